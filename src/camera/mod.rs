@@ -1,0 +1,65 @@
+//! Cameras: the [`Projection`] trait every camera model implements, and the pinhole camera
+//! (paper 1 §3; algorithms.md §1).
+//!
+//! A projection maps a world point to continuous image coordinates `(u, v)` (pixels, origin
+//! top-left, pixel centres at `+0.5`) and a **generalized depth** `gd` (algorithms.md §1.2):
+//! `gd = 1/t` where the point is `C + t·M·(u, v, 1)`. Larger `gd` is nearer; an empty pixel has
+//! `gd = 0`. The rasterizer interpolates `gd` linearly in image space and keeps the largest.
+//!
+//! Invariants: `unproject(project(X)) = X` wherever `project` succeeds; `clip_distance` is affine
+//! in the world point and non-negative exactly where `project` is valid. Projection arithmetic is
+//! `f64` (algorithms.md: "use f64 for all geometry").
+
+mod pinhole;
+
+pub use pinhole::Pinhole;
+
+use glam::{DVec2, DVec3, Vec3};
+use thiserror::Error;
+
+/// Where a world point lands in an image: continuous pixel coordinates and generalized depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImagePoint {
+    /// Pixel coordinates; `(i + 0.5, j + 0.5)` is the centre of pixel `(i, j)`.
+    pub uv: DVec2,
+    /// Generalized depth `gd = 1/t` (algorithms.md §1.2): larger is nearer, never ≤ 0 for a
+    /// point the camera sees.
+    pub gd: f64,
+}
+
+/// A camera model: world point → `(u, v, gd)` and back. The rasterizer and the ray walks are
+/// generic over it, so any camera can build an image.
+pub trait Projection: Sync {
+    /// Image size in pixels `(width, height)`.
+    fn resolution(&self) -> (u32, u32);
+
+    /// Projects a world point; `None` outside the camera's domain (behind its near boundary).
+    fn project(&self, p: DVec3) -> Option<ImagePoint>;
+
+    /// The world point at image coordinates `uv` and generalized depth `gd > 0`.
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3;
+
+    /// Signed distance to the near boundary, affine in `p`, `≥ 0` where [`Projection::project`]
+    /// is valid. The rasterizer clips triangles where it is negative.
+    fn clip_distance(&self, p: DVec3) -> f64;
+
+    /// Projects an `f32` world point (convenience for mesh vertices).
+    fn project_f32(&self, p: Vec3) -> Option<ImagePoint> {
+        self.project(p.as_dvec3())
+    }
+}
+
+/// Errors from building a camera from user parameters.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum CameraError {
+    /// Position, look-at or up vector make no camera.
+    #[error("camera: {0}")]
+    Degenerate(&'static str),
+    /// Field of view outside (0°, 180°).
+    #[error("camera: field of view {0}° must be in (0, 180)")]
+    FieldOfView(f64),
+    /// Resolution refused by the allocation limits.
+    #[error("camera: {0}")]
+    Resolution(#[from] crate::frame::FrameError),
+}

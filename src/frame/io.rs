@@ -1,0 +1,296 @@
+//! Image files: PNG (8-bit sRGB) for colour, OpenEXR (32-bit float) for colour, depth and normals,
+//! Radiance `.hdr` for environment maps.
+//!
+//! The sRGB ↔ linear conversion happens here and nowhere else. Every reader checks the declared
+//! size against [`super::check_size`] before it allocates pixel memory.
+
+use super::{FrameError, Image, Rgba, check_size, linear_to_srgb, srgb_to_linear};
+use exr::prelude::{
+    AnyChannel, AnyChannels, FlatSamples, ReadChannels, ReadLayers, WritableImage,
+};
+use glam::{Vec3, Vec4};
+use std::path::{Path, PathBuf};
+
+fn codec(path: &Path, reason: impl ToString) -> FrameError {
+    FrameError::Codec {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+/// Encodes a linear colour image as 8-bit sRGB RGBA bytes (alpha stays linear).
+pub fn to_srgb8(image: &Image<Rgba>) -> Vec<u8> {
+    let mut out = Vec::with_capacity(image.pixels().len() * 4);
+    for p in image.pixels() {
+        for c in [p.x, p.y, p.z] {
+            out.push((linear_to_srgb(c) * 255.0 + 0.5) as u8);
+        }
+        out.push((p.w.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+    }
+    out
+}
+
+/// Writes a linear colour image as an sRGB PNG.
+pub fn write_png(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
+    let bytes = to_srgb8(image);
+    image::save_buffer(
+        path,
+        &bytes,
+        image.width(),
+        image.height(),
+        image::ExtendedColorType::Rgba8,
+    )
+    .map_err(|e| codec(path, e))
+}
+
+/// Reads a PNG (or any 8/16-bit image the `image` crate knows) as linear RGBA.
+pub fn read_png(path: &Path) -> Result<Image<Rgba>, FrameError> {
+    let bytes = std::fs::read(path).map_err(|source| FrameError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    decode_srgb_image(&bytes, path)
+}
+
+/// Decodes an encoded 8/16-bit image held in memory (`path` only names it in errors).
+pub fn decode_srgb_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, FrameError> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| codec(path, e))?;
+    let (w, h) = reader.into_dimensions().map_err(|e| codec(path, e))?;
+    check_size(w as u64, h as u64)?;
+    let img = image::load_from_memory(bytes).map_err(|e| codec(path, e))?;
+    let rgba = img.to_rgba8();
+    let data = rgba
+        .pixels()
+        .map(|p| {
+            Vec4::new(
+                srgb_to_linear(p[0] as f32 / 255.0),
+                srgb_to_linear(p[1] as f32 / 255.0),
+                srgb_to_linear(p[2] as f32 / 255.0),
+                p[3] as f32 / 255.0,
+            )
+        })
+        .collect();
+    Image::from_vec(w, h, data)
+}
+
+/// Writes a linear colour image as a float RGBA OpenEXR.
+pub fn write_exr_rgba(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
+    let w = image.width() as usize;
+    exr::prelude::write_rgba_file(path, w, image.height() as usize, |x, y| {
+        let p = image.pixels()[y * w + x];
+        (p.x, p.y, p.z, p.w)
+    })
+    .map_err(|e| codec(path, e))
+}
+
+/// Writes named float channels of one size to an OpenEXR file (e.g. `Z` for depth, `N.X` …).
+pub fn write_exr_channels(
+    path: &Path,
+    size: (u32, u32),
+    channels: Vec<(&str, Vec<f32>)>,
+) -> Result<(), FrameError> {
+    let list = channels
+        .into_iter()
+        .map(|(name, data)| AnyChannel::new(name, FlatSamples::F32(data)))
+        .collect();
+    let image = exr::prelude::Image::from_channels(
+        (size.0 as usize, size.1 as usize),
+        AnyChannels::sort(list),
+    );
+    image.write().to_file(path).map_err(|e| codec(path, e))
+}
+
+/// Writes a depth image as a single-channel (`Z`) float OpenEXR.
+pub fn write_exr_depth(path: &Path, depth: &Image<f32>) -> Result<(), FrameError> {
+    write_exr_channels(path, depth.size(), vec![("Z", depth.pixels().to_vec())])
+}
+
+/// Writes a normal image as a three-channel (`N.X`, `N.Y`, `N.Z`) float OpenEXR.
+pub fn write_exr_normals(path: &Path, normals: &Image<Vec3>) -> Result<(), FrameError> {
+    let px = normals.pixels();
+    write_exr_channels(
+        path,
+        normals.size(),
+        vec![
+            ("N.X", px.iter().map(|n| n.x).collect()),
+            ("N.Y", px.iter().map(|n| n.y).collect()),
+            ("N.Z", px.iter().map(|n| n.z).collect()),
+        ],
+    )
+}
+
+/// Reads every channel of the first layer of an OpenEXR file as `f32`.
+pub fn read_exr_channels(path: &Path) -> Result<ExrChannels, FrameError> {
+    check_exr_size(path)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| codec(path, e))?;
+    let size = image.layer_data.size;
+    let (w, h) = check_size(size.0 as u64, size.1 as u64)?;
+    let channels = image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| {
+            let name = c.name.to_string();
+            let values = c.sample_data.values_as_f32().collect();
+            (name, values)
+        })
+        .collect();
+    Ok(ExrChannels {
+        path: path.to_path_buf(),
+        width: w,
+        height: h,
+        channels,
+    })
+}
+
+/// The float channels of one OpenEXR layer.
+#[derive(Clone, Debug)]
+pub struct ExrChannels {
+    /// The file they came from (for errors).
+    pub path: PathBuf,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `(name, row-major samples)` in file order.
+    pub channels: Vec<(String, Vec<f32>)>,
+}
+
+impl ExrChannels {
+    /// The channel called `name` as an image, or an error naming the file and the channel.
+    pub fn channel(&self, name: &str) -> Result<Image<f32>, FrameError> {
+        let data = self
+            .channels
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, d)| d.clone())
+            .ok_or_else(|| codec(&self.path, format!("no channel named {name:?}")))?;
+        Image::from_vec(self.width, self.height, data)
+    }
+}
+
+fn check_exr_size(path: &Path) -> Result<(), FrameError> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| codec(path, e))?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| codec(path, "no layer in file"))?;
+    let size = header.layer_size;
+    check_size(size.0 as u64, size.1 as u64)?;
+    Ok(())
+}
+
+/// Reads an RGB(A) OpenEXR as linear RGBA (alpha 1 when the file has none).
+pub fn read_exr_rgba(path: &Path) -> Result<Image<Rgba>, FrameError> {
+    check_exr_size(path)?;
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| (size.0, vec![Vec4::ZERO; size.0 * size.1]),
+        |(w, px): &mut (usize, Vec<Vec4>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.1 * *w + pos.0] = Vec4::new(r, g, b, a);
+        },
+    )
+    .map_err(|e| codec(path, e))?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Image::from_vec(size.0 as u32, size.1 as u32, pixels)
+}
+
+/// Reads a Radiance RGBE (`.hdr`) file as linear RGBA.
+pub fn read_hdr(path: &Path) -> Result<Image<Rgba>, FrameError> {
+    let file = std::fs::File::open(path).map_err(|source| FrameError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let decoder = image::codecs::hdr::HdrDecoder::new(std::io::BufReader::new(file))
+        .map_err(|e| codec(path, e))?;
+    let meta = decoder.metadata();
+    let (w, h) = check_size(meta.width as u64, meta.height as u64)?;
+    let img = image::DynamicImage::from_decoder(decoder).map_err(|e| codec(path, e))?;
+    let rgb = img.to_rgb32f();
+    let data = rgb.pixels().map(|p| Vec4::new(p[0], p[1], p[2], 1.0)).collect();
+    Image::from_vec(w, h, data)
+}
+
+/// Reads a float colour image by extension: `.exr` or `.hdr`; anything else as sRGB.
+pub fn read_color(path: &Path) -> Result<Image<Rgba>, FrameError> {
+    match extension(path).as_str() {
+        "exr" => read_exr_rgba(path),
+        "hdr" => read_hdr(path),
+        _ => read_png(path),
+    }
+}
+
+/// Writes a colour image by extension: `.exr` as float, anything else as sRGB PNG.
+pub fn write_color(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
+    match extension(path).as_str() {
+        "exr" => write_exr_rgba(path, image),
+        _ => write_png(path, image),
+    }
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn png_round_trip_is_within_8_bit_quantisation() {
+        let dir = std::env::temp_dir().join(format!("trompe-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("rt.png");
+        let img = Image::from_vec(
+            3,
+            1,
+            vec![
+                Vec4::new(0.0, 0.5, 1.0, 1.0),
+                Vec4::new(0.2, 0.02, 0.7, 0.5),
+                Vec4::ONE,
+            ],
+        )
+        .unwrap();
+        write_png(&path, &img).unwrap();
+        let back = read_png(&path).unwrap();
+        for (a, b) in img.pixels().iter().zip(back.pixels()) {
+            assert!((*a - *b).abs().max_element() < 0.01, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn exr_depth_round_trips_exactly() {
+        let dir = std::env::temp_dir().join(format!("trompe-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("depth.exr");
+        let depth = Image::from_vec(2, 2, vec![1.0, 2.5, f32::INFINITY, 1e-3]).unwrap();
+        write_exr_depth(&path, &depth).unwrap();
+        let back = read_exr_channels(&path).unwrap().channel("Z").unwrap();
+        assert_eq!(back, depth);
+    }
+
+    #[test]
+    fn garbage_files_are_errors() {
+        let dir = std::env::temp_dir().join(format!("trompe-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in ["bad.png", "bad.exr", "bad.hdr"] {
+            let path = dir.join(name);
+            std::fs::write(&path, b"not an image at all").unwrap();
+            assert!(read_color(&path).is_err(), "{name}");
+        }
+    }
+}

@@ -1,0 +1,302 @@
+//! Typed image buffers: linear colour with alpha, depth, normals and ids (all papers).
+//!
+//! An [`Image<T>`] is a row-major grid of `T`, origin top-left; pixel `(i, j)` covers
+//! `[i, i+1) × [j, j+1)` and its centre is `(i + 0.5, j + 0.5)` ([`PIXEL_CENTER`]). Colours are
+//! linear `f32` RGBA inside trompe; sRGB appears only at the PNG boundary ([`io`]).
+//!
+//! Invariants: `data.len() == width * height`, `1 ≤ width, height ≤` [`MAX_DIMENSION`] and
+//! `width * height ≤` [`MAX_PIXELS`], checked by [`Image::new`] before anything is allocated.
+
+pub mod envmap;
+pub mod io;
+pub mod metrics;
+
+use glam::{Vec2, Vec3, Vec4};
+use std::ops::{Add, Mul};
+use thiserror::Error;
+
+/// Offset of a pixel's centre from its integer corner (algorithms.md §1.1).
+pub const PIXEL_CENTER: f32 = 0.5;
+/// Largest width or height trompe allocates.
+pub const MAX_DIMENSION: u32 = 16_384;
+/// Largest pixel count trompe allocates (8192 × 8192).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Linear RGBA colour, premultiplied by nothing: `(r, g, b, a)`.
+pub type Rgba = Vec4;
+
+/// Errors from image buffers and image files.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum FrameError {
+    /// A width or height of zero, or a size past [`MAX_DIMENSION`] / [`MAX_PIXELS`].
+    #[error("invalid image size {width} × {height}: {reason}")]
+    InvalidSize {
+        /// Requested width.
+        width: u64,
+        /// Requested height.
+        height: u64,
+        /// Why it was refused.
+        reason: &'static str,
+    },
+    /// Reading or writing a file failed at the operating-system level.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A file could not be decoded or encoded.
+    #[error("{path}: {reason}")]
+    Codec {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        reason: String,
+    },
+    /// Two images that must have the same size do not.
+    #[error("image sizes differ: {a:?} vs {b:?}")]
+    SizeMismatch {
+        /// First size.
+        a: (u32, u32),
+        /// Second size.
+        b: (u32, u32),
+    },
+}
+
+/// Checks a requested image size against the allocation limits.
+pub fn check_size(width: u64, height: u64) -> Result<(u32, u32), FrameError> {
+    let err = |reason| FrameError::InvalidSize {
+        width,
+        height,
+        reason,
+    };
+    if width == 0 || height == 0 {
+        return Err(err("width and height must be at least 1"));
+    }
+    if width > MAX_DIMENSION as u64 || height > MAX_DIMENSION as u64 {
+        return Err(err("a side is larger than 16384 pixels"));
+    }
+    if width * height > MAX_PIXELS {
+        return Err(err("more than 8192 × 8192 pixels"));
+    }
+    Ok((width as u32, height as u32))
+}
+
+/// A row-major image of `T`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image<T> {
+    width: u32,
+    height: u32,
+    data: Vec<T>,
+}
+
+impl<T: Copy> Image<T> {
+    /// A `width × height` image filled with `fill`; refuses empty and absurd sizes.
+    pub fn new(width: u32, height: u32, fill: T) -> Result<Self, FrameError> {
+        let (w, h) = check_size(width as u64, height as u64)?;
+        Ok(Self {
+            width: w,
+            height: h,
+            data: vec![fill; w as usize * h as usize],
+        })
+    }
+
+    /// Wraps existing pixels; `data.len()` must equal `width * height`.
+    pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Result<Self, FrameError> {
+        check_size(width as u64, height as u64)?;
+        if data.len() != width as usize * height as usize {
+            return Err(FrameError::InvalidSize {
+                width: width as u64,
+                height: height as u64,
+                reason: "pixel count does not match the size",
+            });
+        }
+        Ok(Self {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+    /// `(width, height)`.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+    /// All pixels, row-major.
+    pub fn pixels(&self) -> &[T] {
+        &self.data
+    }
+    /// All pixels, row-major, mutable.
+    pub fn pixels_mut(&mut self) -> &mut [T] {
+        &mut self.data
+    }
+    /// Consumes the image, returning its pixels.
+    pub fn into_vec(self) -> Vec<T> {
+        self.data
+    }
+    /// The pixel at column `x`, row `y` (panics only on a programming error: out of bounds).
+    pub fn get(&self, x: u32, y: u32) -> T {
+        self.data[y as usize * self.width as usize + x as usize]
+    }
+    /// Sets the pixel at column `x`, row `y`.
+    pub fn set(&mut self, x: u32, y: u32, value: T) {
+        let w = self.width as usize;
+        self.data[y as usize * w + x as usize] = value;
+    }
+    /// Rows of `rows_per_band` rows each, mutable and disjoint: the unit of parallel work.
+    pub fn bands_mut(&mut self, rows_per_band: u32) -> std::slice::ChunksMut<'_, T> {
+        let n = (rows_per_band.max(1) as usize) * self.width as usize;
+        self.data.chunks_mut(n)
+    }
+    /// A new image with `f` applied to each pixel.
+    pub fn map<U: Copy>(&self, f: impl Fn(T) -> U) -> Image<U> {
+        Image {
+            width: self.width,
+            height: self.height,
+            data: self.data.iter().map(|&p| f(p)).collect(),
+        }
+    }
+
+    /// Nearest-texel lookup at continuous image coordinates (clamped to the border).
+    pub fn sample_nearest(&self, uv: Vec2) -> T {
+        let x = (uv.x.floor() as i64).clamp(0, self.width as i64 - 1) as u32;
+        let y = (uv.y.floor() as i64).clamp(0, self.height as i64 - 1) as u32;
+        self.get(x, y)
+    }
+}
+
+/// Values that can be blended linearly: the bound for bilinear sampling and interpolation.
+pub trait Lerp: Copy + Add<Output = Self> + Mul<f32, Output = Self> {}
+impl<T: Copy + Add<Output = T> + Mul<f32, Output = T>> Lerp for T {}
+
+/// How a lookup outside `[0, 1]` texture coordinates behaves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// Clamp to the border texel.
+    Clamp,
+    /// Repeat the image (texture tiling, the longitude of an environment map).
+    Repeat,
+}
+
+impl<T: Lerp> Image<T> {
+    /// Bilinear lookup at continuous image coordinates (pixel centres at `+0.5`).
+    pub fn sample_bilinear(&self, uv: Vec2, wrap_x: Wrap, wrap_y: Wrap) -> T {
+        let fx = uv.x - PIXEL_CENTER;
+        let fy = uv.y - PIXEL_CENTER;
+        let x0 = fx.floor();
+        let y0 = fy.floor();
+        let (tx, ty) = (fx - x0, fy - y0);
+        let xi = |x: i64| resolve(x, self.width, wrap_x);
+        let yi = |y: i64| resolve(y, self.height, wrap_y);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let (xa, xb, ya, yb) = (xi(x0), xi(x0 + 1), yi(y0), yi(y0 + 1));
+        let top = self.get(xa, ya) * (1.0 - tx) + self.get(xb, ya) * tx;
+        let bottom = self.get(xa, yb) * (1.0 - tx) + self.get(xb, yb) * tx;
+        top * (1.0 - ty) + bottom * ty
+    }
+
+    /// Bilinear lookup at texture coordinates `st ∈ [0, 1]²` (`t = 0` is the top row).
+    pub fn sample_uv(&self, st: Vec2, wrap: Wrap) -> T {
+        let uv = Vec2::new(st.x * self.width as f32, st.y * self.height as f32);
+        self.sample_bilinear(uv, wrap, wrap)
+    }
+}
+
+fn resolve(i: i64, n: u32, wrap: Wrap) -> u32 {
+    let n = n as i64;
+    match wrap {
+        Wrap::Clamp => i.clamp(0, n - 1) as u32,
+        Wrap::Repeat => i.rem_euclid(n) as u32,
+    }
+}
+
+/// The buffers a renderer produces for one view.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Linear RGBA colour.
+    pub color: Image<Rgba>,
+    /// Distance from the eye along each pixel's ray; `f32::INFINITY` where nothing was hit.
+    pub depth: Image<f32>,
+    /// Shading normal (zero where nothing was hit).
+    pub normal: Image<Vec3>,
+    /// Object id ([`crate::trace::NO_OBJECT`] where nothing was hit).
+    pub object_id: Image<u32>,
+}
+
+impl Frame {
+    /// An empty frame: transparent black, infinite depth, no normals, no ids.
+    pub fn new(width: u32, height: u32) -> Result<Self, FrameError> {
+        Ok(Self {
+            color: Image::new(width, height, Vec4::ZERO)?,
+            depth: Image::new(width, height, f32::INFINITY)?,
+            normal: Image::new(width, height, Vec3::ZERO)?,
+            object_id: Image::new(width, height, crate::trace::NO_OBJECT)?,
+        })
+    }
+}
+
+/// sRGB transfer function: linear `[0, 1]` → encoded `[0, 1]`.
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Inverse sRGB transfer function: encoded `[0, 1]` → linear.
+pub fn srgb_to_linear(x: f32) -> f32 {
+    if x <= 0.040_45 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Rec. 709 luminance of a linear colour.
+pub fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absurd_sizes_are_refused_before_allocating() {
+        assert!(Image::new(0, 10, 0.0f32).is_err());
+        assert!(Image::new(1_000_000, 1_000_000, 0.0f32).is_err());
+        assert!(Image::new(16_384, 16_384, 0u8).is_err());
+        assert!(Image::new(8192, 8192, 0u8).is_ok());
+    }
+
+    #[test]
+    fn bilinear_reproduces_texels_at_centres_and_blends_between() {
+        let img = Image::from_vec(2, 1, vec![0.0f32, 1.0]).unwrap();
+        assert_eq!(img.sample_bilinear(Vec2::new(0.5, 0.5), Wrap::Clamp, Wrap::Clamp), 0.0);
+        assert_eq!(img.sample_bilinear(Vec2::new(1.5, 0.5), Wrap::Clamp, Wrap::Clamp), 1.0);
+        assert!((img.sample_bilinear(Vec2::new(1.0, 0.5), Wrap::Clamp, Wrap::Clamp) - 0.5).abs() < 1e-6);
+        // Repeat wraps the left neighbour of texel 0 to texel 1.
+        assert!((img.sample_bilinear(Vec2::new(0.0, 0.5), Wrap::Repeat, Wrap::Clamp) - 0.5).abs() < 1e-6);
+        assert_eq!(img.sample_nearest(Vec2::new(1.9, 0.2)), 1.0);
+    }
+
+    #[test]
+    fn srgb_round_trips() {
+        for i in 0..=100 {
+            let x = i as f32 / 100.0;
+            assert!((srgb_to_linear(linear_to_srgb(x)) - x).abs() < 1e-5);
+        }
+    }
+}

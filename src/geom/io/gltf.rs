@@ -1,0 +1,285 @@
+//! glTF 2.0 reader (`.gltf` with external or embedded buffers, and `.glb`), via the `gltf` crate.
+//!
+//! The default scene's node hierarchy is flattened: every triangle primitive of every mesh
+//! instance is transformed by its node's world matrix and appended, so an instanced mesh counts
+//! once per instance. Base-colour factor and texture (`TEXCOORD_0`), normals and UVs are read.
+//! Missing buffers or images and out-of-range accessors are errors naming the element, checked
+//! before the crate's readers slice any buffer.
+
+use super::{LoadedMesh, malformed, read_file};
+use crate::frame::{Image, srgb_to_linear};
+use crate::geom::{Material, Mesh, MeshError, SourceCounts, Warning};
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Loads a `.gltf` or `.glb` file.
+pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
+    let bytes = read_file(path)?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| malformed(path, "document", e.to_string()))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    check_external_files(path, base, &gltf.document)?;
+    let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
+        .map_err(|e| malformed(path, "buffers", e.to_string()))?;
+    for view in gltf.document.views() {
+        let len = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+        if view.offset().saturating_add(view.length()) > len {
+            return Err(malformed(
+                path,
+                format!("bufferView {}", view.index()),
+                format!("bytes {}..{} past the end of buffer {} ({len} bytes)", view.offset(), view.offset() + view.length(), view.buffer().index()),
+            ));
+        }
+    }
+    let images = gltf::import_images(&gltf.document, Some(base), &buffers)
+        .map_err(|e| malformed(path, "images", e.to_string()))?;
+
+    let mut warnings = Vec::new();
+    let mut state = Flatten {
+        path,
+        buffers: &buffers,
+        images: &images,
+        textures: HashMap::new(),
+        materials: HashMap::new(),
+        mesh: Mesh::default(),
+        normals_present: true,
+        source: SourceCounts::default(),
+        warnings: &mut warnings,
+    };
+    let scene = gltf
+        .document
+        .default_scene()
+        .or_else(|| gltf.document.scenes().next())
+        .ok_or_else(|| malformed(path, "document", "no scene"))?;
+    for node in scene.nodes() {
+        state.visit(&node, Mat4::IDENTITY, 0)?;
+    }
+    let Flatten {
+        mesh: flat,
+        normals_present,
+        source,
+        ..
+    } = state;
+    let mesh = Mesh::from_parts(
+        path,
+        flat.positions,
+        normals_present.then_some(flat.normals),
+        flat.uvs,
+        flat.triangles,
+        flat.face_material,
+        flat.materials,
+        &mut warnings,
+    )?;
+    Ok(LoadedMesh {
+        mesh,
+        source,
+        warnings,
+    })
+}
+
+fn check_external_files(path: &Path, base: &Path, doc: &gltf::Document) -> Result<(), MeshError> {
+    for b in doc.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = b.source() {
+            if !uri.starts_with("data:") && !base.join(uri).is_file() {
+                return Err(malformed(path, format!("buffer {}", b.index()), format!("file {uri:?} not found")));
+            }
+        }
+    }
+    for i in doc.images() {
+        if let gltf::image::Source::Uri { uri, .. } = i.source() {
+            if !uri.starts_with("data:") && !base.join(uri).is_file() {
+                return Err(malformed(path, format!("image {}", i.index()), format!("file {uri:?} not found")));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Node hierarchies deeper than this are refused (cycles are invalid glTF but must not hang).
+const MAX_NODE_DEPTH: usize = 256;
+
+struct Flatten<'a> {
+    path: &'a Path,
+    buffers: &'a [gltf::buffer::Data],
+    images: &'a [gltf::image::Data],
+    textures: HashMap<usize, crate::geom::Texture>,
+    materials: HashMap<Option<usize>, u32>,
+    mesh: Mesh,
+    normals_present: bool,
+    source: SourceCounts,
+    warnings: &'a mut Vec<Warning>,
+}
+
+impl Flatten<'_> {
+    fn visit(&mut self, node: &gltf::Node, parent: Mat4, depth: usize) -> Result<(), MeshError> {
+        if depth > MAX_NODE_DEPTH {
+            return Err(malformed(self.path, format!("node {}", node.index()), "hierarchy too deep (a cycle?)"));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !world.is_finite() {
+            return Err(MeshError::NonFinite {
+                path: self.path.to_path_buf(),
+                element: format!("node {} transform", node.index()),
+            });
+        }
+        if let Some(mesh) = node.mesh() {
+            for prim in mesh.primitives() {
+                self.primitive(&mesh, &prim, &world)?;
+            }
+        }
+        for child in node.children() {
+            self.visit(&child, world, depth + 1)?;
+        }
+        Ok(())
+    }
+
+    fn check(&self, accessor: &gltf::Accessor, what: &str) -> Result<(), MeshError> {
+        let element = format!("accessor {} ({what})", accessor.index());
+        let Some(view) = accessor.view() else {
+            return Err(malformed(self.path, element, "sparse or view-less accessors are not supported"));
+        };
+        let elem = accessor.size();
+        let stride = view.stride().unwrap_or(elem);
+        let need = match accessor.count() {
+            0 => 0,
+            n => accessor.offset() + (n - 1).saturating_mul(stride) + elem,
+        };
+        if need > view.length() {
+            return Err(malformed(
+                self.path,
+                element,
+                format!("{} items need {need} bytes but bufferView {} holds {}", accessor.count(), view.index(), view.length()),
+            ));
+        }
+        Ok(())
+    }
+
+    fn primitive(&mut self, mesh: &gltf::Mesh, prim: &gltf::Primitive, world: &Mat4) -> Result<(), MeshError> {
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            self.warnings.push(Warning::Skipped {
+                path: self.path.to_path_buf(),
+                what: format!("mesh {} primitive {}: mode {:?} is not triangles", mesh.index(), prim.index(), prim.mode()),
+            });
+            return Ok(());
+        }
+        for (sem, acc) in prim.attributes() {
+            self.check(&acc, &format!("{sem:?}"))?;
+        }
+        if let Some(acc) = prim.indices() {
+            self.check(&acc, "indices")?;
+        }
+        let buffers = self.buffers;
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
+        let element = || format!("mesh {} primitive {}", mesh.index(), prim.index());
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or_else(|| malformed(self.path, element(), "no POSITION attribute"))?
+            .map(|p| world.transform_point3(Vec3::from(p)))
+            .collect();
+        let n = positions.len();
+        let normal_m = glam::Mat3::from_mat4(*world).inverse().transpose();
+        let normals: Option<Vec<Vec3>> = reader
+            .read_normals()
+            .map(|it| it.map(|v| (normal_m * Vec3::from(v)).normalize_or_zero()).collect());
+        let uvs: Option<Vec<Vec2>> = reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect());
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..n as u32).collect(),
+        };
+        if indices.len() % 3 != 0 {
+            return Err(malformed(self.path, element(), format!("{} indices is not a multiple of 3", indices.len())));
+        }
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(MeshError::IndexOutOfRange {
+                path: self.path.to_path_buf(),
+                element: element(),
+                index: bad as i64,
+                count: n,
+            });
+        }
+        let material = self.material(&prim.material())?;
+        self.normals_present &= normals.as_ref().is_some_and(|v| v.len() == n);
+        self.source.vertices += n;
+        self.source.triangles += indices.len() / 3;
+        let flip = world.determinant() < 0.0;
+        let part = Mesh {
+            normals: normals.filter(|v| v.len() == n).unwrap_or_else(|| vec![Vec3::ZERO; n]),
+            uvs: uvs.filter(|v| v.len() == n),
+            triangles: indices
+                .chunks_exact(3)
+                .map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] })
+                .collect(),
+            face_material: vec![0; indices.len() / 3],
+            materials: Vec::new(),
+            positions,
+        };
+        // Append with the material index resolved into the shared table.
+        let first_face = self.mesh.face_material.len();
+        self.mesh.append(&part);
+        for m in &mut self.mesh.face_material[first_face..] {
+            *m = material;
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, m: &gltf::Material) -> Result<u32, MeshError> {
+        if let Some(&i) = self.materials.get(&m.index()) {
+            return Ok(i);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, _] = pbr.base_color_factor();
+        let texture = match pbr.base_color_texture() {
+            Some(info) => Some(self.texture(info.texture().source().index())?),
+            None => None,
+        };
+        self.mesh.materials.push(Material {
+            name: m.name().unwrap_or("default").to_string(),
+            base_color: Vec3::new(r, g, b),
+            texture,
+        });
+        let i = self.mesh.materials.len() as u32 - 1;
+        self.materials.insert(m.index(), i);
+        Ok(i)
+    }
+
+    fn texture(&mut self, image: usize) -> Result<crate::geom::Texture, MeshError> {
+        if let Some(t) = self.textures.get(&image) {
+            return Ok(t.clone());
+        }
+        let data = self
+            .images
+            .get(image)
+            .ok_or_else(|| malformed(self.path, format!("image {image}"), "missing"))?;
+        let channels = match data.format {
+            gltf::image::Format::R8 => 1,
+            gltf::image::Format::R8G8 => 2,
+            gltf::image::Format::R8G8B8 => 3,
+            gltf::image::Format::R8G8B8A8 => 4,
+            other => {
+                return Err(malformed(self.path, format!("image {image}"), format!("pixel format {other:?} is not supported")));
+            }
+        };
+        let px: Vec<Vec4> = data
+            .pixels
+            .chunks_exact(channels)
+            .map(|p| {
+                let c = |i: usize| srgb_to_linear(p[i.min(channels - 1)] as f32 / 255.0);
+                let a = if channels == 4 { p[3] as f32 / 255.0 } else { 1.0 };
+                if channels <= 2 {
+                    Vec4::new(c(0), c(0), c(0), a)
+                } else {
+                    Vec4::new(c(0), c(1), c(2), a)
+                }
+            })
+            .collect();
+        let img = Image::from_vec(data.width, data.height, px).map_err(|source| MeshError::Texture {
+            path: self.path.to_path_buf(),
+            texture: format!("image {image}"),
+            source,
+        })?;
+        let t = Arc::new(img);
+        self.textures.insert(image, t.clone());
+        Ok(t)
+    }
+}

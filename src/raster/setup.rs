@@ -1,0 +1,221 @@
+//! Triangle setup: world-space clipping against the camera's near boundary, projection,
+//! guard-band clipping in image space, snapping to fixed point, and attribute planes.
+
+use super::{ItemId, RasterStats};
+use crate::camera::Projection;
+use crate::geom::Mesh;
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+/// Sub-pixel precision: vertices snap to 1/2^SUBPIXEL_BITS of a pixel.
+pub(super) const SUBPIXEL_BITS: u32 = 8;
+/// One pixel in fixed point.
+pub(super) const ONE: i64 = 1 << SUBPIXEL_BITS;
+/// Half the guard band, in pixels: vertices are clipped to `[-GUARD, size + GUARD]` so the
+/// integer edge functions (products of two coordinate differences) stay below 2^62.
+const GUARD: f64 = (1u64 << 20) as f64;
+
+/// An affine function of image position: `f(x, y) = f0 + dfdx·(x − x0) + dfdy·(y − y0)`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Plane {
+    pub f0: f64,
+    pub dfdx: f64,
+    pub dfdy: f64,
+}
+
+/// A triangle ready for scan conversion.
+#[derive(Clone, Debug)]
+pub(super) struct ScreenTri {
+    /// Snapped corners, ordered so the doubled signed area is positive.
+    pub fixed: [[i64; 2]; 3],
+    /// Rows whose centres may be covered, inclusive, within the image.
+    pub rows: (u32, u32),
+    /// Columns whose centres may be covered, inclusive, within the image.
+    pub cols: (u32, u32),
+    /// Image position `(x0, y0)` the attribute planes are anchored at.
+    pub origin: DVec2,
+    /// `gd`, then `gd·b0`, `gd·b1`, `gd·b2` (b = barycentrics of the source triangle).
+    pub planes: [Plane; 4],
+    /// Source object and triangle.
+    pub item: ItemId,
+}
+
+/// A polygon corner during clipping: world point (before projection) or image point (after),
+/// with the source triangle's barycentrics.
+#[derive(Clone, Copy, Debug)]
+struct Corner {
+    world: DVec3,
+    uv: DVec2,
+    gd: f64,
+    /// `gd·b` after projection; `b` before.
+    q: DVec3,
+}
+
+/// Sets up every triangle of every object, in input order (parallel, order-preserving).
+pub(super) fn screen_triangles<P: Projection>(camera: &P, objects: &[&Mesh]) -> (Vec<ScreenTri>, RasterStats) {
+    let (w, h) = camera.resolution();
+    let refs: Vec<(u32, u32)> = objects
+        .iter()
+        .enumerate()
+        .flat_map(|(o, m)| (0..m.triangles.len() as u32).map(move |t| (o as u32, t)))
+        .collect();
+    let tris: Vec<ScreenTri> = refs
+        .par_iter()
+        .flat_map_iter(|&(o, t)| {
+            let mesh = objects[o as usize];
+            let item = ItemId { object: o, triangle: t };
+            setup_triangle(camera, mesh.corners(t as usize).map(|p| p.as_dvec3()), item, w, h)
+        })
+        .collect();
+    let stats = RasterStats {
+        triangles_in: refs.len() as u64,
+        screen_triangles: tris.len() as u64,
+        ..RasterStats::default()
+    };
+    (tris, stats)
+}
+
+fn setup_triangle<P: Projection>(camera: &P, p: [DVec3; 3], item: ItemId, w: u32, h: u32) -> Vec<ScreenTri> {
+    let corner = |world, b| Corner {
+        world,
+        uv: DVec2::ZERO,
+        gd: 0.0,
+        q: b,
+    };
+    let mut poly = vec![corner(p[0], DVec3::X), corner(p[1], DVec3::Y), corner(p[2], DVec3::Z)];
+    // 1. Near boundary, in world space (clip_distance is affine, so linear interpolation is exact).
+    let d: Vec<f64> = p.iter().map(|&x| camera.clip_distance(x)).collect();
+    if d.iter().any(|&x| x < 0.0) {
+        if d.iter().all(|&x| x < 0.0) {
+            return Vec::new();
+        }
+        poly = clip_polygon(&poly, |c| camera.clip_distance(c.world), |a, b, s| Corner {
+            world: a.world + (b.world - a.world) * s,
+            q: a.q + (b.q - a.q) * s,
+            ..*a
+        });
+        if poly.len() < 3 {
+            return Vec::new();
+        }
+    }
+    // 2. Project.
+    for c in &mut poly {
+        let Some(ip) = camera.project(c.world) else {
+            return Vec::new();
+        };
+        if !(ip.uv.is_finite() && ip.gd.is_finite() && ip.gd > 0.0) {
+            return Vec::new();
+        }
+        c.uv = ip.uv;
+        c.gd = ip.gd;
+        c.q *= ip.gd;
+    }
+    // 3. Guard band, in image space (gd and gd·b are affine in image space).
+    let (wf, hf) = (w as f64, h as f64);
+    let bounds = [
+        (DVec2::X, GUARD),                // x ≥ −G
+        (-DVec2::X, wf + GUARD),          // x ≤ w + G
+        (DVec2::Y, GUARD),                // y ≥ −G
+        (-DVec2::Y, hf + GUARD),          // y ≤ h + G
+    ];
+    for (n, off) in bounds {
+        if poly.iter().any(|c| n.dot(c.uv) + off < 0.0) {
+            poly = clip_polygon(&poly, |c| n.dot(c.uv) + off, |a, b, s| Corner {
+                uv: a.uv + (b.uv - a.uv) * s,
+                gd: a.gd + (b.gd - a.gd) * s,
+                q: a.q + (b.q - a.q) * s,
+                ..*a
+            });
+            if poly.len() < 3 {
+                return Vec::new();
+            }
+        }
+    }
+    // 4. Fan-triangulate, snap, orient, bound.
+    (1..poly.len() - 1)
+        .filter_map(|k| screen_triangle([poly[0], poly[k], poly[k + 1]], item, w, h))
+        .collect()
+}
+
+/// Sutherland–Hodgman against `dist ≥ 0`. New corners are always interpolated from the inside
+/// corner toward the outside one, so an edge shared by two triangles is cut at the same point.
+fn clip_polygon(
+    poly: &[Corner],
+    dist: impl Fn(&Corner) -> f64,
+    lerp: impl Fn(&Corner, &Corner, f64) -> Corner,
+) -> Vec<Corner> {
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    for i in 0..poly.len() {
+        let (a, b) = (&poly[i], &poly[(i + 1) % poly.len()]);
+        let (da, db) = (dist(a), dist(b));
+        if da >= 0.0 {
+            out.push(*a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            let (inside, outside, di, dout) = if da >= 0.0 { (a, b, da, db) } else { (b, a, db, da) };
+            out.push(lerp(inside, outside, di / (di - dout)));
+        }
+    }
+    out
+}
+
+fn snap(x: f64) -> i64 {
+    (x * ONE as f64).round() as i64
+}
+
+fn screen_triangle(c: [Corner; 3], item: ItemId, w: u32, h: u32) -> Option<ScreenTri> {
+    let mut fixed = c.map(|c| [snap(c.uv.x), snap(c.uv.y)]);
+    let area2 = (fixed[1][0] - fixed[0][0]) * (fixed[2][1] - fixed[0][1])
+        - (fixed[1][1] - fixed[0][1]) * (fixed[2][0] - fixed[0][0]);
+    if area2 == 0 {
+        return None;
+    }
+    if area2 < 0 {
+        fixed.swap(1, 2);
+    }
+    // Pixel (i, j) is a candidate when its centre (i + ½, j + ½) lies in the snapped box.
+    let min = |k: usize| fixed.iter().map(|v| v[k]).min().unwrap_or(0);
+    let max = |k: usize| fixed.iter().map(|v| v[k]).max().unwrap_or(0);
+    let first = |lo: i64| (lo - ONE / 2 + ONE - 1).div_euclid(ONE); // ceil((lo − ½)/1)
+    let last = |hi: i64| (hi - ONE / 2).div_euclid(ONE); // floor(hi − ½)
+    let (x0, x1) = (first(min(0)).max(0), last(max(0)).min(w as i64 - 1));
+    let (y0, y1) = (first(min(1)).max(0), last(max(1)).min(h as i64 - 1));
+    if x0 > x1 || y0 > y1 {
+        return None;
+    }
+    let origin = c[0].uv;
+    let values = |f: &dyn Fn(&Corner) -> f64| plane(&c, origin, f);
+    Some(ScreenTri {
+        fixed,
+        rows: (y0 as u32, y1 as u32),
+        cols: (x0 as u32, x1 as u32),
+        origin,
+        planes: [
+            values(&|c| c.gd),
+            values(&|c| c.q.x),
+            values(&|c| c.q.y),
+            values(&|c| c.q.z),
+        ],
+        item,
+    })
+}
+
+/// The affine function through three image points' values, from unsnapped positions.
+fn plane(c: &[Corner; 3], origin: DVec2, f: &dyn Fn(&Corner) -> f64) -> Plane {
+    let (e1, e2) = (c[1].uv - origin, c[2].uv - origin);
+    let (f0, f1, f2) = (f(&c[0]), f(&c[1]), f(&c[2]));
+    let det = e1.x * e2.y - e1.y * e2.x;
+    if det.abs() < 1e-12 {
+        // Sliver: degenerate in image space; use a constant, the corners' mean.
+        return Plane {
+            f0: (f0 + f1 + f2) / 3.0,
+            dfdx: 0.0,
+            dfdy: 0.0,
+        };
+    }
+    Plane {
+        f0,
+        dfdx: ((f1 - f0) * e2.y - (f2 - f0) * e1.y) / det,
+        dfdy: ((f2 - f0) * e1.x - (f1 - f0) * e2.x) / det,
+    }
+}

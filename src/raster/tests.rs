@@ -1,0 +1,214 @@
+//! Rasterizer properties: watertightness under the top-left rule, depth and barycentrics.
+
+use super::*;
+use crate::camera::ImagePoint;
+use crate::geom::Material;
+use glam::{DVec2, DVec3, Vec2};
+
+/// Image space as a camera: world `(x, y)` is pixel `(u, v)`, `gd = 1/z`.
+struct ScreenSpace(u32, u32);
+
+impl Projection for ScreenSpace {
+    fn resolution(&self) -> (u32, u32) {
+        (self.0, self.1)
+    }
+    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+        (p.z > 0.0).then(|| ImagePoint {
+            uv: p.truncate(),
+            gd: 1.0 / p.z,
+        })
+    }
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+        uv.extend(1.0 / gd)
+    }
+    fn clip_distance(&self, p: DVec3) -> f64 {
+        p.z - 1e-3
+    }
+}
+
+fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Mesh {
+    let n = triangles.len();
+    Mesh {
+        normals: vec![Vec3::Z; positions.len()],
+        positions,
+        uvs: None,
+        triangles,
+        face_material: vec![0; n],
+        materials: vec![Material::default()],
+    }
+}
+
+/// Per-pixel coverage counts, each triangle rasterized on its own so the depth test hides nothing.
+fn coverage(cam: &ScreenSpace, m: &Mesh) -> Vec<u32> {
+    let mut count = vec![0u32; (cam.0 * cam.1) as usize];
+    for t in 0..m.triangles.len() {
+        let single = mesh(m.positions.clone(), vec![m.triangles[t]]);
+        let (target, _) = rasterize(cam, &[&single], &NoAttributes, ()).unwrap();
+        for (c, id) in count.iter_mut().zip(target.item.pixels()) {
+            *c += (!id.is_none()) as u32;
+        }
+    }
+    count
+}
+
+/// Replayable jitter in `[-0.5, 0.5)`.
+fn jitter(i: u32) -> f32 {
+    (i.wrapping_mul(2_654_435_761) >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+}
+
+#[test]
+fn grid_sharing_edges_covers_each_pixel_exactly_once() {
+    // An 8 × 8 grid of quads over [4.5, 59.5]²: the outer corners sit on pixel centres, interior
+    // vertices are jittered (some land exactly on centres too), and every quad is split in two.
+    let cam = ScreenSpace(64, 64);
+    let n = 8;
+    let step = 55.0 / n as f32;
+    let mut p = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let mut v = Vec3::new(4.5 + i as f32 * step, 4.5 + j as f32 * step, 1.0);
+            if i > 0 && i < n && j > 0 && j < n {
+                let k = (j * (n + 1) + i) as u32;
+                v.x += if k % 3 == 0 { 0.0 } else { jitter(k) * step * 0.6 };
+                v.y += if k % 3 == 0 { 0.0 } else { jitter(k + 1000) * step * 0.6 };
+                if k % 3 == 0 {
+                    v.x = v.x.floor() + 0.5;
+                    v.y = v.y.floor() + 0.5;
+                }
+            }
+            p.push(v);
+        }
+    }
+    let idx = |i: u32, j: u32| j * (n + 1) + i;
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            tris.push([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)]);
+            tris.push([idx(i, j), idx(i, j + 1), idx(i + 1, j + 1)]); // opposite winding on purpose
+        }
+    }
+    let count = coverage(&cam, &mesh(p, tris));
+    for y in 0..64 {
+        for x in 0..64 {
+            // Left and top borders (on pixel centres) are owned; right and bottom are not.
+            let inside = (4..59).contains(&x) && (4..59).contains(&y);
+            assert_eq!(count[y * 64 + x], inside as u32, "pixel ({x}, {y})");
+        }
+    }
+}
+
+#[test]
+fn fan_around_a_pixel_centre_covers_each_pixel_exactly_once() {
+    let cam = ScreenSpace(64, 64);
+    let c = Vec3::new(32.5, 32.5, 1.0);
+    let k = 13;
+    let mut p = vec![c];
+    for i in 0..k {
+        let a = i as f32 / k as f32 * std::f32::consts::TAU;
+        p.push(c + Vec3::new(a.cos(), a.sin(), 0.0) * 25.0);
+    }
+    let tris = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % k]).collect();
+    let m = mesh(p.clone(), tris);
+    let count = coverage(&cam, &m);
+    for y in 0..64u32 {
+        for x in 0..64u32 {
+            let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            // Signed distance to the outer polygon (negative inside).
+            let mut dist = f32::NEG_INFINITY;
+            for i in 0..k as usize {
+                let (a, b) = (p[1 + i].truncate(), p[1 + (i + 1) % k as usize].truncate());
+                let n = Vec2::new(b.y - a.y, a.x - b.x).normalize();
+                let n = if n.dot(c.truncate() - a) > 0.0 { -n } else { n };
+                dist = dist.max(n.dot(q - a));
+            }
+            let got = count[(y * 64 + x) as usize];
+            assert!(got <= 1, "pixel ({x}, {y}) covered {got} times");
+            if dist < -1e-3 {
+                assert_eq!(got, 1, "pixel ({x}, {y}) missed");
+            } else if dist > 1e-3 {
+                assert_eq!(got, 0, "pixel ({x}, {y}) outside covered");
+            }
+        }
+    }
+}
+
+#[test]
+fn depth_test_keeps_the_nearer_triangle_and_ties_keep_the_first() {
+    let cam = ScreenSpace(16, 16);
+    let quad = |z: f32| vec![Vec3::new(0.0, 0.0, z), Vec3::new(16.0, 0.0, z), Vec3::new(0.0, 16.0, z)];
+    let far = mesh(quad(2.0), vec![[0, 1, 2]]);
+    let near = mesh(quad(1.0), vec![[0, 1, 2]]);
+    let (t, _) = rasterize(&cam, &[&far, &near, &near], &NoAttributes, ()).unwrap();
+    assert_eq!(t.item.get(2, 2), ItemId { object: 1, triangle: 0 });
+    assert_eq!(t.gd.get(2, 2), 1.0);
+    assert_eq!(t.gd.get(15, 15), 0.0);
+}
+
+#[test]
+fn barycentrics_are_perspective_correct() {
+    // A tilted triangle: interpolating world positions with the fragment barycentrics must land
+    // on the point the pixel's ray meets, i.e. unproject(uv, gd).
+    let cam = ScreenSpace(32, 32);
+    let p = vec![Vec3::new(1.0, 1.0, 1.0), Vec3::new(31.0, 2.0, 4.0), Vec3::new(3.0, 30.0, 9.0)];
+    // In ScreenSpace, a world point (x, y, z) projects to (x, y): make the corners' image
+    // positions differ from their x, y by storing world = (u·z, v·z, z) (a true perspective).
+    let world: Vec<Vec3> = p.iter().map(|v| Vec3::new(v.x * v.z, v.y * v.z, v.z)).collect();
+    struct Persp;
+    impl Projection for Persp {
+        fn resolution(&self) -> (u32, u32) {
+            (32, 32)
+        }
+        fn project(&self, p: DVec3) -> Option<ImagePoint> {
+            (p.z > 0.0).then(|| ImagePoint {
+                uv: DVec2::new(p.x / p.z, p.y / p.z),
+                gd: 1.0 / p.z,
+            })
+        }
+        fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+            uv.extend(1.0) / gd
+        }
+        fn clip_distance(&self, p: DVec3) -> f64 {
+            p.z - 1e-3
+        }
+    }
+    let _ = cam;
+    let m = mesh(world.clone(), vec![[0, 1, 2]]);
+    let (t, stats) = rasterize(&Persp, &[&m], &StoreFragment, None).unwrap();
+    assert!(stats.written > 100);
+    for f in t.attributes.pixels().iter().flatten() {
+        let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
+        let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
+        let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
+        assert!((interp - exact).length() < 1e-4 * exact.length(), "{interp} vs {exact}");
+        assert!((f.bary.element_sum() - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn triangles_crossing_the_near_plane_are_clipped_not_dropped() {
+    let cam = ScreenSpace(16, 16);
+    // One corner behind the camera: the visible part still covers pixels, with positive gd.
+    let m = mesh(
+        vec![Vec3::new(2.0, 2.0, 1.0), Vec3::new(14.0, 2.0, 1.0), Vec3::new(2.0, 14.0, -1.0)],
+        vec![[0, 1, 2]],
+    );
+    let (t, stats) = rasterize(&cam, &[&m], &NoAttributes, ()).unwrap();
+    assert!(stats.written > 10);
+    assert!(t.gd.pixels().iter().all(|&g| g >= 0.0 && g.is_finite()));
+    // Entirely behind: nothing.
+    let behind = mesh(vec![Vec3::new(2.0, 2.0, -1.0), Vec3::new(14.0, 2.0, -1.0), Vec3::new(2.0, 14.0, -1.0)], vec![[0, 1, 2]]);
+    let (_, stats) = rasterize(&cam, &[&behind], &NoAttributes, ()).unwrap();
+    assert_eq!(stats.written, 0);
+}
+
+#[test]
+fn huge_triangles_are_guard_band_clipped() {
+    // Corners millions of pixels away must neither overflow nor lose the on-screen part.
+    let cam = ScreenSpace(16, 16);
+    let m = mesh(
+        vec![Vec3::new(-1e8, -1e8, 1.0), Vec3::new(1e8, -1e8, 1.0), Vec3::new(0.0, 1e8, 1.0)],
+        vec![[0, 1, 2]],
+    );
+    let (t, _) = rasterize(&cam, &[&m], &NoAttributes, ()).unwrap();
+    assert!(t.item.pixels().iter().all(|id| !id.is_none()));
+}

@@ -1,0 +1,161 @@
+//! The exact BVH over triangle meshes, built and traversed by `obvhs` (PLOC-built, 8-wide
+//! compressed CWBVH with SIMD node tests), with trompe's own triangle test and hit record.
+
+use super::{Hit, RayQuery};
+use crate::geom::{Mesh, Ray, TriangleHit, intersect_triangle};
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::CwBvh;
+use std::sync::Arc;
+
+/// A bounding-volume hierarchy over the triangles of several meshes (object id = index).
+pub struct Bvh {
+    bvh: CwBvh,
+    /// Triangle corners in BVH leaf order.
+    corners: Vec<[Vec3; 3]>,
+    /// `(object, triangle)` of each leaf-ordered triangle.
+    source: Vec<(u32, u32)>,
+    meshes: Vec<Arc<Mesh>>,
+}
+
+impl Bvh {
+    /// Builds the hierarchy (parallel where `obvhs` is).
+    pub fn build(meshes: Vec<Arc<Mesh>>) -> Bvh {
+        let mut tris = Vec::new();
+        let mut source = Vec::new();
+        for (o, m) in meshes.iter().enumerate() {
+            for t in 0..m.triangles.len() {
+                let [a, b, c] = m.corners(t);
+                tris.push(obvhs::triangle::Triangle {
+                    v0: Vec3A::from(a),
+                    v1: Vec3A::from(b),
+                    v2: Vec3A::from(c),
+                });
+                source.push((o as u32, t as u32));
+            }
+        }
+        if tris.is_empty() {
+            return Bvh {
+                bvh: CwBvh::default(),
+                corners: Vec::new(),
+                source: Vec::new(),
+                meshes,
+            };
+        }
+        let mut build_time = std::time::Duration::default();
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut build_time);
+        let corners = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| {
+                let t = &tris[i as usize];
+                [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)]
+            })
+            .collect();
+        let source = bvh.primitive_indices.iter().map(|&i| source[i as usize]).collect();
+        Bvh {
+            bvh,
+            corners,
+            source,
+            meshes,
+        }
+    }
+
+    /// The meshes, by object id.
+    pub fn meshes(&self) -> &[Arc<Mesh>] {
+        &self.meshes
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.corners.len()
+    }
+
+    fn obvhs_ray(ray: &Ray, t_max: f32) -> obvhs::ray::Ray {
+        obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), 0.0, t_max)
+    }
+}
+
+impl RayQuery for Bvh {
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        if self.corners.is_empty() {
+            return None;
+        }
+        let mut best: Option<(usize, TriangleHit)> = None;
+        let mut rec = obvhs::ray::RayHit::none();
+        self.bvh.ray_traverse(Self::obvhs_ray(ray, t_max), &mut rec, |r, id| {
+            match intersect_triangle(ray, self.corners[id], 0.0, r.tmax) {
+                Some(h) => {
+                    best = Some((id, h));
+                    h.t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best.map(|(id, h)| {
+            let (o, t) = self.source[id];
+            surface_hit(&self.meshes[o as usize], o, t, ray, h)
+        })
+    }
+
+    fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.corners.is_empty() {
+            return false;
+        }
+        !self.bvh.ray_traverse_miss(Self::obvhs_ray(ray, t_max), |r, id| {
+            intersect_triangle(ray, self.corners[id], 0.0, r.tmax).map_or(f32::INFINITY, |h| h.t)
+        })
+    }
+}
+
+/// Fills a hit record from a triangle hit: interpolated normal and UV.
+pub(crate) fn surface_hit(mesh: &Mesh, object: u32, triangle: u32, ray: &Ray, h: TriangleHit) -> Hit {
+    let [i0, i1, i2] = mesh.triangles[triangle as usize].map(|i| i as usize);
+    let (b1, b2) = (h.bary.x, h.bary.y);
+    let b0 = 1.0 - b1 - b2;
+    let n = mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2;
+    let geometric_normal = mesh.face_normal(triangle as usize);
+    let uv = mesh
+        .uvs
+        .as_ref()
+        .map_or(Vec2::ZERO, |uv| uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2);
+    Hit {
+        t: h.t,
+        position: ray.at(h.t),
+        normal: n.try_normalize().unwrap_or(geometric_normal),
+        geometric_normal,
+        uv,
+        bary: h.bary,
+        object,
+        triangle,
+        radiance: None,
+    }
+}
+
+/// Tests every triangle: the oracle the BVH is checked against, and the peer it is timed with.
+pub struct BruteForce {
+    meshes: Vec<Arc<Mesh>>,
+}
+
+impl BruteForce {
+    /// Wraps meshes (object id = index).
+    pub fn new(meshes: Vec<Arc<Mesh>>) -> Self {
+        Self { meshes }
+    }
+}
+
+impl RayQuery for BruteForce {
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let mut best: Option<(u32, u32, TriangleHit)> = None;
+        let mut limit = t_max;
+        for (o, m) in self.meshes.iter().enumerate() {
+            for t in 0..m.triangles.len() {
+                if let Some(h) = intersect_triangle(ray, m.corners(t), 0.0, limit) {
+                    limit = h.t;
+                    best = Some((o as u32, t as u32, h));
+                }
+            }
+        }
+        best.map(|(o, t, h)| surface_hit(&self.meshes[o as usize], o, t, ray, h))
+    }
+}

@@ -1,0 +1,86 @@
+//! Exact ray queries: the [`RayQuery`] trait every ray-answering representation implements, the
+//! BVH over triangle meshes (ground truth for every impostor; the CPU "software shader" of
+//! paper 3), a brute-force oracle, and the environment map as a hit at infinity.
+//!
+//! Invariants: `trace` never uses impostors — it is the ground truth. A [`Hit`]'s `t` is the ray
+//! parameter (a distance when the direction is unit length); hits satisfy `0 < t < t_max`.
+
+mod bvh;
+
+pub use bvh::{Bvh, BruteForce};
+
+use crate::frame::envmap::EnvMap;
+use crate::geom::Ray;
+use glam::{Vec2, Vec3};
+
+/// Object id of "nothing" (an empty pixel).
+pub const NO_OBJECT: u32 = u32::MAX;
+/// Object id of the environment (a hit at infinity).
+pub const ENVIRONMENT: u32 = u32::MAX - 1;
+
+/// What a ray query found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit (`f32::INFINITY` for the environment).
+    pub t: f32,
+    /// World position (the ray's direction, for the environment).
+    pub position: Vec3,
+    /// Unit shading normal (interpolated vertex normals); its side is not flipped.
+    pub normal: Vec3,
+    /// Unit geometric normal (counter-clockwise front).
+    pub geometric_normal: Vec3,
+    /// Texture coordinates (zero when the mesh has none).
+    pub uv: Vec2,
+    /// Barycentrics of corners 1 and 2.
+    pub bary: Vec2,
+    /// Object id ([`ENVIRONMENT`] for the environment).
+    pub object: u32,
+    /// Triangle index within the object.
+    pub triangle: u32,
+    /// Radiance carried by image-based answers (environment maps, impostors); `None` for geometry,
+    /// which the renderer shades from its material.
+    pub radiance: Option<Vec3>,
+}
+
+/// Anything that answers rays: the exact BVH, an environment map, later impostors and
+/// billboards. Renderers are generic over it.
+pub trait RayQuery: Sync {
+    /// The nearest hit with `0 < t < t_max`.
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit>;
+    /// Whether anything is hit with `0 < t < t_max` (shadow and visibility rays).
+    fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
+        self.closest_hit(ray, t_max).is_some()
+    }
+}
+
+impl RayQuery for EnvMap {
+    /// The environment is hit by every ray whose range reaches infinity.
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        (t_max == f32::INFINITY).then(|| Hit {
+            t: f32::INFINITY,
+            position: ray.dir,
+            normal: -ray.dir.normalize_or_zero(),
+            geometric_normal: -ray.dir.normalize_or_zero(),
+            uv: self.lookup_uv(ray.dir),
+            bary: Vec2::ZERO,
+            object: ENVIRONMENT,
+            triangle: 0,
+            radiance: Some(self.radiance(ray.dir)),
+        })
+    }
+}
+
+/// The nearer of two answers: geometry first, then what lies behind it (e.g. BVH, then sky).
+pub struct Nearest<A, B>(pub A, pub B);
+
+impl<A: RayQuery, B: RayQuery> RayQuery for Nearest<A, B> {
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        match self.0.closest_hit(ray, t_max) {
+            Some(h) => self.1.closest_hit(ray, h.t).or(Some(h)),
+            None => self.1.closest_hit(ray, t_max),
+        }
+    }
+    fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
+        self.0.any_hit(ray, t_max) || self.1.any_hit(ray, t_max)
+    }
+}
