@@ -96,6 +96,15 @@ fn check_external_files(path: &Path, base: &Path, doc: &gltf::Document) -> Resul
     Ok(())
 }
 
+/// The accessors that define a primitive's vertices: POSITION, NORMAL, TEXCOORD_0.
+type VertexKey = (Option<usize>, Option<usize>, Option<usize>);
+
+fn vertex_key(prim: &gltf::Primitive) -> VertexKey {
+    use gltf::Semantic;
+    let index = |s: Semantic| prim.get(&s).map(|a| a.index());
+    (index(Semantic::Positions), index(Semantic::Normals), index(Semantic::TexCoords(0)))
+}
+
 /// Node hierarchies deeper than this are refused (cycles are invalid glTF but must not hang).
 const MAX_NODE_DEPTH: usize = 256;
 
@@ -124,8 +133,10 @@ impl Flatten<'_> {
             });
         }
         if let Some(mesh) = node.mesh() {
+            // Primitives of one instance that share vertex accessors share vertices.
+            let mut shared = HashMap::new();
             for prim in mesh.primitives() {
-                self.primitive(&mesh, &prim, &world)?;
+                self.primitive(&mesh, &prim, &world, &mut shared)?;
             }
         }
         for child in node.children() {
@@ -155,7 +166,13 @@ impl Flatten<'_> {
         Ok(())
     }
 
-    fn primitive(&mut self, mesh: &gltf::Mesh, prim: &gltf::Primitive, world: &Mat4) -> Result<(), MeshError> {
+    fn primitive(
+        &mut self,
+        mesh: &gltf::Mesh,
+        prim: &gltf::Primitive,
+        world: &Mat4,
+        shared: &mut HashMap<VertexKey, u32>,
+    ) -> Result<(), MeshError> {
         if prim.mode() != gltf::mesh::Mode::Triangles {
             self.warnings.push(Warning::Skipped {
                 path: self.path.to_path_buf(),
@@ -199,17 +216,26 @@ impl Flatten<'_> {
             });
         }
         let material = self.material(&prim.material())?;
+        let flip = world.determinant() < 0.0;
+        let oriented = |t: &[u32], base: u32| {
+            if flip { [t[0] + base, t[2] + base, t[1] + base] } else { [t[0] + base, t[1] + base, t[2] + base] }
+        };
+        self.source.triangles += indices.len() / 3;
+        let key = vertex_key(prim);
+        if let Some(&base) = shared.get(&key) {
+            for t in indices.chunks_exact(3) {
+                self.mesh.triangles.push(oriented(t, base));
+                self.mesh.face_material.push(material);
+            }
+            return Ok(());
+        }
+        shared.insert(key, self.mesh.positions.len() as u32);
         self.normals_present &= normals.as_ref().is_some_and(|v| v.len() == n);
         self.source.vertices += n;
-        self.source.triangles += indices.len() / 3;
-        let flip = world.determinant() < 0.0;
         let part = Mesh {
             normals: normals.filter(|v| v.len() == n).unwrap_or_else(|| vec![Vec3::ZERO; n]),
             uvs: uvs.filter(|v| v.len() == n),
-            triangles: indices
-                .chunks_exact(3)
-                .map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] })
-                .collect(),
+            triangles: indices.chunks_exact(3).map(|t| oriented(t, 0)).collect(),
             face_material: vec![0; indices.len() / 3],
             materials: Vec::new(),
             positions,

@@ -1,0 +1,155 @@
+//! Benchmark workloads shared by `cargo bench` (criterion, `benches/`) and `trompe bench`: each
+//! is timed beside a peer measured in the same run, so figures come with a ratio.
+//!
+//! Workloads (issue 2): rasterizer throughput on the 56k-triangle bunny (peer: a `memcpy` of the
+//! bytes the rasterizer writes); BVH build; primary and incoherent (reflected) rays per second
+//! through the BVH (peer: brute force over every triangle, on a sample of the same rays).
+
+use crate::camera::Pinhole;
+use crate::geom::{Mesh, Ray};
+use crate::raster::{ItemId, NoAttributes, rasterize};
+use crate::render::shading::reflect;
+use crate::trace::{BruteForce, Bvh, RayQuery};
+use glam::{DVec2, Vec3};
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// A camera framing `mesh` from the front-right, `size × size` pixels.
+pub fn framing_camera(mesh: &Mesh, size: u32) -> Pinhole {
+    let b = mesh.bounds();
+    let r = b.radius();
+    let eye = b.center() + Vec3::new(0.5, 0.35, 1.0).normalize() * r * 2.6;
+    Pinhole::look_at(eye, b.center(), Vec3::Y, 45.0, size, size)
+        .expect("a valid framing")
+        .with_near(r as f64 * 1e-3)
+}
+
+/// Runs `f` repeatedly for at least `min_time` (and at least once); returns the median duration.
+pub fn time_median(min_time: Duration, mut f: impl FnMut()) -> Duration {
+    let mut samples = Vec::new();
+    let start = Instant::now();
+    while samples.is_empty() || (start.elapsed() < min_time && samples.len() < 1000) {
+        let t = Instant::now();
+        f();
+        samples.push(t.elapsed());
+    }
+    samples.sort();
+    samples[samples.len() / 2]
+}
+
+/// Rasterizes `mesh` through `camera` into depth and item buffers; returns pixels written.
+pub fn raster_once(camera: &Pinhole, mesh: &Mesh) -> u64 {
+    let (_, stats) = rasterize(camera, &[mesh], &NoAttributes, ()).expect("camera size is valid");
+    stats.written
+}
+
+/// The bytes a depth + item rasterization writes, copied once (the raster peer).
+pub fn memcpy_frame(src: &[u8], dst: &mut [u8]) {
+    dst.copy_from_slice(src);
+}
+
+/// Size in bytes of the depth and item buffers of a `size × size` frame.
+pub fn frame_bytes(size: u32) -> usize {
+    size as usize * size as usize * (std::mem::size_of::<f32>() + std::mem::size_of::<ItemId>())
+}
+
+/// Primary rays of `camera`, one per pixel centre.
+pub fn primary_rays(camera: &Pinhole) -> Vec<Ray> {
+    let (w, h) = crate::camera::Projection::resolution(camera);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5)))
+        .collect()
+}
+
+/// Reflected rays: each primary ray that hits is mirrored about the shading normal at the hit
+/// (incoherent: neighbouring rays diverge over the curved surface).
+pub fn reflected_rays(bvh: &Bvh, primary: &[Ray], epsilon: f32) -> Vec<Ray> {
+    primary
+        .par_iter()
+        .filter_map(|r| {
+            let h = bvh.closest_hit(r, f32::INFINITY)?;
+            let n = if h.normal.dot(r.dir) > 0.0 { -h.normal } else { h.normal };
+            let ng = if h.geometric_normal.dot(r.dir) > 0.0 { -h.geometric_normal } else { h.geometric_normal };
+            Some(Ray::new(h.position + ng * epsilon, reflect(r.dir, n)))
+        })
+        .collect()
+}
+
+/// Traces every ray (closest hit, in parallel); returns how many hit.
+pub fn trace_all<Q: RayQuery>(scene: &Q, rays: &[Ray]) -> usize {
+    rays.par_iter().filter(|r| scene.closest_hit(r, f32::INFINITY).is_some()).count()
+}
+
+/// One row of the `trompe bench` table.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// What was measured.
+    pub name: String,
+    /// The figure.
+    pub value: f64,
+    /// Its unit.
+    pub unit: &'static str,
+    /// A ratio against the named peer measured in the same run, if any.
+    pub versus: Option<(f64, String)>,
+}
+
+/// Runs the foundation benchmarks on `mesh` (the bunny); `quick` shortens every timing.
+pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
+    let min = Duration::from_millis(if quick { 200 } else { 1500 });
+    let mut out = Vec::new();
+    let tris = mesh.triangle_count() as f64;
+    for size in [512u32, 1024] {
+        let cam = framing_camera(mesh, size);
+        let mut written = 0;
+        let t = time_median(min, || written = raster_once(&cam, mesh));
+        let bytes = frame_bytes(size);
+        let (src, mut dst) = (vec![1u8; bytes], vec![0u8; bytes]);
+        let peer = time_median(min, || memcpy_frame(&src, &mut dst));
+        out.push(Figure {
+            name: format!("raster bunny {size}²: triangles"),
+            value: tris / t.as_secs_f64(),
+            unit: "tri/s",
+            versus: None,
+        });
+        out.push(Figure {
+            name: format!("raster bunny {size}²: pixels written"),
+            value: written as f64 / t.as_secs_f64(),
+            unit: "px/s",
+            versus: Some((t.as_secs_f64() / peer.as_secs_f64(), format!("× the time of a memcpy of its {:.1} MB of buffers", bytes as f64 / 1e6))),
+        });
+    }
+    let meshes = vec![Arc::new(mesh.clone())];
+    let mut bvh = None;
+    let build = time_median(min, || bvh = Some(Bvh::build(meshes.clone())));
+    let bvh = bvh.expect("built at least once");
+    out.push(Figure {
+        name: "BVH build (56k triangles)".into(),
+        value: build.as_secs_f64() * 1e3,
+        unit: "ms",
+        versus: None,
+    });
+    let cam = framing_camera(mesh, 512);
+    let primary = primary_rays(&cam);
+    let reflected = reflected_rays(&bvh, &primary, mesh.bounds().radius() * 1e-4);
+    let brute = BruteForce::new(meshes);
+    for (name, rays) in [("primary", &primary), ("reflected (incoherent)", &reflected)] {
+        let t = time_median(min, || {
+            trace_all(&bvh, rays);
+        });
+        let sample: Vec<Ray> = rays.iter().step_by((rays.len() / 256).max(1)).copied().collect();
+        let tb = time_median(min / 4, || {
+            trace_all(&brute, &sample);
+        });
+        let bvh_rate = rays.len() as f64 / t.as_secs_f64();
+        let brute_rate = sample.len() as f64 / tb.as_secs_f64();
+        out.push(Figure {
+            name: format!("BVH rays, {name}"),
+            value: bvh_rate,
+            unit: "rays/s",
+            versus: Some((bvh_rate / brute_rate, "× brute force over every triangle".into())),
+        });
+    }
+    out
+}

@@ -1,0 +1,267 @@
+//! The `trompe` command line: clap definitions and thin glue over the library. No algorithm
+//! lives here.
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use trompe::frame::{io, metrics};
+use trompe::render::{self, Method, Progress, Timings};
+use trompe::scene::Scene;
+
+/// Impostor-based and image-based rendering on the CPU.
+#[derive(Parser, Debug)]
+#[command(name = "trompe", version, about)]
+pub struct Cli {
+    /// Worker threads (default: every core).
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    /// Print per-step timings and loader warnings.
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene file to an image.
+    Render {
+        /// Scene file (TOML; see scenes/README.md).
+        scene: PathBuf,
+        /// Output image: .png (sRGB) or .exr (linear float).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Renderer.
+        #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
+        method: MethodArg,
+        /// Time in seconds (camera path and animation); default: the scene's.
+        #[arg(long)]
+        time: Option<f32>,
+        /// Also write the depth (distance) as a float EXR.
+        #[arg(long)]
+        depth: Option<PathBuf>,
+        /// Also write the shading normals as a float EXR.
+        #[arg(long)]
+        normals: Option<PathBuf>,
+    },
+    /// Compare two images: PSNR, SSIM and FLIP, and a FLIP heat map.
+    Compare {
+        /// Reference image (.png, .exr or .hdr).
+        reference: PathBuf,
+        /// Test image.
+        test: PathBuf,
+        /// Where to write the FLIP heat map (PNG).
+        #[arg(long, default_value = "flip-heatmap.png")]
+        heatmap: PathBuf,
+        /// Only average over pixels where this image is non-black.
+        #[arg(long)]
+        mask: Option<PathBuf>,
+    },
+    /// Describe a mesh file: counts, bounds, materials, textures.
+    Info {
+        /// .obj, .ply, .gltf or .glb.
+        mesh: PathBuf,
+    },
+    /// Render the demo scenes and write an HTML report.
+    Demo {
+        /// Output directory.
+        #[arg(short, long, default_value = "out/demo")]
+        output: PathBuf,
+    },
+    /// Measure throughput against peers measured in the same run.
+    Bench {
+        /// Shorter timings (less stable figures).
+        #[arg(long)]
+        quick: bool,
+        /// Mesh to measure on (default: the shipped 56k-triangle bunny).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+    },
+}
+
+/// `--method`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MethodArg {
+    /// Rasterize and shade (environment-mapped mirrors and glass).
+    Raster,
+    /// Whitted ray tracing through the exact BVH.
+    Trace,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::Raster => Method::Raster,
+            MethodArg::Trace => Method::Trace,
+        }
+    }
+}
+
+/// A progress bar over rows.
+struct Bar(ProgressBar);
+
+impl Progress for Bar {
+    fn advance(&self, rows: u64) {
+        self.0.inc(rows);
+    }
+}
+
+fn bar(label: &str, total: u64) -> Box<dyn Progress> {
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template("{msg:>28} [{bar:30}] {percent:>3}% {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    pb.set_message(label.to_string());
+    Box::new(Bar(pb))
+}
+
+/// Refuses an output path that is one of the inputs: nothing a user gave is overwritten.
+fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    if let Some(o) = canon(output) {
+        for i in inputs {
+            if canon(i).as_ref() == Some(&o) {
+                bail!("{}: refusing to overwrite an input file", output.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+fn print_timings(t: &Timings) {
+    for (name, d) in &t.0 {
+        eprintln!("  {name:<16} {:>9.1} ms", d.as_secs_f64() * 1e3);
+    }
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> Result<ExitCode> {
+    if let Some(n) = cli.threads {
+        if n == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
+    match cli.command {
+        Command::Render {
+            scene,
+            output,
+            method,
+            time,
+            depth,
+            normals,
+        } => {
+            for o in [Some(&output), depth.as_ref(), normals.as_ref()].into_iter().flatten() {
+                check_output(o, &[&scene])?;
+            }
+            let mut timings = Timings::default();
+            let s = timings.time("load scene", || Scene::load(&scene)).context("loading the scene")?;
+            for w in &s.warnings {
+                eprintln!("warning: {w}");
+            }
+            let t = time.unwrap_or(s.render.time);
+            let method: Method = method.into();
+            let pb = bar(&format!("{method}"), s.camera.height as u64);
+            let (frame, steps) = render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
+            timings.0.extend(steps.0);
+            timings
+                .time("write", || -> Result<()> {
+                    io::write_color(&output, &frame.color)?;
+                    if let Some(d) = &depth {
+                        io::write_exr_depth(d, &frame.depth)?;
+                    }
+                    if let Some(n) = &normals {
+                        io::write_exr_normals(n, &frame.normal)?;
+                    }
+                    Ok(())
+                })
+                .context("writing the output")?;
+            eprintln!("wrote {}", output.display());
+            if cli.verbose {
+                print_timings(&timings);
+            }
+        }
+        Command::Compare {
+            reference,
+            test,
+            heatmap,
+            mask,
+        } => {
+            check_output(&heatmap, &[&reference, &test])?;
+            let a = io::read_color(&reference).with_context(|| format!("reading {}", reference.display()))?;
+            let b = io::read_color(&test).with_context(|| format!("reading {}", test.display()))?;
+            let mask = match mask {
+                Some(m) => {
+                    let img = io::read_color(&m).with_context(|| format!("reading {}", m.display()))?;
+                    Some(img.map(|p| p.truncate().max_element() > 0.0))
+                }
+                None => None,
+            };
+            let s = metrics::compare(&a, &b, mask.as_ref()).context("comparing")?;
+            println!("PSNR {:.3} dB", s.psnr);
+            println!("SSIM {:.5}", s.ssim);
+            println!("FLIP {:.5}", s.flip);
+            let heat = metrics::heat_map(&metrics::flip_map(&a, &b)?);
+            io::write_png(&heatmap, &heat)?;
+            eprintln!("wrote {}", heatmap.display());
+        }
+        Command::Info { mesh } => {
+            let loaded = trompe::geom::io::load(&mesh)?;
+            let m = &loaded.mesh;
+            let b = m.bounds();
+            println!("{}", mesh.display());
+            println!("  vertices   {} in the file, {} after splitting by attribute", loaded.source.vertices, m.positions.len());
+            println!("  triangles  {} in the file, {} kept", loaded.source.triangles, m.triangle_count());
+            println!("  bounds     [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]", b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z);
+            println!("  surface    {:.6} square units", m.area());
+            println!("  UVs        {}", if m.uvs.is_some() { "yes" } else { "no" });
+            println!("  materials  {}", m.materials.len());
+            for mat in &m.materials {
+                let c = mat.base_color;
+                let tex = mat
+                    .texture
+                    .as_ref()
+                    .map_or("no texture".to_string(), |t| format!("texture {}×{}", t.width(), t.height()));
+                println!("    {:<24} colour [{:.3}, {:.3}, {:.3}], {tex}", mat.name, c.x, c.y, c.z);
+            }
+            for w in &loaded.warnings {
+                eprintln!("warning: {w}");
+            }
+        }
+        Command::Demo { output } => {
+            let inputs = trompe::report::DemoInputs::locate();
+            let summary = trompe::report::demo(&inputs, &output, &|label, rows| bar(label, rows)).context("building the demo report")?;
+            for r in &summary.renders {
+                println!(
+                    "{:<12} {:<7} {:>8.0} ms  PSNR {:>6.2}  SSIM {:.4}  FLIP {:.4}  ids {:.2} %",
+                    r.scene,
+                    r.method.to_string(),
+                    r.time.as_secs_f64() * 1e3,
+                    r.scores.psnr,
+                    r.scores.ssim,
+                    r.scores.flip,
+                    r.id_agreement * 100.0
+                );
+            }
+            println!("wrote {}", summary.index.display());
+        }
+        Command::Bench { quick, mesh } => {
+            let path = mesh.unwrap_or_else(|| trompe::report::DemoInputs::locate().assets.join("meshes/bunny.obj"));
+            let m = trompe::geom::io::load(&path)?.mesh;
+            println!("trompe bench on {} ({} triangles), {} threads", path.display(), m.triangle_count(), rayon::current_num_threads());
+            for f in trompe::bench::foundation(&m, quick) {
+                let versus = f.versus.map_or(String::new(), |(r, peer)| format!("   ({r:.2} {peer})"));
+                println!("  {:<40} {:>14.4e} {:<7}{versus}", f.name, f.value, f.unit);
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

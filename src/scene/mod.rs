@@ -1,0 +1,588 @@
+//! Scenes: the TOML scene file (format in `scenes/README.md`), camera paths and per-object
+//! animation (all papers).
+//!
+//! [`Scene::load`] reads the file, resolves paths relative to it, loads meshes and the panorama
+//! and validates everything a user typed. [`Scene::view`] evaluates the scene at one time into a
+//! [`View`]: a camera and world-space meshes, which is all a renderer sees.
+//!
+//! Invariants: a loaded scene's camera is valid at every time; paths are relative to the scene
+//! file; unknown keys are errors.
+
+mod file;
+
+pub use file::SceneFile;
+
+use crate::camera::{CameraError, Pinhole};
+use crate::frame::envmap::EnvMap;
+use crate::frame::{FrameError, Image, Rgba};
+use crate::geom::{Aabb, Mesh, MeshError, Texture, Warning};
+use file::{MaterialFile, ObjectFile, ScaleFile};
+use glam::{EulerRot, Mat4, Quat, Vec3};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Errors from loading a scene: each names the scene file and what in it is wrong.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The scene file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The scene file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax, a wrong type or an unknown key (the message gives line and column).
+    #[error("{path}: {message}")]
+    Parse {
+        /// The scene file.
+        path: PathBuf,
+        /// The parser's message.
+        message: String,
+    },
+    /// A value that parses but makes no sense.
+    #[error("{path}: {key}: {reason}")]
+    Invalid {
+        /// The scene file.
+        path: PathBuf,
+        /// Which key (`camera.resolution`, `object[2].mesh` …).
+        key: String,
+        /// Why.
+        reason: String,
+    },
+    /// An object's mesh could not be loaded.
+    #[error("{path}: {key}: {source}")]
+    Mesh {
+        /// The scene file.
+        path: PathBuf,
+        /// Which object.
+        key: String,
+        /// The cause.
+        source: MeshError,
+    },
+    /// An image (panorama, texture) could not be loaded.
+    #[error("{path}: {key}: {source}")]
+    Image {
+        /// The scene file.
+        path: PathBuf,
+        /// Which key.
+        key: String,
+        /// The cause.
+        source: FrameError,
+    },
+    /// The camera parameters make no camera.
+    #[error("{path}: camera: {source}")]
+    Camera {
+        /// The scene file.
+        path: PathBuf,
+        /// The cause.
+        source: CameraError,
+    },
+}
+
+/// How a surface responds to light.
+#[derive(Clone, Debug)]
+pub enum Surface {
+    /// Lambertian. `None` uses the mesh file's materials; `Some` overrides them.
+    Diffuse(Option<DiffuseOverride>),
+    /// Perfect mirror with a per-channel reflectance.
+    Mirror {
+        /// Reflectance.
+        tint: Vec3,
+    },
+    /// Smooth dielectric.
+    Glass {
+        /// Index of refraction.
+        ior: f32,
+        /// Transmittance.
+        tint: Vec3,
+    },
+}
+
+/// A diffuse colour or texture given in the scene, replacing the mesh file's.
+#[derive(Clone, Debug)]
+pub struct DiffuseOverride {
+    /// Linear colour (multiplies the texture).
+    pub color: Vec3,
+    /// Texture.
+    pub texture: Option<Texture>,
+}
+
+/// Motion of an object over time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Animation {
+    /// Unit rotation axis through the object's origin.
+    pub axis: Vec3,
+    /// Radians per second.
+    pub angular_speed: f32,
+    /// Units per second.
+    pub velocity: Vec3,
+}
+
+/// One object of a scene.
+#[derive(Clone, Debug)]
+pub struct SceneObject {
+    /// Name (for reports and ids).
+    pub name: String,
+    /// The mesh in object space.
+    pub mesh: Arc<Mesh>,
+    /// Its surface.
+    pub surface: Surface,
+    /// Object → world at time 0.
+    pub world_from_object: Mat4,
+    /// Motion, if any.
+    pub animation: Option<Animation>,
+}
+
+/// A camera keyframe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Keyframe {
+    /// Seconds.
+    pub time: f32,
+    /// Eye.
+    pub position: Vec3,
+    /// Target.
+    pub look_at: Vec3,
+}
+
+/// The viewing camera's parameters (a camera is built per time, along the path).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraSpec {
+    /// Eye.
+    pub position: Vec3,
+    /// Target.
+    pub look_at: Vec3,
+    /// Up.
+    pub up: Vec3,
+    /// Full vertical field of view, degrees.
+    pub fov_y: f64,
+    /// Pixels.
+    pub width: u32,
+    /// Pixels.
+    pub height: u32,
+    /// Near-plane distance.
+    pub near: f64,
+    /// Keyframes (sorted by time); empty for a still camera.
+    pub path: Vec<Keyframe>,
+}
+
+/// A directional light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// Unit direction toward the light.
+    pub direction: Vec3,
+    /// Radiance scale (colour × intensity).
+    pub radiance: Vec3,
+}
+
+/// Everything a renderer needs to light a surface.
+#[derive(Clone, Debug)]
+pub struct Lighting {
+    /// Panorama at infinity (a constant background when the scene has none).
+    pub environment: EnvMap,
+    /// The sun, if any.
+    pub light: Option<Light>,
+}
+
+/// Renderer settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Ray-tracing recursion limit.
+    pub max_depth: u32,
+    /// Time of the default view.
+    pub time: f32,
+    /// Offset along the normal for secondary rays (1e-4 × the scene's radius).
+    pub ray_epsilon: f32,
+}
+
+/// A loaded scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// Viewing camera.
+    pub camera: CameraSpec,
+    /// Objects (object id = index).
+    pub objects: Vec<SceneObject>,
+    /// Environment and sun.
+    pub lighting: Lighting,
+    /// Renderer settings.
+    pub render: RenderSettings,
+    /// Problems survived while loading.
+    pub warnings: Vec<Warning>,
+}
+
+/// A scene at one instant: camera and world-space geometry.
+#[derive(Clone, Debug)]
+pub struct View {
+    /// The camera at that time.
+    pub camera: Pinhole,
+    /// World-space meshes (object id = index).
+    pub meshes: Vec<Arc<Mesh>>,
+    /// Surfaces, by object id.
+    pub surfaces: Vec<Surface>,
+}
+
+impl View {
+    /// Borrowed meshes, in object order (what the rasterizer takes).
+    pub fn mesh_refs(&self) -> Vec<&Mesh> {
+        self.meshes.iter().map(|m| m.as_ref()).collect()
+    }
+}
+
+fn vec3(a: [f32; 3]) -> Vec3 {
+    Vec3::from_array(a)
+}
+
+impl Scene {
+    /// Reads and validates a scene file, loading its meshes and images.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Parse {
+            path: path.to_path_buf(),
+            message: e.to_string().trim_end().replace('\n', "\n  "),
+        })?;
+        Self::from_file(path, file)
+    }
+
+    /// Resolves a parsed scene file (`path` locates relative paths and names errors).
+    pub fn from_file(path: &Path, file: SceneFile) -> Result<Scene, SceneError> {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let invalid = |key: &str, reason: String| SceneError::Invalid {
+            path: path.to_path_buf(),
+            key: key.to_string(),
+            reason,
+        };
+        let finite = |key: &str, v: &[f32]| -> Result<(), SceneError> {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(invalid(key, "values must be finite".into()))
+            }
+        };
+        let mut warnings = Vec::new();
+        let mut objects = Vec::new();
+        for (i, o) in file.objects.iter().enumerate() {
+            objects.push(load_object(path, dir, i, o, &mut warnings)?);
+        }
+        let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
+            b.union(o.mesh.bounds().transformed(&o.world_from_object))
+        });
+        let radius = if bounds.is_empty() { 1.0 } else { bounds.radius().max(1e-6) };
+
+        let c = &file.camera;
+        finite("camera.position", &c.position)?;
+        finite("camera.look_at", &c.look_at)?;
+        finite("camera.up", &c.up)?;
+        let (width, height) = crate::frame::check_size(c.resolution[0], c.resolution[1])
+            .map_err(|e| invalid("camera.resolution", e.to_string()))?;
+        let near = c.near.unwrap_or(1e-3 * radius as f64);
+        if !(near > 0.0 && near.is_finite()) {
+            return Err(invalid("camera.near", format!("{near} must be positive")));
+        }
+        let mut keys = Vec::new();
+        for (k, kf) in c.path.iter().enumerate() {
+            let key = format!("camera.path[{k}]");
+            finite(&key, &[kf.time])?;
+            finite(&key, &kf.position)?;
+            finite(&key, &kf.look_at)?;
+            keys.push(Keyframe {
+                time: kf.time,
+                position: vec3(kf.position),
+                look_at: vec3(kf.look_at),
+            });
+        }
+        keys.sort_by(|a, b| a.time.total_cmp(&b.time));
+        let camera = CameraSpec {
+            position: vec3(c.position),
+            look_at: vec3(c.look_at),
+            up: vec3(c.up),
+            fov_y: c.fov_y,
+            width,
+            height,
+            near,
+            path: keys,
+        };
+        // Validate the camera at its rest pose and at every keyframe now, not at render time.
+        for t in std::iter::once(file.render.time).chain(camera.path.iter().map(|k| k.time)) {
+            camera.at(t).map_err(|source| SceneError::Camera {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        }
+
+        let environment = match &file.environment {
+            Some(e) => {
+                finite("environment.rotation", &[e.rotation, e.intensity])?;
+                EnvMap::load(&dir.join(&e.path), e.rotation.to_radians(), e.intensity).map_err(|source| {
+                    SceneError::Image {
+                        path: path.to_path_buf(),
+                        key: "environment.path".into(),
+                        source,
+                    }
+                })?
+            }
+            None => EnvMap::constant(vec3(file.render.background)),
+        };
+        let light = match &file.light {
+            Some(l) => {
+                finite("light", &l.direction)?;
+                finite("light", &l.color)?;
+                let direction = vec3(l.direction)
+                    .try_normalize()
+                    .ok_or_else(|| invalid("light.direction", "must not be zero".into()))?;
+                Some(Light {
+                    direction,
+                    radiance: vec3(l.color) * l.intensity,
+                })
+            }
+            None => None,
+        };
+        if file.render.max_depth > 64 {
+            return Err(invalid("render.max_depth", format!("{} is more than 64", file.render.max_depth)));
+        }
+        Ok(Scene {
+            path: path.to_path_buf(),
+            camera,
+            objects,
+            lighting: Lighting { environment, light },
+            render: RenderSettings {
+                max_depth: file.render.max_depth,
+                time: file.render.time,
+                ray_epsilon: 1e-4 * radius,
+            },
+            warnings,
+        })
+    }
+
+    /// The scene at time `t` (seconds): camera along its path, objects animated.
+    pub fn view(&self, t: f32) -> Result<View, CameraError> {
+        let camera = self.camera.at(t)?;
+        let meshes = self
+            .objects
+            .iter()
+            .map(|o| Arc::new(o.mesh.transformed(&o.world_from_object_at(t))))
+            .collect();
+        Ok(View {
+            camera,
+            meshes,
+            surfaces: self.objects.iter().map(|o| o.surface.clone()).collect(),
+        })
+    }
+}
+
+impl CameraSpec {
+    /// The camera at time `t`: keyframes interpolated linearly, clamped at the ends.
+    pub fn at(&self, t: f32) -> Result<Pinhole, CameraError> {
+        let (position, look_at) = match self.path.as_slice() {
+            [] => (self.position, self.look_at),
+            [k] => (k.position, k.look_at),
+            keys => {
+                let i = keys.partition_point(|k| k.time <= t);
+                if i == 0 {
+                    (keys[0].position, keys[0].look_at)
+                } else if i == keys.len() {
+                    (keys[i - 1].position, keys[i - 1].look_at)
+                } else {
+                    let (a, b) = (&keys[i - 1], &keys[i]);
+                    let s = (t - a.time) / (b.time - a.time).max(f32::MIN_POSITIVE);
+                    (a.position.lerp(b.position, s), a.look_at.lerp(b.look_at, s))
+                }
+            }
+        };
+        Ok(Pinhole::look_at(position, look_at, self.up, self.fov_y, self.width, self.height)?.with_near(self.near))
+    }
+}
+
+impl SceneObject {
+    /// Object → world at time `t`.
+    pub fn world_from_object_at(&self, t: f32) -> Mat4 {
+        match self.animation {
+            None => self.world_from_object,
+            Some(a) => {
+                let (_, _, origin) = self.world_from_object.to_scale_rotation_translation();
+                let spin = Mat4::from_translation(origin + a.velocity * t)
+                    * Mat4::from_axis_angle(a.axis, a.angular_speed * t)
+                    * Mat4::from_translation(-origin);
+                spin * self.world_from_object
+            }
+        }
+    }
+}
+
+fn load_object(
+    scene: &Path,
+    dir: &Path,
+    index: usize,
+    o: &ObjectFile,
+    warnings: &mut Vec<Warning>,
+) -> Result<SceneObject, SceneError> {
+    let key = |k: &str| format!("object[{index}]{k}");
+    let invalid = |k: &str, reason: String| SceneError::Invalid {
+        path: scene.to_path_buf(),
+        key: key(k),
+        reason,
+    };
+    let (mut mesh, default_name) = match (&o.mesh, &o.shape) {
+        (Some(m), None) => {
+            let mesh_path = dir.join(m);
+            let loaded = crate::geom::io::load(&mesh_path).map_err(|source| SceneError::Mesh {
+                path: scene.to_path_buf(),
+                key: key(".mesh"),
+                source,
+            })?;
+            warnings.extend(loaded.warnings);
+            let stem = mesh_path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_string();
+            (loaded.mesh, stem)
+        }
+        (None, Some(s)) => {
+            let mesh = match s.as_str() {
+                "plane" => crate::geom::plane(1),
+                "cube" => crate::geom::cube(),
+                "sphere" => crate::geom::icosphere(4),
+                other => return Err(invalid(".shape", format!("unknown shape {other:?} (plane, cube or sphere)"))),
+            };
+            (mesh, s.clone())
+        }
+        _ => return Err(invalid("", "needs exactly one of `mesh` or `shape`".into())),
+    };
+    if let Some(fit) = o.fit {
+        if !(fit > 0.0 && fit.is_finite()) {
+            return Err(invalid(".fit", format!("{fit} must be positive")));
+        }
+        let b = mesh.bounds();
+        let s = fit / b.extent().max_element().max(f32::MIN_POSITIVE);
+        let base = Vec3::new(b.center().x, b.min.y, b.center().z);
+        mesh = mesh.transformed(&(Mat4::from_scale(Vec3::splat(s)) * Mat4::from_translation(-base)));
+    }
+    let scale = match &o.scale {
+        None => Vec3::ONE,
+        Some(ScaleFile::Uniform(s)) => Vec3::splat(*s),
+        Some(ScaleFile::PerAxis(s)) => Vec3::from_array(*s),
+    };
+    let all: Vec<f32> = [o.translate, o.rotate, scale.to_array()].concat();
+    if !all.iter().all(|x| x.is_finite()) || scale.cmpeq(Vec3::ZERO).any() {
+        return Err(invalid("", "translate, rotate and scale must be finite and scale non-zero".into()));
+    }
+    let [rx, ry, rz] = o.rotate.map(f32::to_radians);
+    let world_from_object = Mat4::from_scale_rotation_translation(
+        scale,
+        Quat::from_euler(EulerRot::ZYX, rz, ry, rx),
+        Vec3::from_array(o.translate),
+    );
+    let surface = match &o.material {
+        None => Surface::Diffuse(None),
+        Some(MaterialFile::Diffuse { color, texture }) => {
+            let texture = match texture {
+                Some(t) => Some(Arc::new(load_image(scene, &dir.join(t), &key(".material.texture"))?)),
+                None => None,
+            };
+            Surface::Diffuse(Some(DiffuseOverride {
+                color: color.map_or(Vec3::ONE, Vec3::from_array),
+                texture,
+            }))
+        }
+        Some(MaterialFile::Mirror { tint }) => Surface::Mirror { tint: Vec3::from_array(*tint) },
+        Some(MaterialFile::Glass { ior, tint }) => {
+            if !(*ior >= 1.0 && *ior < 5.0) {
+                return Err(invalid(".material.ior", format!("{ior} must be in [1, 5)")));
+            }
+            Surface::Glass {
+                ior: *ior,
+                tint: Vec3::from_array(*tint),
+            }
+        }
+    };
+    let animation = match &o.animate {
+        None => None,
+        Some(a) => {
+            let axis = Vec3::from_array(a.axis)
+                .try_normalize()
+                .ok_or_else(|| invalid(".animate.axis", "must not be zero".into()))?;
+            Some(Animation {
+                axis,
+                angular_speed: a.degrees_per_second.to_radians(),
+                velocity: Vec3::from_array(a.velocity),
+            })
+        }
+    };
+    Ok(SceneObject {
+        name: o.name.clone().unwrap_or(default_name),
+        mesh: Arc::new(mesh),
+        surface,
+        world_from_object,
+        animation,
+    })
+}
+
+fn load_image(scene: &Path, path: &Path, key: &str) -> Result<Image<Rgba>, SceneError> {
+    crate::frame::io::read_color(path).map_err(|source| SceneError::Image {
+        path: scene.to_path_buf(),
+        key: key.to_string(),
+        source,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: "t.toml".into(),
+            message: e.to_string(),
+        })?;
+        Scene::from_file(Path::new("t.toml"), file)
+    }
+
+    const CAMERA: &str = "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [32, 24]\n";
+
+    #[test]
+    fn a_minimal_scene_loads() {
+        let s = parse(&format!("{CAMERA}[[object]]\nshape = \"cube\"\n")).unwrap();
+        assert_eq!(s.objects.len(), 1);
+        let v = s.view(0.0).unwrap();
+        assert_eq!(v.meshes[0].triangle_count(), 12);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_errors() {
+        let e = parse(&format!("{CAMERA}[[object]]\nshape = \"cube\"\ncolour = 1\n")).unwrap_err();
+        assert!(e.to_string().contains("colour"), "{e}");
+        let e = parse(&format!("{CAMERA}[[object]]\nshape = \"cube\"\nmaterial = {{ type = \"glass\", iorr = 1.5 }}\n")).unwrap_err();
+        assert!(e.to_string().contains("iorr"), "{e}");
+        let e = parse(&CAMERA.replace("[32, 24]", "[1000000, 1000000]")).unwrap_err();
+        assert!(e.to_string().contains("camera.resolution"), "{e}");
+        let e = parse(&CAMERA.replace("[32, 24]", "[0, 24]")).unwrap_err();
+        assert!(e.to_string().contains("camera.resolution"), "{e}");
+        let e = parse(&format!("{CAMERA}[[object]]\nshape = \"teapot\"\n")).unwrap_err();
+        assert!(e.to_string().contains("object[0].shape"), "{e}");
+        let e = parse(&format!("{CAMERA}[[object]]\nmesh = \"missing.obj\"\n")).unwrap_err();
+        assert!(e.to_string().contains("missing.obj"), "{e}");
+        let e = parse(&CAMERA.replace("look_at = [0, 0, 0]", "look_at = [0, 1, 3]")).unwrap_err();
+        assert!(e.to_string().contains("camera"), "{e}");
+    }
+
+    #[test]
+    fn camera_path_and_animation_move_things() {
+        let text = format!(
+            "{CAMERA}[[camera.path]]\ntime = 0\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\n\
+             [[camera.path]]\ntime = 2\nposition = [2, 1, 3]\nlook_at = [0, 0, 0]\n\
+             [[object]]\nshape = \"cube\"\ntranslate = [1, 0, 0]\n[object.animate]\ndegrees_per_second = 90\n"
+        );
+        let s = parse(&text).unwrap();
+        let mid = s.camera.at(1.0).unwrap();
+        assert!((mid.position() - glam::DVec3::new(1.0, 1.0, 3.0)).length() < 1e-6);
+        // A quarter turn about +y through the object's origin after one second.
+        let b0 = s.view(0.0).unwrap().meshes[0].bounds();
+        let b1 = s.view(1.0).unwrap().meshes[0].bounds();
+        assert!((b0.center() - b1.center()).length() < 1e-5);
+        let p = s.objects[0].world_from_object_at(1.0).transform_point3(Vec3::new(0.5, 0.0, 0.0));
+        assert!((p - Vec3::new(1.0, 0.0, -0.5)).length() < 1e-5, "{p}");
+    }
+}

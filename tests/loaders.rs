@@ -1,0 +1,55 @@
+//! Loading the shared models gives the counts listed in ../shared/data/SOURCES.md.
+
+mod common;
+use common::shared;
+use trompe::geom::io::load;
+
+#[track_caller]
+fn check(rel: &str, vertices: usize, triangles: usize) -> trompe::geom::io::LoadedMesh {
+    let loaded = load(&shared(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    assert_eq!(loaded.source.vertices, vertices, "{rel}: vertices");
+    assert_eq!(loaded.source.triangles, triangles, "{rel}: triangles");
+    let m = &loaded.mesh;
+    assert!(m.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4), "{rel}: normals");
+    loaded
+}
+
+#[test]
+fn obj_counts_match_sources() {
+    let bunny = check("meshes/bunny.obj", 28088, 56172);
+    assert_eq!(bunny.mesh.triangle_count(), 56172);
+    let b = bunny.mesh.bounds();
+    assert!((b.max.x - 0.6238).abs() < 1e-3 && (b.min.y + 0.06646).abs() < 1e-4, "{b:?}");
+    check("meshes/bunny_lowres.obj", 1839, 3674);
+    check("meshes/teapot.obj", 792, 992);
+    check("meshes/dragon_res4.obj", 5205, 11102);
+    let tex = check("meshes/bunny10k_textured/bunny10k_textured.obj", 5051, 9999);
+    assert!(tex.mesh.uvs.is_some());
+    assert!(tex.mesh.materials.iter().any(|m| m.texture.is_some()), "texture from map_Kd");
+}
+
+#[test]
+fn gltf_counts_match_sources() {
+    let duck = check("gltf/Duck.glb", 2399, 4212);
+    assert!(duck.mesh.materials.iter().any(|m| m.texture.is_some()));
+    // Root node scale 0.01 is applied: the bounds are those of SOURCES.md.
+    let b = duck.mesh.bounds();
+    assert!((b.max.y - 1.64).abs() < 1e-2, "{b:?}");
+    // The truck's wheels are instanced twice: counts are per instance.
+    let truck = check("gltf/CesiumMilkTruck/CesiumMilkTruck.gltf", 3564, 3624);
+    assert!(truck.mesh.materials.iter().any(|m| m.texture.is_some()));
+    check("gltf/BoxTextured.glb", 24, 12);
+    check("gltf/Suzanne.glb", 7503, 14842);
+}
+
+#[test]
+fn teapot_normals_are_smooth_across_its_duplicated_seams() {
+    let t = load(&shared("meshes/teapot.obj")).unwrap().mesh;
+    // Vertices at the same position get the same (welded) normal.
+    let mut by_pos = std::collections::HashMap::new();
+    for (p, n) in t.positions.iter().zip(&t.normals) {
+        let e = by_pos.entry(p.to_array().map(f32::to_bits)).or_insert(*n);
+        assert!((*e - *n).length() < 1e-6);
+    }
+    assert_eq!(by_pos.len(), 529);
+}
