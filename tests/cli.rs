@@ -1,0 +1,92 @@
+//! The `trompe` binary end to end: outputs, exit codes and error messages.
+
+mod common;
+use common::scratch;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn trompe(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_trompe"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[track_caller]
+fn fails_cleanly(o: &Output, expect: &str) {
+    let e = stderr(o);
+    assert!(!o.status.success(), "should fail: {e}");
+    assert!(!e.contains("panicked"), "panicked: {e}");
+    assert!(e.contains(expect), "expected {expect:?} in: {e}");
+}
+
+#[test]
+fn render_then_compare() {
+    let d = scratch("cli_render");
+    let png = d.join("t.png");
+    let depth = d.join("t-depth.exr");
+    let o = trompe(&["render", "scenes/turntable.toml", "-o", png.to_str().unwrap(), "--method", "raster", "--time", "1", "--depth", depth.to_str().unwrap(), "-v"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(png.is_file() && depth.is_file());
+    assert!(stderr(&o).contains("rasterize"), "timings with -v");
+    let heat = d.join("heat.png");
+    let o = trompe(&["compare", png.to_str().unwrap(), png.to_str().unwrap(), "--heatmap", heat.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("PSNR inf") && out.contains("SSIM 1.00000") && out.contains("FLIP 0.00000"), "{out}");
+    assert!(heat.is_file());
+}
+
+#[test]
+fn info_reports_counts() {
+    let o = trompe(&["info", "assets/meshes/bunny.obj"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("28088 in the file") && out.contains("56172 in the file"), "{out}");
+}
+
+#[test]
+fn bad_inputs_exit_non_zero_with_a_clear_message() {
+    let d = scratch("cli_bad");
+    let scene = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let cam = "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\n";
+    let out = d.join("o.png");
+    let out = out.to_str().unwrap();
+    let absurd = scene("absurd.toml", &format!("{cam}resolution = [1000000, 1000000]\n"));
+    fails_cleanly(&trompe(&["render", &absurd, "-o", out]), "camera.resolution");
+    let unknown = scene("unknown.toml", &format!("{cam}resolution = [8, 8]\nfocal = 3\n"));
+    fails_cleanly(&trompe(&["render", &unknown, "-o", out]), "focal");
+    let missing = scene("missing.toml", &format!("{cam}resolution = [8, 8]\n[[object]]\nmesh = \"nowhere.obj\"\n"));
+    fails_cleanly(&trompe(&["render", &missing, "-o", out]), "nowhere.obj");
+    // The output may not be an input.
+    fails_cleanly(&trompe(&["render", &missing, "-o", &missing]), "refusing to overwrite");
+    let text = std::fs::read_to_string(&missing).unwrap();
+    assert!(text.contains("nowhere.obj"), "input untouched");
+    fails_cleanly(&trompe(&["info", "Cargo.toml"]), "unknown extension");
+    let short = d.join("short.obj");
+    std::fs::write(&short, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    fails_cleanly(&trompe(&["info", short.to_str().unwrap()]), "line 3");
+    let a = d.join("a.png");
+    std::fs::write(&a, "not a png").unwrap();
+    fails_cleanly(&trompe(&["compare", a.to_str().unwrap(), a.to_str().unwrap(), "--heatmap", d.join("h.png").to_str().unwrap()]), "a.png");
+    fails_cleanly(&trompe(&["--threads", "0", "info", "assets/meshes/teapot.obj"]), "--threads");
+}
+
+#[test]
+fn demo_writes_a_report() {
+    let d = scratch("cli_demo");
+    let o = trompe(&["demo", "-o", d.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(Path::new(&d).join("index.html")).unwrap();
+    assert!(html.contains("diffuse-raster.png") && html.contains("FLIP"));
+    assert!(d.join("reflections-trace.png").is_file());
+}
