@@ -70,8 +70,16 @@ pub fn reflected_rays(bvh: &Bvh, primary: &[Ray], epsilon: f32) -> Vec<Ray> {
         .par_iter()
         .filter_map(|r| {
             let h = bvh.closest_hit(r, f32::INFINITY)?;
-            let n = if h.normal.dot(r.dir) > 0.0 { -h.normal } else { h.normal };
-            let ng = if h.geometric_normal.dot(r.dir) > 0.0 { -h.geometric_normal } else { h.geometric_normal };
+            let n = if h.normal.dot(r.dir) > 0.0 {
+                -h.normal
+            } else {
+                h.normal
+            };
+            let ng = if h.geometric_normal.dot(r.dir) > 0.0 {
+                -h.geometric_normal
+            } else {
+                h.geometric_normal
+            };
             Some(Ray::new(h.position + ng * epsilon, reflect(r.dir, n)))
         })
         .collect()
@@ -79,7 +87,9 @@ pub fn reflected_rays(bvh: &Bvh, primary: &[Ray], epsilon: f32) -> Vec<Ray> {
 
 /// Traces every ray (closest hit, in parallel); returns how many hit.
 pub fn trace_all<Q: RayQuery>(scene: &Q, rays: &[Ray]) -> usize {
-    rays.par_iter().filter(|r| scene.closest_hit(r, f32::INFINITY).is_some()).count()
+    rays.par_iter()
+        .filter(|r| scene.closest_hit(r, f32::INFINITY).is_some())
+        .count()
 }
 
 /// One row of the `trompe bench` table.
@@ -117,7 +127,13 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
             name: format!("raster bunny {size}²: pixels written"),
             value: written as f64 / t.as_secs_f64(),
             unit: "px/s",
-            versus: Some((t.as_secs_f64() / peer.as_secs_f64(), format!("× the time of a memcpy of its {:.1} MB of buffers", bytes as f64 / 1e6))),
+            versus: Some((
+                t.as_secs_f64() / peer.as_secs_f64(),
+                format!(
+                    "× the time of a memcpy of its {:.1} MB of buffers",
+                    bytes as f64 / 1e6
+                ),
+            )),
         });
     }
     let meshes = vec![Arc::new(mesh.clone())];
@@ -134,11 +150,18 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     let primary = primary_rays(&cam);
     let reflected = reflected_rays(&bvh, &primary, mesh.bounds().radius() * 1e-4);
     let brute = BruteForce::new(meshes);
-    for (name, rays) in [("primary", &primary), ("reflected (incoherent)", &reflected)] {
+    for (name, rays) in [
+        ("primary", &primary),
+        ("reflected (incoherent)", &reflected),
+    ] {
         let t = time_median(min, || {
             trace_all(&bvh, rays);
         });
-        let sample: Vec<Ray> = rays.iter().step_by((rays.len() / 256).max(1)).copied().collect();
+        let sample: Vec<Ray> = rays
+            .iter()
+            .step_by((rays.len() / 256).max(1))
+            .copied()
+            .collect();
         let tb = time_median(min / 4, || {
             trace_all(&brute, &sample);
         });
@@ -148,7 +171,10 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
             name: format!("BVH rays, {name}"),
             value: bvh_rate,
             unit: "rays/s",
-            versus: Some((bvh_rate / brute_rate, "× brute force over every triangle".into())),
+            versus: Some((
+                bvh_rate / brute_rate,
+                "× brute force over every triangle".into(),
+            )),
         });
     }
     out

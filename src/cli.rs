@@ -159,18 +159,24 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             depth,
             normals,
         } => {
-            for o in [Some(&output), depth.as_ref(), normals.as_ref()].into_iter().flatten() {
+            for o in [Some(&output), depth.as_ref(), normals.as_ref()]
+                .into_iter()
+                .flatten()
+            {
                 check_output(o, &[&scene])?;
             }
             let mut timings = Timings::default();
-            let s = timings.time("load scene", || Scene::load(&scene)).context("loading the scene")?;
+            let s = timings
+                .time("load scene", || Scene::load(&scene))
+                .context("loading the scene")?;
             for w in &s.warnings {
                 eprintln!("warning: {w}");
             }
             let t = time.unwrap_or(s.render.time);
             let method: Method = method.into();
             let pb = bar(&format!("{method}"), s.camera.height as u64);
-            let (frame, steps) = render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
+            let (frame, steps) =
+                render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
             timings.0.extend(steps.0);
             timings
                 .time("write", || -> Result<()> {
@@ -196,11 +202,13 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             mask,
         } => {
             check_output(&heatmap, &[&reference, &test])?;
-            let a = io::read_color(&reference).with_context(|| format!("reading {}", reference.display()))?;
+            let a = io::read_color(&reference)
+                .with_context(|| format!("reading {}", reference.display()))?;
             let b = io::read_color(&test).with_context(|| format!("reading {}", test.display()))?;
             let mask = match mask {
                 Some(m) => {
-                    let img = io::read_color(&m).with_context(|| format!("reading {}", m.display()))?;
+                    let img =
+                        io::read_color(&m).with_context(|| format!("reading {}", m.display()))?;
                     Some(img.map(|p| p.truncate().max_element() > 0.0))
                 }
                 None => None,
@@ -218,19 +226,35 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let m = &loaded.mesh;
             let b = m.bounds();
             println!("{}", mesh.display());
-            println!("  vertices   {} in the file, {} after splitting by attribute", loaded.source.vertices, m.positions.len());
-            println!("  triangles  {} in the file, {} kept", loaded.source.triangles, m.triangle_count());
-            println!("  bounds     [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]", b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z);
+            println!(
+                "  vertices   {} in the file, {} after splitting by attribute",
+                loaded.source.vertices,
+                m.positions.len()
+            );
+            println!(
+                "  triangles  {} in the file, {} kept",
+                loaded.source.triangles,
+                m.triangle_count()
+            );
+            println!(
+                "  bounds     [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+            );
             println!("  surface    {:.6} square units", m.area());
-            println!("  UVs        {}", if m.uvs.is_some() { "yes" } else { "no" });
+            println!(
+                "  UVs        {}",
+                if m.uvs.is_some() { "yes" } else { "no" }
+            );
             println!("  materials  {}", m.materials.len());
             for mat in &m.materials {
                 let c = mat.base_color;
-                let tex = mat
-                    .texture
-                    .as_ref()
-                    .map_or("no texture".to_string(), |t| format!("texture {}×{}", t.width(), t.height()));
-                println!("    {:<24} colour [{:.3}, {:.3}, {:.3}], {tex}", mat.name, c.x, c.y, c.z);
+                let tex = mat.texture.as_ref().map_or("no texture".to_string(), |t| {
+                    format!("texture {}×{}", t.width(), t.height())
+                });
+                println!(
+                    "    {:<24} colour [{:.3}, {:.3}, {:.3}], {tex}",
+                    mat.name, c.x, c.y, c.z
+                );
             }
             for w in &loaded.warnings {
                 eprintln!("warning: {w}");
@@ -238,7 +262,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         }
         Command::Demo { output } => {
             let inputs = trompe::report::DemoInputs::locate();
-            let summary = trompe::report::demo(&inputs, &output, &|label, rows| bar(label, rows)).context("building the demo report")?;
+            let summary = trompe::report::demo(&inputs, &output, &|label, rows| bar(label, rows))
+                .context("building the demo report")?;
             for r in &summary.renders {
                 println!(
                     "{:<12} {:<7} {:>8.0} ms  PSNR {:>6.2}  SSIM {:.4}  FLIP {:.4}  ids {:.2} %",
@@ -254,11 +279,22 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             println!("wrote {}", summary.index.display());
         }
         Command::Bench { quick, mesh } => {
-            let path = mesh.unwrap_or_else(|| trompe::report::DemoInputs::locate().assets.join("meshes/bunny.obj"));
+            let path = mesh.unwrap_or_else(|| {
+                trompe::report::DemoInputs::locate()
+                    .assets
+                    .join("meshes/bunny.obj")
+            });
             let m = trompe::geom::io::load(&path)?.mesh;
-            println!("trompe bench on {} ({} triangles), {} threads", path.display(), m.triangle_count(), rayon::current_num_threads());
+            println!(
+                "trompe bench on {} ({} triangles), {} threads",
+                path.display(),
+                m.triangle_count(),
+                rayon::current_num_threads()
+            );
             for f in trompe::bench::foundation(&m, quick) {
-                let versus = f.versus.map_or(String::new(), |(r, peer)| format!("   ({r:.2} {peer})"));
+                let versus = f
+                    .versus
+                    .map_or(String::new(), |(r, peer)| format!("   ({r:.2} {peer})"));
                 println!("  {:<40} {:>14.4e} {:<7}{versus}", f.name, f.value, f.unit);
             }
         }

@@ -1,11 +1,11 @@
 //! trompe
+pub mod bench;
 pub mod camera;
 pub mod frame;
 pub mod geom;
 pub mod raster;
-pub mod trace;
-pub mod scene;
 pub mod render;
-pub mod bench;
 pub mod report;
+pub mod scene;
+pub mod trace;
 pub mod validate;

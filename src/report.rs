@@ -20,7 +20,7 @@ use thiserror::Error;
 pub enum ReportError {
     /// A shipped scene failed to load.
     #[error(transparent)]
-    Scene(#[from] SceneError),
+    Scene(#[from] Box<SceneError>),
     /// Rendering failed.
     #[error(transparent)]
     Render(#[from] RenderError),
@@ -111,10 +111,12 @@ pub fn demo(
 
     html.push_str("<h2>Foundation: ground-truth renderers</h2>\n");
     html.push_str("<p><b>raster</b> rasterizes through the pinhole camera and shades each pixel once (mirrors and glass are looked up in the panorama); <b>trace</b> is a Whitted ray tracer through the exact BVH (mirror reflection, refraction with Fresnel). Scores compare each image with the trace image. On the diffuse scene the two must agree: they share one shading model and differ only at silhouette pixels where a different triangle is visible.</p>\n");
-    let mut table = String::from("<table><tr><th>scene</th><th>method</th><th>time</th><th>PSNR (dB)</th><th>SSIM</th><th>FLIP</th><th>object ids equal</th></tr>\n");
+    let mut table = String::from(
+        "<table><tr><th>scene</th><th>method</th><th>time</th><th>PSNR (dB)</th><th>SSIM</th><th>FLIP</th><th>object ids equal</th></tr>\n",
+    );
     for name in ["diffuse", "reflections"] {
         let path = inputs.scenes.join(format!("{name}.toml"));
-        let scene = Scene::load(&path)?;
+        let scene = Scene::load(&path).map_err(Box::new)?;
         let (h, _) = (scene.camera.height, ());
         let mut frames: Vec<(Method, Frame, Duration)> = Vec::new();
         for method in [Method::Trace, Method::Raster] {
@@ -124,7 +126,10 @@ pub fn demo(
             frames.push((method, frame, start.elapsed()));
         }
         let reference = frames[0].1.clone();
-        let _ = writeln!(html, "<h3>Scene <code>{name}.toml</code></h3>\n<div class=row>");
+        let _ = writeln!(
+            html,
+            "<h3>Scene <code>{name}.toml</code></h3>\n<div class=row>"
+        );
         for (method, frame, time) in &frames {
             let file = format!("{name}-{method}.png");
             io::write_png(&out.join(&file), &frame.color)?;
@@ -137,7 +142,11 @@ pub fn demo(
                 .filter(|(a, b)| a == b)
                 .count() as f64
                 / reference.object_id.pixels().len() as f64;
-            let _ = writeln!(html, "<figure><img src=\"{file}\"><figcaption>{method}, {:.0} ms</figcaption></figure>", time.as_secs_f64() * 1e3);
+            let _ = writeln!(
+                html,
+                "<figure><img src=\"{file}\"><figcaption>{method}, {:.0} ms</figcaption></figure>",
+                time.as_secs_f64() * 1e3
+            );
             let _ = writeln!(
                 table,
                 "<tr><td>{name}</td><td>{method}</td><td>{:.0} ms</td><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.2} %</td></tr>",
@@ -158,7 +167,10 @@ pub fn demo(
         let heat = metrics::heat_map(&metrics::flip_map(&reference.color, &frames[1].1.color)?);
         let file = format!("{name}-flip.png");
         io::write_png(&out.join(&file), &heat)?;
-        let _ = writeln!(html, "<figure><img src=\"{file}\"><figcaption>FLIP error, raster vs trace</figcaption></figure></div>");
+        let _ = writeln!(
+            html,
+            "<figure><img src=\"{file}\"><figcaption>FLIP error, raster vs trace</figcaption></figure></div>"
+        );
     }
     table.push_str("</table>\n");
     html.push_str(&table);
@@ -174,7 +186,11 @@ pub fn demo(
             loaded.source.triangles,
             m.triangle_count(),
             m.materials.len(),
-            if m.materials.iter().any(|x| x.texture.is_some()) { "yes" } else { "no" }
+            if m.materials.iter().any(|x| x.texture.is_some()) {
+                "yes"
+            } else {
+                "no"
+            }
         );
     }
     html.push_str("</table>\n");
@@ -197,7 +213,11 @@ pub fn demo(
 }
 
 fn fmt_psnr(p: f64) -> String {
-    if p.is_infinite() { "∞".into() } else { format!("{p:.2}") }
+    if p.is_infinite() {
+        "∞".into()
+    } else {
+        format!("{p:.2}")
+    }
 }
 
 const HEAD: &str = "<!doctype html><html><head><meta charset=utf-8><title>trompe demo</title><style>

@@ -44,7 +44,11 @@ pub fn raster_vs_bvh(mesh: &Mesh, size: u32) -> Result<RasterAgreement, FrameErr
                 Some(h) if raster_covers => {
                     let same = h.triangle == id.triangle;
                     let d_raster = cam.distance(uv, gd as f64);
-                    let err = if same { (d_raster - h.t as f64).abs() / h.t as f64 } else { 0.0 };
+                    let err = if same {
+                        (d_raster - h.t as f64).abs() / h.t as f64
+                    } else {
+                        0.0
+                    };
                     (true, true, same, err)
                 }
                 Some(_) => (true, false, false, 0.0),

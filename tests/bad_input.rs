@@ -16,7 +16,10 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
 fn error_of(dir: &Path, name: &str, bytes: &[u8], expect: &str) -> String {
     let p = write(dir, name, bytes);
     let e = load(&p).expect_err(name).to_string();
-    assert!(e.contains(name), "{name}: error does not name the file: {e}");
+    assert!(
+        e.contains(name),
+        "{name}: error does not name the file: {e}"
+    );
     assert!(e.contains(expect), "{name}: expected {expect:?} in: {e}");
     e
 }
@@ -25,16 +28,45 @@ fn error_of(dir: &Path, name: &str, bytes: &[u8], expect: &str) -> String {
 fn bad_obj_files() {
     let d = scratch("bad_obj");
     error_of(&d, "truncated.obj", b"v 0 0 0\nv 1 0 0\nv 0 1", "line 3");
-    error_of(&d, "word.obj", b"v 0 0 0\nv one 0 0\n", "\"one\" is not a number");
-    error_of(&d, "range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "vertex index 9 out of range");
-    error_of(&d, "zero.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4");
-    error_of(&d, "nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "not finite");
-    error_of(&d, "inf.obj", b"v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n", "not finite");
+    error_of(
+        &d,
+        "word.obj",
+        b"v 0 0 0\nv one 0 0\n",
+        "\"one\" is not a number",
+    );
+    error_of(
+        &d,
+        "range.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+        "vertex index 9 out of range",
+    );
+    error_of(
+        &d,
+        "zero.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+        "line 4",
+    );
+    error_of(
+        &d,
+        "nan.obj",
+        b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+        "not finite",
+    );
+    error_of(
+        &d,
+        "inf.obj",
+        b"v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n",
+        "not finite",
+    );
     error_of(&d, "empty.obj", b"# nothing\n", "no triangles");
     error_of(&d, "short.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\n", "at least 3");
     // A material library that names a missing texture.
     write(&d, "tex.mtl", b"newmtl m\nmap_Kd missing.png\n");
-    let p = write(&d, "tex.obj", b"mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n");
+    let p = write(
+        &d,
+        "tex.obj",
+        b"mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
+    );
     let e = load(&p).unwrap_err().to_string();
     assert!(e.contains("tex.mtl: texture missing.png"), "{e}");
 }
@@ -42,11 +74,21 @@ fn bad_obj_files() {
 #[test]
 fn degenerate_triangles_are_dropped_with_a_warning() {
     let d = scratch("degenerate");
-    let p = write(&d, "deg.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 2 2 3\n");
+    let p = write(
+        &d,
+        "deg.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 2 2 3\n",
+    );
     let l = load(&p).unwrap();
     assert_eq!(l.mesh.triangle_count(), 1);
     assert_eq!(l.source.triangles, 3);
-    assert!(l.warnings.iter().any(|w| w.to_string().contains("dropped 2 degenerate")), "{:?}", l.warnings);
+    assert!(
+        l.warnings
+            .iter()
+            .any(|w| w.to_string().contains("dropped 2 degenerate")),
+        "{:?}",
+        l.warnings
+    );
 }
 
 fn ply_header(format: &str, vertices: u64, faces: u64) -> String {
@@ -60,7 +102,13 @@ fn bad_ply_files() {
     let d = scratch("bad_ply");
     // Good files first, so the errors below are about the defects.
     let ascii = ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-    assert_eq!(load(&write(&d, "ok.ply", ascii.as_bytes())).unwrap().mesh.triangle_count(), 1);
+    assert_eq!(
+        load(&write(&d, "ok.ply", ascii.as_bytes()))
+            .unwrap()
+            .mesh
+            .triangle_count(),
+        1
+    );
     let mut bin = ply_header("binary_little_endian", 3, 1).into_bytes();
     for v in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]] {
         for c in v {
@@ -71,7 +119,13 @@ fn bad_ply_files() {
     for i in [0i32, 1, 2] {
         bin.extend(i.to_le_bytes());
     }
-    assert_eq!(load(&write(&d, "ok_bin.ply", &bin)).unwrap().mesh.triangle_count(), 1);
+    assert_eq!(
+        load(&write(&d, "ok_bin.ply", &bin))
+            .unwrap()
+            .mesh
+            .triangle_count(),
+        1
+    );
     let mut be = ply_header("binary_big_endian", 3, 1).into_bytes();
     for v in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]] {
         for c in v {
@@ -82,16 +136,34 @@ fn bad_ply_files() {
     for i in [0i32, 1, 2] {
         be.extend(i.to_be_bytes());
     }
-    assert_eq!(load(&write(&d, "ok_be.ply", &be)).unwrap().mesh.bounds().max.x, 1.0);
+    assert_eq!(
+        load(&write(&d, "ok_be.ply", &be))
+            .unwrap()
+            .mesh
+            .bounds()
+            .max
+            .x,
+        1.0
+    );
 
     error_of(&d, "truncated.ply", &bin[..bin.len() - 5], "truncated");
     error_of(&d, "magic.ply", b"plx\n", "not a PLY");
-    error_of(&d, "noend.ply", b"ply\nformat ascii 1.0\nelement vertex 3\n", "end_header");
+    error_of(
+        &d,
+        "noend.ply",
+        b"ply\nformat ascii 1.0\nelement vertex 3\n",
+        "end_header",
+    );
     // A count no file could hold: refused before anything is reserved.
     let huge = ply_header("binary_little_endian", 1_000_000_000_000_000, 1) + "xx";
     error_of(&d, "huge.ply", huge.as_bytes(), "declares");
     let range = ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
-    error_of(&d, "range.ply", range.as_bytes(), "face 0: vertex index 7 out of range");
+    error_of(
+        &d,
+        "range.ply",
+        range.as_bytes(),
+        "face 0: vertex index 7 out of range",
+    );
     let nan = ply_header("ascii", 3, 1) + "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n";
     error_of(&d, "nan.ply", nan.as_bytes(), "vertex 1");
     let word = ply_header("ascii", 3, 1) + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n";
@@ -105,19 +177,31 @@ fn bad_gltf_files() {
     let duck = std::fs::read(shared("gltf/Duck.glb")).unwrap();
     error_of(&d, "half.glb", &duck[..duck.len() / 2], "half.glb");
     // A .gltf whose buffer file is missing.
-    let gltf = std::fs::read_to_string(shared("gltf/CesiumMilkTruck/CesiumMilkTruck.gltf")).unwrap();
+    let gltf =
+        std::fs::read_to_string(shared("gltf/CesiumMilkTruck/CesiumMilkTruck.gltf")).unwrap();
     error_of(&d, "nobuffer.gltf", gltf.as_bytes(), "buffer 0");
     // The buffer exists but is shorter than its views need.
-    std::fs::copy(shared("gltf/CesiumMilkTruck/CesiumMilkTruck.png"), d.join("CesiumMilkTruck.png")).unwrap();
+    std::fs::copy(
+        shared("gltf/CesiumMilkTruck/CesiumMilkTruck.png"),
+        d.join("CesiumMilkTruck.png"),
+    )
+    .unwrap();
     let bin = std::fs::read(shared("gltf/CesiumMilkTruck/CesiumMilkTruck.bin")).unwrap();
     write(&d, "CesiumMilkTruck.bin", &bin[..1000]);
-    let e = load(&d.join("nobuffer.gltf")).expect_err("short buffer").to_string();
+    let e = load(&d.join("nobuffer.gltf"))
+        .expect_err("short buffer")
+        .to_string();
     assert!(e.contains("nobuffer.gltf"), "{e}");
     // A missing image.
     std::fs::write(d.join("CesiumMilkTruck.bin"), &bin).unwrap();
     std::fs::remove_file(d.join("CesiumMilkTruck.png")).unwrap();
-    let e = load(&d.join("nobuffer.gltf")).expect_err("missing image").to_string();
-    assert!(e.contains("image 0") && e.contains("CesiumMilkTruck.png"), "{e}");
+    let e = load(&d.join("nobuffer.gltf"))
+        .expect_err("missing image")
+        .to_string();
+    assert!(
+        e.contains("image 0") && e.contains("CesiumMilkTruck.png"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -131,7 +215,11 @@ fn unknown_extensions_and_missing_files() {
 #[test]
 fn bad_images_are_errors() {
     let d = scratch("bad_images");
-    let p = write(&d, "env.hdr", b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n");
+    let p = write(
+        &d,
+        "env.hdr",
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n",
+    );
     assert!(trompe::frame::envmap::EnvMap::load(&p, 0.0, 1.0).is_err());
     let p = write(&d, "env.exr", b"v/1\x01garbage");
     assert!(trompe::frame::envmap::EnvMap::load(&p, 0.0, 1.0).is_err());

@@ -30,15 +30,36 @@ fn render_then_compare() {
     let d = scratch("cli_render");
     let png = d.join("t.png");
     let depth = d.join("t-depth.exr");
-    let o = trompe(&["render", "scenes/turntable.toml", "-o", png.to_str().unwrap(), "--method", "raster", "--time", "1", "--depth", depth.to_str().unwrap(), "-v"]);
+    let o = trompe(&[
+        "render",
+        "scenes/turntable.toml",
+        "-o",
+        png.to_str().unwrap(),
+        "--method",
+        "raster",
+        "--time",
+        "1",
+        "--depth",
+        depth.to_str().unwrap(),
+        "-v",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(png.is_file() && depth.is_file());
     assert!(stderr(&o).contains("rasterize"), "timings with -v");
     let heat = d.join("heat.png");
-    let o = trompe(&["compare", png.to_str().unwrap(), png.to_str().unwrap(), "--heatmap", heat.to_str().unwrap()]);
+    let o = trompe(&[
+        "compare",
+        png.to_str().unwrap(),
+        png.to_str().unwrap(),
+        "--heatmap",
+        heat.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("PSNR inf") && out.contains("SSIM 1.00000") && out.contains("FLIP 0.00000"), "{out}");
+    assert!(
+        out.contains("PSNR inf") && out.contains("SSIM 1.00000") && out.contains("FLIP 0.00000"),
+        "{out}"
+    );
     assert!(heat.is_file());
 }
 
@@ -47,7 +68,10 @@ fn info_reports_counts() {
     let o = trompe(&["info", "assets/meshes/bunny.obj"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("28088 in the file") && out.contains("56172 in the file"), "{out}");
+    assert!(
+        out.contains("28088 in the file") && out.contains("56172 in the file"),
+        "{out}"
+    );
 }
 
 #[test]
@@ -61,14 +85,29 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
     let cam = "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\n";
     let out = d.join("o.png");
     let out = out.to_str().unwrap();
-    let absurd = scene("absurd.toml", &format!("{cam}resolution = [1000000, 1000000]\n"));
-    fails_cleanly(&trompe(&["render", &absurd, "-o", out]), "camera.resolution");
-    let unknown = scene("unknown.toml", &format!("{cam}resolution = [8, 8]\nfocal = 3\n"));
+    let absurd = scene(
+        "absurd.toml",
+        &format!("{cam}resolution = [1000000, 1000000]\n"),
+    );
+    fails_cleanly(
+        &trompe(&["render", &absurd, "-o", out]),
+        "camera.resolution",
+    );
+    let unknown = scene(
+        "unknown.toml",
+        &format!("{cam}resolution = [8, 8]\nfocal = 3\n"),
+    );
     fails_cleanly(&trompe(&["render", &unknown, "-o", out]), "focal");
-    let missing = scene("missing.toml", &format!("{cam}resolution = [8, 8]\n[[object]]\nmesh = \"nowhere.obj\"\n"));
+    let missing = scene(
+        "missing.toml",
+        &format!("{cam}resolution = [8, 8]\n[[object]]\nmesh = \"nowhere.obj\"\n"),
+    );
     fails_cleanly(&trompe(&["render", &missing, "-o", out]), "nowhere.obj");
     // The output may not be an input.
-    fails_cleanly(&trompe(&["render", &missing, "-o", &missing]), "refusing to overwrite");
+    fails_cleanly(
+        &trompe(&["render", &missing, "-o", &missing]),
+        "refusing to overwrite",
+    );
     let text = std::fs::read_to_string(&missing).unwrap();
     assert!(text.contains("nowhere.obj"), "input untouched");
     fails_cleanly(&trompe(&["info", "Cargo.toml"]), "unknown extension");
@@ -77,8 +116,20 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
     fails_cleanly(&trompe(&["info", short.to_str().unwrap()]), "line 3");
     let a = d.join("a.png");
     std::fs::write(&a, "not a png").unwrap();
-    fails_cleanly(&trompe(&["compare", a.to_str().unwrap(), a.to_str().unwrap(), "--heatmap", d.join("h.png").to_str().unwrap()]), "a.png");
-    fails_cleanly(&trompe(&["--threads", "0", "info", "assets/meshes/teapot.obj"]), "--threads");
+    fails_cleanly(
+        &trompe(&[
+            "compare",
+            a.to_str().unwrap(),
+            a.to_str().unwrap(),
+            "--heatmap",
+            d.join("h.png").to_str().unwrap(),
+        ]),
+        "a.png",
+    );
+    fails_cleanly(
+        &trompe(&["--threads", "0", "info", "assets/meshes/teapot.obj"]),
+        "--threads",
+    );
 }
 
 #[test]

@@ -10,7 +10,12 @@ fn check(rel: &str, vertices: usize, triangles: usize) -> trompe::geom::io::Load
     assert_eq!(loaded.source.vertices, vertices, "{rel}: vertices");
     assert_eq!(loaded.source.triangles, triangles, "{rel}: triangles");
     let m = &loaded.mesh;
-    assert!(m.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4), "{rel}: normals");
+    assert!(
+        m.normals
+            .iter()
+            .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-4),
+        "{rel}: normals"
+    );
     loaded
 }
 
@@ -19,13 +24,19 @@ fn obj_counts_match_sources() {
     let bunny = check("meshes/bunny.obj", 28088, 56172);
     assert_eq!(bunny.mesh.triangle_count(), 56172);
     let b = bunny.mesh.bounds();
-    assert!((b.max.x - 0.6238).abs() < 1e-3 && (b.min.y + 0.06646).abs() < 1e-4, "{b:?}");
+    assert!(
+        (b.max.x - 0.6238).abs() < 1e-3 && (b.min.y + 0.06646).abs() < 1e-4,
+        "{b:?}"
+    );
     check("meshes/bunny_lowres.obj", 1839, 3674);
     check("meshes/teapot.obj", 792, 992);
     check("meshes/dragon_res4.obj", 5205, 11102);
     let tex = check("meshes/bunny10k_textured/bunny10k_textured.obj", 5051, 9999);
     assert!(tex.mesh.uvs.is_some());
-    assert!(tex.mesh.materials.iter().any(|m| m.texture.is_some()), "texture from map_Kd");
+    assert!(
+        tex.mesh.materials.iter().any(|m| m.texture.is_some()),
+        "texture from map_Kd"
+    );
 }
 
 #[test]

@@ -39,7 +39,9 @@ impl Pinhole {
         }
         let (eye, target, up) = (position.as_dvec3(), look_at.as_dvec3(), up.as_dvec3());
         if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
-            return Err(CameraError::Degenerate("position, look_at and up must be finite"));
+            return Err(CameraError::Degenerate(
+                "position, look_at and up must be finite",
+            ));
         }
         let forward = (target - eye)
             .try_normalize()
@@ -47,7 +49,9 @@ impl Pinhole {
         let right = forward
             .cross(up)
             .try_normalize()
-            .ok_or(CameraError::Degenerate("up is parallel to the view direction"))?;
+            .ok_or(CameraError::Degenerate(
+                "up is parallel to the view direction",
+            ))?;
         let true_up = right.cross(forward);
         // Pixel size at unit distance; v grows downward (image origin top-left).
         let s = 2.0 * (fov_y_deg.to_radians() * 0.5).tan() / height as f64;
@@ -58,7 +62,14 @@ impl Pinhole {
     }
 
     /// A camera from McMillan's parameters directly (`a`, `b`, `c` as in algorithms.md §1.1).
-    pub fn from_mcmillan(c_pos: DVec3, a: DVec3, b: DVec3, c: DVec3, width: u32, height: u32) -> Self {
+    pub fn from_mcmillan(
+        c_pos: DVec3,
+        a: DVec3,
+        b: DVec3,
+        c: DVec3,
+        width: u32,
+        height: u32,
+    ) -> Self {
         let m = DMat3::from_cols(a, b, c);
         let mut forward = a.cross(b).normalize_or_zero();
         if forward.dot(c) < 0.0 {
@@ -148,7 +159,10 @@ mod tests {
         let cam = camera();
         for i in 0..1000u32 {
             // Replayable pseudo-random points in front of the camera.
-            let h = |k: u32| ((i.wrapping_mul(2_654_435_761) ^ k.wrapping_mul(40_503)) % 10_007) as f64 / 10_007.0;
+            let h = |k: u32| {
+                ((i.wrapping_mul(2_654_435_761) ^ k.wrapping_mul(40_503)) % 10_007) as f64
+                    / 10_007.0
+            };
             let p = DVec3::new(h(1) - 0.5, h(2) - 0.5, h(3) - 0.5) * 4.0;
             let Some(q) = cam.project(p) else { continue };
             assert!((cam.unproject(q.uv, q.gd) - p).length() < 1e-9, "{p}");
@@ -179,6 +193,8 @@ mod tests {
         assert!(Pinhole::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::Y, 50.0, 8, 8).is_err());
         assert!(Pinhole::look_at(Vec3::ZERO, Vec3::Y, Vec3::Y, 50.0, 8, 8).is_err());
         assert!(Pinhole::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 180.0, 8, 8).is_err());
-        assert!(Pinhole::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 50.0, 1_000_000, 1_000_000).is_err());
+        assert!(
+            Pinhole::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 50.0, 1_000_000, 1_000_000).is_err()
+        );
     }
 }

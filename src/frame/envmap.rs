@@ -28,7 +28,11 @@ impl EnvMap {
     /// Loads a Radiance `.hdr` or OpenEXR panorama.
     pub fn load(path: &Path, rotation: f32, intensity: f32) -> Result<Self, FrameError> {
         let image = io::read_color(path)?;
-        Ok(Self::from_image(image.map(|p| p.truncate()), rotation, intensity))
+        Ok(Self::from_image(
+            image.map(|p| p.truncate()),
+            rotation,
+            intensity,
+        ))
     }
 
     /// Wraps a panorama already in memory (negative samples, e.g. EXR ringing, are clamped to 0).
@@ -129,9 +133,15 @@ fn downsample(src: &Image<Vec3>, size: (u32, u32)) -> Image<Vec3> {
     }
     let mut out = Image::new(w, h, Vec3::ZERO).expect("target no larger than source");
     for y in 0..h {
-        let (y0, y1) = (y * src.height() / h, ((y + 1) * src.height() / h).max(y * src.height() / h + 1));
+        let (y0, y1) = (
+            y * src.height() / h,
+            ((y + 1) * src.height() / h).max(y * src.height() / h + 1),
+        );
         for x in 0..w {
-            let (x0, x1) = (x * src.width() / w, ((x + 1) * src.width() / w).max(x * src.width() / w + 1));
+            let (x0, x1) = (
+                x * src.width() / w,
+                ((x + 1) * src.width() / w).max(x * src.width() / w + 1),
+            );
             let mut sum = Vec3::ZERO;
             for sy in y0..y1 {
                 for sx in x0..x1 {
@@ -161,7 +171,10 @@ fn convolve_cosine(radiance: &Image<Vec3>) -> Image<Vec3> {
     let mut out = Image::new(w, h, Vec3::ZERO).expect("constant size");
     for y in 0..h {
         for x in 0..w {
-            let n = uv_to_direction(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
+            let n = uv_to_direction(Vec2::new(
+                (x as f32 + 0.5) / w as f32,
+                (y as f32 + 0.5) / h as f32,
+            ));
             let mut sum = Vec3::ZERO;
             for (d, l) in &texels {
                 let c = n.dot(*d);
@@ -190,12 +203,18 @@ mod tests {
     #[test]
     fn direction_inverts_lookup() {
         for i in 0..200 {
-            let uv = Vec2::new((i as f32 * 0.618).fract(), 0.02 + 0.96 * (i as f32 * 0.377).fract());
+            let uv = Vec2::new(
+                (i as f32 * 0.618).fract(),
+                0.02 + 0.96 * (i as f32 * 0.377).fract(),
+            );
             let d = uv_to_direction(uv);
             assert!((direction_to_uv(d) - uv).length() < 1e-4, "{uv}");
         }
         let env = EnvMap::constant(Vec3::ONE);
-        let env = EnvMap { rotation: 0.7, ..env };
+        let env = EnvMap {
+            rotation: 0.7,
+            ..env
+        };
         let d = Vec3::new(0.3, 0.4, -0.5).normalize();
         assert!((env.direction(env.lookup_uv(d)) - d).length() < 1e-4);
     }
@@ -205,7 +224,10 @@ mod tests {
         let env = EnvMap::constant(Vec3::new(0.5, 1.0, 2.0));
         for n in [Vec3::Y, Vec3::X, -Vec3::Z, Vec3::new(1.0, -1.0, 0.3)] {
             let e = env.irradiance(n);
-            assert!((e - Vec3::new(0.5, 1.0, 2.0)).abs().max_element() < 0.03, "{n}: {e}");
+            assert!(
+                (e - Vec3::new(0.5, 1.0, 2.0)).abs().max_element() < 0.03,
+                "{n}: {e}"
+            );
         }
     }
 }

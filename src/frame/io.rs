@@ -5,9 +5,7 @@
 //! size against [`super::check_size`] before it allocates pixel memory.
 
 use super::{FrameError, Image, Rgba, check_size, linear_to_srgb, srgb_to_linear};
-use exr::prelude::{
-    AnyChannel, AnyChannels, FlatSamples, ReadChannels, ReadLayers, WritableImage,
-};
+use exr::prelude::{AnyChannel, AnyChannels, FlatSamples, ReadChannels, ReadLayers, WritableImage};
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
 
@@ -218,7 +216,10 @@ pub fn read_hdr(path: &Path) -> Result<Image<Rgba>, FrameError> {
     let (w, h) = check_size(meta.width as u64, meta.height as u64)?;
     let img = image::DynamicImage::from_decoder(decoder).map_err(|e| codec(path, e))?;
     let rgb = img.to_rgb32f();
-    let data = rgb.pixels().map(|p| Vec4::new(p[0], p[1], p[2], 1.0)).collect();
+    let data = rgb
+        .pixels()
+        .map(|p| Vec4::new(p[0], p[1], p[2], 1.0))
+        .collect();
     Image::from_vec(w, h, data)
 }
 

@@ -185,14 +185,22 @@ pub fn flip_map(reference: &Image<Rgba>, test: &Image<Rgba>) -> Result<Image<f32
 }
 
 /// Mean LDR-FLIP error (`reference` first).
-pub fn flip(reference: &Image<Rgba>, test: &Image<Rgba>, mask: Option<&Mask>) -> Result<f64, FrameError> {
+pub fn flip(
+    reference: &Image<Rgba>,
+    test: &Image<Rgba>,
+    mask: Option<&Mask>,
+) -> Result<f64, FrameError> {
     check_inputs(reference, test, mask)?;
     let map = flip_map(reference, test)?;
     Ok(masked_mean(map.pixels().iter().map(|&v| v as f64), mask))
 }
 
 /// PSNR, SSIM and FLIP of `test` against `reference`.
-pub fn compare(reference: &Image<Rgba>, test: &Image<Rgba>, mask: Option<&Mask>) -> Result<Scores, FrameError> {
+pub fn compare(
+    reference: &Image<Rgba>,
+    test: &Image<Rgba>,
+    mask: Option<&Mask>,
+) -> Result<Scores, FrameError> {
     Ok(Scores {
         psnr: psnr(reference, test, mask)?,
         ssim: ssim(reference, test, mask)?,
@@ -202,7 +210,8 @@ pub fn compare(reference: &Image<Rgba>, test: &Image<Rgba>, mask: Option<&Mask>)
 
 /// A heat map of a `[0, 1]` error map through FLIP's magma colour ramp.
 pub fn heat_map(errors: &Image<f32>) -> Image<Rgba> {
-    let float = nv_flip::FlipImageFloat::with_data(errors.width(), errors.height(), errors.pixels());
+    let float =
+        nv_flip::FlipImageFloat::with_data(errors.width(), errors.height(), errors.pixels());
     let rgb = float.apply_color_lut(&nv_flip::magma_lut()).to_vec();
     let data = rgb
         .chunks_exact(3)
@@ -225,7 +234,8 @@ mod tests {
     fn pattern(w: u32, h: u32, seed: u32) -> Image<Rgba> {
         let data = (0..w * h)
             .map(|i| {
-                let v = ((i.wrapping_mul(2_654_435_761).wrapping_add(seed)) >> 8) as f32 / (1u32 << 24) as f32;
+                let v = ((i.wrapping_mul(2_654_435_761).wrapping_add(seed)) >> 8) as f32
+                    / (1u32 << 24) as f32;
                 Vec4::new(v, (v * 3.0).fract(), (v * 7.0).fract(), 1.0)
             })
             .collect();

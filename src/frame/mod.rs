@@ -284,11 +284,22 @@ mod tests {
     #[test]
     fn bilinear_reproduces_texels_at_centres_and_blends_between() {
         let img = Image::from_vec(2, 1, vec![0.0f32, 1.0]).unwrap();
-        assert_eq!(img.sample_bilinear(Vec2::new(0.5, 0.5), Wrap::Clamp, Wrap::Clamp), 0.0);
-        assert_eq!(img.sample_bilinear(Vec2::new(1.5, 0.5), Wrap::Clamp, Wrap::Clamp), 1.0);
-        assert!((img.sample_bilinear(Vec2::new(1.0, 0.5), Wrap::Clamp, Wrap::Clamp) - 0.5).abs() < 1e-6);
+        assert_eq!(
+            img.sample_bilinear(Vec2::new(0.5, 0.5), Wrap::Clamp, Wrap::Clamp),
+            0.0
+        );
+        assert_eq!(
+            img.sample_bilinear(Vec2::new(1.5, 0.5), Wrap::Clamp, Wrap::Clamp),
+            1.0
+        );
+        assert!(
+            (img.sample_bilinear(Vec2::new(1.0, 0.5), Wrap::Clamp, Wrap::Clamp) - 0.5).abs() < 1e-6
+        );
         // Repeat wraps the left neighbour of texel 0 to texel 1.
-        assert!((img.sample_bilinear(Vec2::new(0.0, 0.5), Wrap::Repeat, Wrap::Clamp) - 0.5).abs() < 1e-6);
+        assert!(
+            (img.sample_bilinear(Vec2::new(0.0, 0.5), Wrap::Repeat, Wrap::Clamp) - 0.5).abs()
+                < 1e-6
+        );
         assert_eq!(img.sample_nearest(Vec2::new(1.9, 0.2)), 1.0);
     }
 

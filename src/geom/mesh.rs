@@ -85,7 +85,11 @@ impl std::fmt::Display for Warning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Warning::DegenerateTriangles { path, count } => {
-                write!(f, "{}: dropped {count} degenerate triangle(s)", path.display())
+                write!(
+                    f,
+                    "{}: dropped {count} degenerate triangle(s)",
+                    path.display()
+                )
             }
             Warning::Skipped { path, what } => write!(f, "{}: skipped {what}", path.display()),
         }
@@ -269,7 +273,11 @@ impl Mesh {
             .positions
             .iter()
             .enumerate()
-            .map(|(i, p)| *weld.entry(p.to_array().map(f32::to_bits)).or_insert(i as u32))
+            .map(|(i, p)| {
+                *weld
+                    .entry(p.to_array().map(f32::to_bits))
+                    .or_insert(i as u32)
+            })
             .collect();
         let mut sum = vec![Vec3::ZERO; self.positions.len()];
         let mut any_face = vec![Vec3::ZERO; self.positions.len()];
@@ -316,7 +324,11 @@ impl Mesh {
         let normal_m = Mat3::from_mat4(*m).inverse().transpose();
         let flip = Mat3::from_mat4(*m).determinant() < 0.0;
         Mesh {
-            positions: self.positions.iter().map(|&p| m.transform_point3(p)).collect(),
+            positions: self
+                .positions
+                .iter()
+                .map(|&p| m.transform_point3(p))
+                .collect(),
             normals: self
                 .normals
                 .iter()
@@ -389,13 +401,40 @@ mod tests {
         )
         .unwrap();
         assert_eq!(m.triangle_count(), 1);
-        assert_eq!(w, vec![Warning::DegenerateTriangles { path: "t".into(), count: 2 }]);
+        assert_eq!(
+            w,
+            vec![Warning::DegenerateTriangles {
+                path: "t".into(),
+                count: 2
+            }]
+        );
         assert!((m.normals[0] - Vec3::Z).length() < 1e-6);
-        let err = Mesh::from_parts(Path::new("t"), p.clone(), None, None, vec![[0, 1, 9]], vec![], vec![], &mut w);
-        assert!(matches!(err, Err(MeshError::IndexOutOfRange { index: 9, .. })));
+        let err = Mesh::from_parts(
+            Path::new("t"),
+            p.clone(),
+            None,
+            None,
+            vec![[0, 1, 9]],
+            vec![],
+            vec![],
+            &mut w,
+        );
+        assert!(matches!(
+            err,
+            Err(MeshError::IndexOutOfRange { index: 9, .. })
+        ));
         let mut nan = p;
         nan[2].y = f32::NAN;
-        let err = Mesh::from_parts(Path::new("t"), nan, None, None, vec![[0, 1, 2]], vec![], vec![], &mut w);
+        let err = Mesh::from_parts(
+            Path::new("t"),
+            nan,
+            None,
+            None,
+            vec![[0, 1, 2]],
+            vec![],
+            vec![],
+            &mut w,
+        );
         assert!(matches!(err, Err(MeshError::NonFinite { .. })));
     }
 
@@ -403,7 +442,21 @@ mod tests {
     fn opposite_duplicate_faces_do_not_make_nan_normals() {
         let p = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
         let mut w = Vec::new();
-        let m = Mesh::from_parts(Path::new("t"), p, None, None, vec![[0, 1, 2], [0, 2, 1]], vec![], vec![], &mut w).unwrap();
-        assert!(m.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-5));
+        let m = Mesh::from_parts(
+            Path::new("t"),
+            p,
+            None,
+            None,
+            vec![[0, 1, 2], [0, 2, 1]],
+            vec![],
+            vec![],
+            &mut w,
+        )
+        .unwrap();
+        assert!(
+            m.normals
+                .iter()
+                .all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-5)
+        );
     }
 }

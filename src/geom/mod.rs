@@ -169,6 +169,9 @@ mod tests {
         let r = Ray::new(Vec3::new(0.5, 0.5, -1.0), Vec3::Z);
         let (t0, t1) = b.intersect(&r, 10.0).unwrap();
         assert!((t0 - 1.0).abs() < 1e-6 && (t1 - 2.0).abs() < 1e-6);
-        assert!(b.intersect(&Ray::new(Vec3::new(2.0, 0.5, -1.0), Vec3::Z), 10.0).is_none());
+        assert!(
+            b.intersect(&Ray::new(Vec3::new(2.0, 0.5, -1.0), Vec3::Z), 10.0)
+                .is_none()
+        );
     }
 }

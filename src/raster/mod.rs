@@ -2,8 +2,8 @@
 //! impostor construction of paper 1 §3.1 / algorithms.md §2.2 runs through it).
 //!
 //! Pipeline: [`setup`] clips each triangle where the camera's `clip_distance` is negative (in
-//! world space), projects the corners through the camera, clips to a guard band and snaps them
-//! to 1/256 pixel; the screen triangles are binned into bands of [`BAND_ROWS`] rows; bands are
+//! world space), projects the corners through the camera, clips to a guard band, snaps them to
+//! 1/256 pixel and bins the screen triangles into bands of [`BAND_ROWS`] rows; bands are
 //! rasterized in parallel by [`scan`], each owning its rows of every buffer.
 //!
 //! Invariants:
@@ -146,16 +146,7 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         item: Image::new(w, h, ItemId::NONE)?,
         attributes: Image::new(w, h, empty)?,
     };
-    let (tris, mut stats) = setup::screen_triangles(camera, objects);
-    // Bin screen triangles into bands, in input order.
-    let band_count = h.div_ceil(BAND_ROWS) as usize;
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); band_count];
-    for (i, t) in tris.iter().enumerate() {
-        let (y0, y1) = (t.rows.0 / BAND_ROWS, t.rows.1 / BAND_ROWS);
-        for bin in &mut bins[y0 as usize..=y1 as usize] {
-            bin.push(i as u32);
-        }
-    }
+    let (binned, mut stats) = setup::screen_triangles(camera, objects, BAND_ROWS);
     let n = (BAND_ROWS * w) as usize;
     let band_stats: Vec<RasterStats> = target
         .gd
@@ -163,19 +154,20 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         .par_chunks_mut(n)
         .zip(target.item.pixels_mut().par_chunks_mut(n))
         .zip(target.attributes.pixels_mut().par_chunks_mut(n))
-        .zip(bins.par_iter())
         .enumerate()
-        .map(|(band, (((gd, item), attr), bin))| {
+        .map(|(band_index, ((gd, item), attr))| {
             let mut band = scan::Band {
                 width: w,
-                first_row: band as u32 * BAND_ROWS,
+                first_row: band_index as u32 * BAND_ROWS,
                 gd,
                 item,
                 attr,
             };
             let mut s = RasterStats::default();
-            for &t in bin {
-                band.draw(&tris[t as usize], shader, &mut s);
+            for chunk in &binned.chunks {
+                for t in &chunk[band_index] {
+                    band.draw(t, shader, &mut s);
+                }
             }
             s
         })

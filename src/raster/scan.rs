@@ -39,7 +39,12 @@ impl Edge {
 }
 
 impl<T: Copy> Band<'_, T> {
-    pub fn draw<S: FragmentShader<Output = T>>(&mut self, t: &ScreenTri, shader: &S, stats: &mut RasterStats) {
+    pub fn draw<S: FragmentShader<Output = T>>(
+        &mut self,
+        t: &ScreenTri,
+        shader: &S,
+        stats: &mut RasterStats,
+    ) {
         let rows_here = (self.gd.len() / self.width as usize) as u32;
         let last_row = self.first_row + rows_here - 1;
         let (y0, y1) = (t.rows.0.max(self.first_row), t.rows.1.min(last_row));
@@ -51,7 +56,11 @@ impl<T: Copy> Band<'_, T> {
         let px = x0 as i64 * ONE + ONE / 2;
         let py = y0 as i64 * ONE + ONE / 2;
         // Weight of corner 0 comes from the opposite edge b → c, and so on.
-        let mut e = [Edge::new(b, c, px, py), Edge::new(c, a, px, py), Edge::new(a, b, px, py)];
+        let mut e = [
+            Edge::new(b, c, px, py),
+            Edge::new(c, a, px, py),
+            Edge::new(a, b, px, py),
+        ];
         let [gd_p, q0, q1, q2] = t.planes;
         for y in y0..=y1 {
             let mut w = [e[0].value, e[1].value, e[2].value];
@@ -66,7 +75,8 @@ impl<T: Copy> Band<'_, T> {
                     let gd32 = gd as f32;
                     if gd32 > self.gd[idx] {
                         let q = [q0, q1, q2].map(|p| p.f0 + p.dfdx * dx + p.dfdy * dy);
-                        let bary = Vec3::new((q[0] / gd) as f32, (q[1] / gd) as f32, (q[2] / gd) as f32);
+                        let bary =
+                            Vec3::new((q[0] / gd) as f32, (q[1] / gd) as f32, (q[2] / gd) as f32);
                         let fragment = Fragment {
                             x,
                             y,

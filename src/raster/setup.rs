@@ -2,7 +2,7 @@
 //! guard-band clipping in image space, snapping to fixed point, and attribute planes.
 
 use super::{ItemId, RasterStats};
-use crate::camera::Projection;
+use crate::camera::{ImagePoint, Projection};
 use crate::geom::Mesh;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -51,60 +51,159 @@ struct Corner {
     q: DVec3,
 }
 
-/// Sets up every triangle of every object, in input order (parallel, order-preserving).
-pub(super) fn screen_triangles<P: Projection>(camera: &P, objects: &[&Mesh]) -> (Vec<ScreenTri>, RasterStats) {
+/// Screen triangles binned by band: `chunks[c][band]` holds, in input order, the triangles of
+/// input chunk `c` that touch `band`. Walking the chunks in order visits a band's triangles in
+/// input order, and each (chunk, band) list is contiguous in memory for the scan.
+pub(super) struct Binned {
+    pub chunks: Vec<Vec<Vec<ScreenTri>>>,
+}
+
+/// Sets up every triangle of every object and bins it into bands of `band_rows` rows
+/// (parallel over fixed chunks of the input, so the result does not depend on the thread count).
+pub(super) fn screen_triangles<P: Projection>(
+    camera: &P,
+    objects: &[&Mesh],
+    band_rows: u32,
+) -> (Binned, RasterStats) {
     let (w, h) = camera.resolution();
+    let band_count = h.div_ceil(band_rows) as usize;
     let refs: Vec<(u32, u32)> = objects
         .iter()
         .enumerate()
         .flat_map(|(o, m)| (0..m.triangles.len() as u32).map(move |t| (o as u32, t)))
         .collect();
-    let tris: Vec<ScreenTri> = refs
-        .par_iter()
-        .flat_map_iter(|&(o, t)| {
-            let mesh = objects[o as usize];
-            let item = ItemId { object: o, triangle: t };
-            setup_triangle(camera, mesh.corners(t as usize).map(|p| p.as_dvec3()), item, w, h)
+    let chunks: Vec<(Vec<Vec<ScreenTri>>, u64)> = refs
+        .par_chunks(SETUP_CHUNK)
+        .map(|chunk| {
+            let mut one = Vec::with_capacity(8);
+            let mut bands: Vec<Vec<ScreenTri>> = vec![Vec::new(); band_count];
+            let mut count = 0;
+            for &(o, t) in chunk {
+                let mesh = objects[o as usize];
+                let item = ItemId {
+                    object: o,
+                    triangle: t,
+                };
+                setup_triangle(
+                    camera,
+                    mesh.corners(t as usize).map(|p| p.as_dvec3()),
+                    item,
+                    w,
+                    h,
+                    &mut one,
+                );
+                for tri in one.drain(..) {
+                    count += 1;
+                    let (b0, b1) = (
+                        (tri.rows.0 / band_rows) as usize,
+                        (tri.rows.1 / band_rows) as usize,
+                    );
+                    for band in &mut bands[b0..b1] {
+                        band.push(tri.clone());
+                    }
+                    bands[b1].push(tri);
+                }
+            }
+            (bands, count)
         })
         .collect();
     let stats = RasterStats {
         triangles_in: refs.len() as u64,
-        screen_triangles: tris.len() as u64,
+        screen_triangles: chunks.iter().map(|c| c.1).sum(),
         ..RasterStats::default()
     };
-    (tris, stats)
+    (
+        Binned {
+            chunks: chunks.into_iter().map(|c| c.0).collect(),
+        },
+        stats,
+    )
 }
 
-fn setup_triangle<P: Projection>(camera: &P, p: [DVec3; 3], item: ItemId, w: u32, h: u32) -> Vec<ScreenTri> {
+/// Triangles set up per parallel task.
+const SETUP_CHUNK: usize = 2048;
+
+fn setup_triangle<P: Projection>(
+    camera: &P,
+    p: [DVec3; 3],
+    item: ItemId,
+    w: u32,
+    h: u32,
+    out: &mut Vec<ScreenTri>,
+) {
+    // Fast path: wholly inside the near boundary and the guard band — no clipping.
+    let d = p.map(|x| camera.clip_distance(x));
+    if d.iter().all(|&x| x >= 0.0) {
+        if let [Some(a), Some(b), Some(c)] = p.map(|x| camera.project(x)) {
+            let ok = |q: &ImagePoint| {
+                q.gd > 0.0 && q.gd.is_finite() && q.uv.x.abs() < GUARD && q.uv.y.abs() < GUARD
+            };
+            if ok(&a) && ok(&b) && ok(&c) {
+                let corner = |q: ImagePoint, world, b: DVec3| Corner {
+                    world,
+                    uv: q.uv,
+                    gd: q.gd,
+                    q: b * q.gd,
+                };
+                let c3 = [
+                    corner(a, p[0], DVec3::X),
+                    corner(b, p[1], DVec3::Y),
+                    corner(c, p[2], DVec3::Z),
+                ];
+                out.extend(screen_triangle(c3, item, w, h));
+                return;
+            }
+        }
+    }
+    setup_clipped(camera, p, d, item, w, h, out);
+}
+
+/// The general path: clip to the near boundary in world space, then to the guard band.
+fn setup_clipped<P: Projection>(
+    camera: &P,
+    p: [DVec3; 3],
+    d: [f64; 3],
+    item: ItemId,
+    w: u32,
+    h: u32,
+    out: &mut Vec<ScreenTri>,
+) {
     let corner = |world, b| Corner {
         world,
         uv: DVec2::ZERO,
         gd: 0.0,
         q: b,
     };
-    let mut poly = vec![corner(p[0], DVec3::X), corner(p[1], DVec3::Y), corner(p[2], DVec3::Z)];
+    let mut poly = vec![
+        corner(p[0], DVec3::X),
+        corner(p[1], DVec3::Y),
+        corner(p[2], DVec3::Z),
+    ];
     // 1. Near boundary, in world space (clip_distance is affine, so linear interpolation is exact).
-    let d: Vec<f64> = p.iter().map(|&x| camera.clip_distance(x)).collect();
     if d.iter().any(|&x| x < 0.0) {
         if d.iter().all(|&x| x < 0.0) {
-            return Vec::new();
+            return;
         }
-        poly = clip_polygon(&poly, |c| camera.clip_distance(c.world), |a, b, s| Corner {
-            world: a.world + (b.world - a.world) * s,
-            q: a.q + (b.q - a.q) * s,
-            ..*a
-        });
+        poly = clip_polygon(
+            &poly,
+            |c| camera.clip_distance(c.world),
+            |a, b, s| Corner {
+                world: a.world + (b.world - a.world) * s,
+                q: a.q + (b.q - a.q) * s,
+                ..*a
+            },
+        );
         if poly.len() < 3 {
-            return Vec::new();
+            return;
         }
     }
     // 2. Project.
     for c in &mut poly {
         let Some(ip) = camera.project(c.world) else {
-            return Vec::new();
+            return;
         };
         if !(ip.uv.is_finite() && ip.gd.is_finite() && ip.gd > 0.0) {
-            return Vec::new();
+            return;
         }
         c.uv = ip.uv;
         c.gd = ip.gd;
@@ -113,28 +212,32 @@ fn setup_triangle<P: Projection>(camera: &P, p: [DVec3; 3], item: ItemId, w: u32
     // 3. Guard band, in image space (gd and gd·b are affine in image space).
     let (wf, hf) = (w as f64, h as f64);
     let bounds = [
-        (DVec2::X, GUARD),                // x ≥ −G
-        (-DVec2::X, wf + GUARD),          // x ≤ w + G
-        (DVec2::Y, GUARD),                // y ≥ −G
-        (-DVec2::Y, hf + GUARD),          // y ≤ h + G
+        (DVec2::X, GUARD),       // x ≥ −G
+        (-DVec2::X, wf + GUARD), // x ≤ w + G
+        (DVec2::Y, GUARD),       // y ≥ −G
+        (-DVec2::Y, hf + GUARD), // y ≤ h + G
     ];
     for (n, off) in bounds {
         if poly.iter().any(|c| n.dot(c.uv) + off < 0.0) {
-            poly = clip_polygon(&poly, |c| n.dot(c.uv) + off, |a, b, s| Corner {
-                uv: a.uv + (b.uv - a.uv) * s,
-                gd: a.gd + (b.gd - a.gd) * s,
-                q: a.q + (b.q - a.q) * s,
-                ..*a
-            });
+            poly = clip_polygon(
+                &poly,
+                |c| n.dot(c.uv) + off,
+                |a, b, s| Corner {
+                    uv: a.uv + (b.uv - a.uv) * s,
+                    gd: a.gd + (b.gd - a.gd) * s,
+                    q: a.q + (b.q - a.q) * s,
+                    ..*a
+                },
+            );
             if poly.len() < 3 {
-                return Vec::new();
+                return;
             }
         }
     }
     // 4. Fan-triangulate, snap, orient, bound.
-    (1..poly.len() - 1)
-        .filter_map(|k| screen_triangle([poly[0], poly[k], poly[k + 1]], item, w, h))
-        .collect()
+    for k in 1..poly.len() - 1 {
+        out.extend(screen_triangle([poly[0], poly[k], poly[k + 1]], item, w, h));
+    }
 }
 
 /// Sutherland–Hodgman against `dist ≥ 0`. New corners are always interpolated from the inside
@@ -152,7 +255,11 @@ fn clip_polygon(
             out.push(*a);
         }
         if (da >= 0.0) != (db >= 0.0) {
-            let (inside, outside, di, dout) = if da >= 0.0 { (a, b, da, db) } else { (b, a, db, da) };
+            let (inside, outside, di, dout) = if da >= 0.0 {
+                (a, b, da, db)
+            } else {
+                (b, a, db, da)
+            };
             out.push(lerp(inside, outside, di / (di - dout)));
         }
     }
@@ -184,38 +291,39 @@ fn screen_triangle(c: [Corner; 3], item: ItemId, w: u32, h: u32) -> Option<Scree
         return None;
     }
     let origin = c[0].uv;
-    let values = |f: &dyn Fn(&Corner) -> f64| plane(&c, origin, f);
+    let values = |c: &Corner| [c.gd, c.q.x, c.q.y, c.q.z];
     Some(ScreenTri {
         fixed,
         rows: (y0 as u32, y1 as u32),
         cols: (x0 as u32, x1 as u32),
         origin,
-        planes: [
-            values(&|c| c.gd),
-            values(&|c| c.q.x),
-            values(&|c| c.q.y),
-            values(&|c| c.q.z),
-        ],
+        planes: planes(
+            [c[1].uv - origin, c[2].uv - origin],
+            [values(&c[0]), values(&c[1]), values(&c[2])],
+        ),
         item,
     })
 }
 
-/// The affine function through three image points' values, from unsnapped positions.
-fn plane(c: &[Corner; 3], origin: DVec2, f: &dyn Fn(&Corner) -> f64) -> Plane {
-    let (e1, e2) = (c[1].uv - origin, c[2].uv - origin);
-    let (f0, f1, f2) = (f(&c[0]), f(&c[1]), f(&c[2]));
+/// The affine functions through the corners' values `f[corner][k]`, from unsnapped positions
+/// (`e` = corners 1 and 2 relative to corner 0).
+fn planes(e: [DVec2; 2], f: [[f64; 4]; 3]) -> [Plane; 4] {
+    let [e1, e2] = e;
     let det = e1.x * e2.y - e1.y * e2.x;
-    if det.abs() < 1e-12 {
-        // Sliver: degenerate in image space; use a constant, the corners' mean.
-        return Plane {
-            f0: (f0 + f1 + f2) / 3.0,
-            dfdx: 0.0,
-            dfdy: 0.0,
-        };
-    }
-    Plane {
-        f0,
-        dfdx: ((f1 - f0) * e2.y - (f2 - f0) * e1.y) / det,
-        dfdy: ((f2 - f0) * e1.x - (f1 - f0) * e2.x) / det,
-    }
+    std::array::from_fn(|k| {
+        let (f0, f1, f2) = (f[0][k], f[1][k], f[2][k]);
+        if det.abs() < 1e-12 {
+            // Sliver: degenerate in image space; use a constant, the corners' mean.
+            return Plane {
+                f0: (f0 + f1 + f2) / 3.0,
+                dfdx: 0.0,
+                dfdy: 0.0,
+            };
+        }
+        Plane {
+            f0,
+            dfdx: ((f1 - f0) * e2.y - (f2 - f0) * e1.y) / det,
+            dfdy: ((f2 - f0) * e1.x - (f1 - f0) * e2.x) / det,
+        }
+    })
 }

@@ -68,9 +68,17 @@ fn grid_sharing_edges_covers_each_pixel_exactly_once() {
         for i in 0..=n {
             let mut v = Vec3::new(4.5 + i as f32 * step, 4.5 + j as f32 * step, 1.0);
             if i > 0 && i < n && j > 0 && j < n {
-                let k = (j * (n + 1) + i) as u32;
-                v.x += if k % 3 == 0 { 0.0 } else { jitter(k) * step * 0.6 };
-                v.y += if k % 3 == 0 { 0.0 } else { jitter(k + 1000) * step * 0.6 };
+                let k = j * (n + 1) + i;
+                v.x += if k % 3 == 0 {
+                    0.0
+                } else {
+                    jitter(k) * step * 0.6
+                };
+                v.y += if k % 3 == 0 {
+                    0.0
+                } else {
+                    jitter(k + 1000) * step * 0.6
+                };
                 if k % 3 == 0 {
                     v.x = v.x.floor() + 0.5;
                     v.y = v.y.floor() + 0.5;
@@ -135,11 +143,23 @@ fn fan_around_a_pixel_centre_covers_each_pixel_exactly_once() {
 #[test]
 fn depth_test_keeps_the_nearer_triangle_and_ties_keep_the_first() {
     let cam = ScreenSpace(16, 16);
-    let quad = |z: f32| vec![Vec3::new(0.0, 0.0, z), Vec3::new(16.0, 0.0, z), Vec3::new(0.0, 16.0, z)];
+    let quad = |z: f32| {
+        vec![
+            Vec3::new(0.0, 0.0, z),
+            Vec3::new(16.0, 0.0, z),
+            Vec3::new(0.0, 16.0, z),
+        ]
+    };
     let far = mesh(quad(2.0), vec![[0, 1, 2]]);
     let near = mesh(quad(1.0), vec![[0, 1, 2]]);
     let (t, _) = rasterize(&cam, &[&far, &near, &near], &NoAttributes, ()).unwrap();
-    assert_eq!(t.item.get(2, 2), ItemId { object: 1, triangle: 0 });
+    assert_eq!(
+        t.item.get(2, 2),
+        ItemId {
+            object: 1,
+            triangle: 0
+        }
+    );
     assert_eq!(t.gd.get(2, 2), 1.0);
     assert_eq!(t.gd.get(15, 15), 0.0);
 }
@@ -148,11 +168,17 @@ fn depth_test_keeps_the_nearer_triangle_and_ties_keep_the_first() {
 fn barycentrics_are_perspective_correct() {
     // A tilted triangle: interpolating world positions with the fragment barycentrics must land
     // on the point the pixel's ray meets, i.e. unproject(uv, gd).
-    let cam = ScreenSpace(32, 32);
-    let p = vec![Vec3::new(1.0, 1.0, 1.0), Vec3::new(31.0, 2.0, 4.0), Vec3::new(3.0, 30.0, 9.0)];
+    let p = [
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(31.0, 2.0, 4.0),
+        Vec3::new(3.0, 30.0, 9.0),
+    ];
     // In ScreenSpace, a world point (x, y, z) projects to (x, y): make the corners' image
     // positions differ from their x, y by storing world = (u·z, v·z, z) (a true perspective).
-    let world: Vec<Vec3> = p.iter().map(|v| Vec3::new(v.x * v.z, v.y * v.z, v.z)).collect();
+    let world: Vec<Vec3> = p
+        .iter()
+        .map(|v| Vec3::new(v.x * v.z, v.y * v.z, v.z))
+        .collect();
     struct Persp;
     impl Projection for Persp {
         fn resolution(&self) -> (u32, u32) {
@@ -171,7 +197,6 @@ fn barycentrics_are_perspective_correct() {
             p.z - 1e-3
         }
     }
-    let _ = cam;
     let m = mesh(world.clone(), vec![[0, 1, 2]]);
     let (t, stats) = rasterize(&Persp, &[&m], &StoreFragment, None).unwrap();
     assert!(stats.written > 100);
@@ -179,7 +204,10 @@ fn barycentrics_are_perspective_correct() {
         let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
         let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
         let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
-        assert!((interp - exact).length() < 1e-4 * exact.length(), "{interp} vs {exact}");
+        assert!(
+            (interp - exact).length() < 1e-4 * exact.length(),
+            "{interp} vs {exact}"
+        );
         assert!((f.bary.element_sum() - 1.0).abs() < 1e-5);
     }
 }
@@ -189,14 +217,25 @@ fn triangles_crossing_the_near_plane_are_clipped_not_dropped() {
     let cam = ScreenSpace(16, 16);
     // One corner behind the camera: the visible part still covers pixels, with positive gd.
     let m = mesh(
-        vec![Vec3::new(2.0, 2.0, 1.0), Vec3::new(14.0, 2.0, 1.0), Vec3::new(2.0, 14.0, -1.0)],
+        vec![
+            Vec3::new(2.0, 2.0, 1.0),
+            Vec3::new(14.0, 2.0, 1.0),
+            Vec3::new(2.0, 14.0, -1.0),
+        ],
         vec![[0, 1, 2]],
     );
     let (t, stats) = rasterize(&cam, &[&m], &NoAttributes, ()).unwrap();
     assert!(stats.written > 10);
     assert!(t.gd.pixels().iter().all(|&g| g >= 0.0 && g.is_finite()));
     // Entirely behind: nothing.
-    let behind = mesh(vec![Vec3::new(2.0, 2.0, -1.0), Vec3::new(14.0, 2.0, -1.0), Vec3::new(2.0, 14.0, -1.0)], vec![[0, 1, 2]]);
+    let behind = mesh(
+        vec![
+            Vec3::new(2.0, 2.0, -1.0),
+            Vec3::new(14.0, 2.0, -1.0),
+            Vec3::new(2.0, 14.0, -1.0),
+        ],
+        vec![[0, 1, 2]],
+    );
     let (_, stats) = rasterize(&cam, &[&behind], &NoAttributes, ()).unwrap();
     assert_eq!(stats.written, 0);
 }
@@ -206,7 +245,11 @@ fn huge_triangles_are_guard_band_clipped() {
     // Corners millions of pixels away must neither overflow nor lose the on-screen part.
     let cam = ScreenSpace(16, 16);
     let m = mesh(
-        vec![Vec3::new(-1e8, -1e8, 1.0), Vec3::new(1e8, -1e8, 1.0), Vec3::new(0.0, 1e8, 1.0)],
+        vec![
+            Vec3::new(-1e8, -1e8, 1.0),
+            Vec3::new(1e8, -1e8, 1.0),
+            Vec3::new(0.0, 1e8, 1.0),
+        ],
         vec![[0, 1, 2]],
     );
     let (t, _) = rasterize(&cam, &[&m], &NoAttributes, ()).unwrap();

@@ -78,15 +78,31 @@ impl Timings {
 }
 
 /// Renders `scene` at its default time with `method`.
-pub fn render(scene: &Scene, method: Method, progress: &dyn Progress) -> Result<(Frame, Timings), RenderError> {
+pub fn render(
+    scene: &Scene,
+    method: Method,
+    progress: &dyn Progress,
+) -> Result<(Frame, Timings), RenderError> {
     render_at(scene, scene.render.time, method, progress)
 }
 
 /// Renders `scene` at time `t` with `method`.
-pub fn render_at(scene: &Scene, t: f32, method: Method, progress: &dyn Progress) -> Result<(Frame, Timings), RenderError> {
+pub fn render_at(
+    scene: &Scene,
+    t: f32,
+    method: Method,
+    progress: &dyn Progress,
+) -> Result<(Frame, Timings), RenderError> {
     let mut timings = Timings::default();
     let view = timings.time("evaluate scene", || scene.view(t))?;
-    let frame = render_view(&view, &scene.lighting, &scene.render, method, progress, &mut timings)?;
+    let frame = render_view(
+        &view,
+        &scene.lighting,
+        &scene.render,
+        method,
+        progress,
+        &mut timings,
+    )?;
     Ok((frame, timings))
 }
 

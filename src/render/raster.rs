@@ -10,9 +10,16 @@ use glam::{DVec2, Vec2, Vec3};
 use rayon::prelude::*;
 
 /// Renders `view` by rasterization.
-pub fn render_raster(view: &View, lighting: &Lighting, progress: &dyn Progress, timings: &mut Timings) -> Result<Frame, RenderError> {
+pub fn render_raster(
+    view: &View,
+    lighting: &Lighting,
+    progress: &dyn Progress,
+    timings: &mut Timings,
+) -> Result<Frame, RenderError> {
     let meshes = view.mesh_refs();
-    let (target, _stats) = timings.time("rasterize", || rasterize(&view.camera, &meshes, &StoreFragment, None))?;
+    let (target, _stats) = timings.time("rasterize", || {
+        rasterize(&view.camera, &meshes, &StoreFragment, None)
+    })?;
     let (w, h) = target.gd.size();
     let mut frame = Frame::new(w, h)?;
     let fragments = target.attributes.pixels();
@@ -57,8 +64,12 @@ fn shade_fragment(view: &View, lighting: &Lighting, f: &Fragment, d: Vec3) -> Sh
     let tri = f.item.triangle as usize;
     let [i0, i1, i2] = mesh.triangles[tri].map(|i| i as usize);
     let b = f.bary;
-    let n = (mesh.normals[i0] * b.x + mesh.normals[i1] * b.y + mesh.normals[i2] * b.z).normalize_or_zero();
-    let uv = mesh.uvs.as_ref().map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
+    let n = (mesh.normals[i0] * b.x + mesh.normals[i1] * b.y + mesh.normals[i2] * b.z)
+        .normalize_or_zero();
+    let uv = mesh
+        .uvs
+        .as_ref()
+        .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
     let (n, _, front) = facing(d, n, mesh.face_normal(tri));
     let env = &lighting.environment;
     let color = match surface {

@@ -2,8 +2,8 @@
 //! optics of mirrors and glass.
 
 use crate::frame::Wrap;
-use crate::scene::{Lighting, Surface};
 use crate::geom::Mesh;
+use crate::scene::{Lighting, Surface};
 use glam::{Vec2, Vec3};
 
 /// Linear albedo of triangle `triangle` of `mesh` at texture coordinates `uv`.
@@ -11,7 +11,11 @@ pub fn albedo(mesh: &Mesh, surface: &Surface, triangle: u32, uv: Vec2) -> Vec3 {
     let (color, texture) = match surface {
         Surface::Diffuse(Some(o)) => (o.color, o.texture.as_ref()),
         _ => {
-            let m = mesh.face_material.get(triangle as usize).copied().unwrap_or(0);
+            let m = mesh
+                .face_material
+                .get(triangle as usize)
+                .copied()
+                .unwrap_or(0);
             match mesh.materials.get(m as usize) {
                 Some(mat) => (mat.base_color, mat.texture.as_ref()),
                 None => (Vec3::splat(0.8), None),

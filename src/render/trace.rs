@@ -51,7 +51,11 @@ impl<Q: RayQuery> Tracer<'_, Q> {
             }
         };
         match surface {
-            Surface::Diffuse(_) => lambert(albedo(mesh, surface, hit.triangle, hit.uv), n, self.lighting),
+            Surface::Diffuse(_) => lambert(
+                albedo(mesh, surface, hit.triangle, hit.uv),
+                n,
+                self.lighting,
+            ),
             Surface::Mirror { tint } => *tint * follow(hit.position + ng * eps, reflect(d, n)),
             Surface::Glass { ior, tint } => {
                 let eta = if front { 1.0 / ior } else { *ior };
@@ -68,7 +72,10 @@ impl<Q: RayQuery> Tracer<'_, Q> {
 }
 
 /// Traces one primary ray per pixel centre.
-pub fn render_trace<Q: RayQuery>(tracer: &Tracer<'_, Q>, progress: &dyn Progress) -> Result<Frame, RenderError> {
+pub fn render_trace<Q: RayQuery>(
+    tracer: &Tracer<'_, Q>,
+    progress: &dyn Progress,
+) -> Result<Frame, RenderError> {
     let camera = &tracer.view.camera;
     let (w, h) = crate::camera::Projection::resolution(camera);
     let mut frame = Frame::new(w, h)?;

@@ -60,7 +60,7 @@ pub enum SceneError {
         /// Which object.
         key: String,
         /// The cause.
-        source: MeshError,
+        source: Box<MeshError>,
     },
     /// An image (panorama, texture) could not be loaded.
     #[error("{path}: {key}: {source}")]
@@ -273,7 +273,11 @@ impl Scene {
         let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
             b.union(o.mesh.bounds().transformed(&o.world_from_object))
         });
-        let radius = if bounds.is_empty() { 1.0 } else { bounds.radius().max(1e-6) };
+        let radius = if bounds.is_empty() {
+            1.0
+        } else {
+            bounds.radius().max(1e-6)
+        };
 
         let c = &file.camera;
         finite("camera.position", &c.position)?;
@@ -319,13 +323,13 @@ impl Scene {
         let environment = match &file.environment {
             Some(e) => {
                 finite("environment.rotation", &[e.rotation, e.intensity])?;
-                EnvMap::load(&dir.join(&e.path), e.rotation.to_radians(), e.intensity).map_err(|source| {
-                    SceneError::Image {
+                EnvMap::load(&dir.join(&e.path), e.rotation.to_radians(), e.intensity).map_err(
+                    |source| SceneError::Image {
                         path: path.to_path_buf(),
                         key: "environment.path".into(),
                         source,
-                    }
-                })?
+                    },
+                )?
             }
             None => EnvMap::constant(vec3(file.render.background)),
         };
@@ -344,7 +348,10 @@ impl Scene {
             None => None,
         };
         if file.render.max_depth > 64 {
-            return Err(invalid("render.max_depth", format!("{} is more than 64", file.render.max_depth)));
+            return Err(invalid(
+                "render.max_depth",
+                format!("{} is more than 64", file.render.max_depth),
+            ));
         }
         Ok(Scene {
             path: path.to_path_buf(),
@@ -395,7 +402,15 @@ impl CameraSpec {
                 }
             }
         };
-        Ok(Pinhole::look_at(position, look_at, self.up, self.fov_y, self.width, self.height)?.with_near(self.near))
+        Ok(Pinhole::look_at(
+            position,
+            look_at,
+            self.up,
+            self.fov_y,
+            self.width,
+            self.height,
+        )?
+        .with_near(self.near))
     }
 }
 
@@ -434,10 +449,14 @@ fn load_object(
             let loaded = crate::geom::io::load(&mesh_path).map_err(|source| SceneError::Mesh {
                 path: scene.to_path_buf(),
                 key: key(".mesh"),
-                source,
+                source: Box::new(source),
             })?;
             warnings.extend(loaded.warnings);
-            let stem = mesh_path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_string();
+            let stem = mesh_path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("mesh")
+                .to_string();
             (loaded.mesh, stem)
         }
         (None, Some(s)) => {
@@ -445,7 +464,12 @@ fn load_object(
                 "plane" => crate::geom::plane(1),
                 "cube" => crate::geom::cube(),
                 "sphere" => crate::geom::icosphere(4),
-                other => return Err(invalid(".shape", format!("unknown shape {other:?} (plane, cube or sphere)"))),
+                other => {
+                    return Err(invalid(
+                        ".shape",
+                        format!("unknown shape {other:?} (plane, cube or sphere)"),
+                    ));
+                }
             };
             (mesh, s.clone())
         }
@@ -458,7 +482,8 @@ fn load_object(
         let b = mesh.bounds();
         let s = fit / b.extent().max_element().max(f32::MIN_POSITIVE);
         let base = Vec3::new(b.center().x, b.min.y, b.center().z);
-        mesh = mesh.transformed(&(Mat4::from_scale(Vec3::splat(s)) * Mat4::from_translation(-base)));
+        mesh =
+            mesh.transformed(&(Mat4::from_scale(Vec3::splat(s)) * Mat4::from_translation(-base)));
     }
     let scale = match &o.scale {
         None => Vec3::ONE,
@@ -467,7 +492,10 @@ fn load_object(
     };
     let all: Vec<f32> = [o.translate, o.rotate, scale.to_array()].concat();
     if !all.iter().all(|x| x.is_finite()) || scale.cmpeq(Vec3::ZERO).any() {
-        return Err(invalid("", "translate, rotate and scale must be finite and scale non-zero".into()));
+        return Err(invalid(
+            "",
+            "translate, rotate and scale must be finite and scale non-zero".into(),
+        ));
     }
     let [rx, ry, rz] = o.rotate.map(f32::to_radians);
     let world_from_object = Mat4::from_scale_rotation_translation(
@@ -479,7 +507,11 @@ fn load_object(
         None => Surface::Diffuse(None),
         Some(MaterialFile::Diffuse { color, texture }) => {
             let texture = match texture {
-                Some(t) => Some(Arc::new(load_image(scene, &dir.join(t), &key(".material.texture"))?)),
+                Some(t) => Some(Arc::new(load_image(
+                    scene,
+                    &dir.join(t),
+                    &key(".material.texture"),
+                )?)),
                 None => None,
             };
             Surface::Diffuse(Some(DiffuseOverride {
@@ -487,7 +519,9 @@ fn load_object(
                 texture,
             }))
         }
-        Some(MaterialFile::Mirror { tint }) => Surface::Mirror { tint: Vec3::from_array(*tint) },
+        Some(MaterialFile::Mirror { tint }) => Surface::Mirror {
+            tint: Vec3::from_array(*tint),
+        },
         Some(MaterialFile::Glass { ior, tint }) => {
             if !(*ior >= 1.0 && *ior < 5.0) {
                 return Err(invalid(".material.ior", format!("{ior} must be in [1, 5)")));
@@ -540,7 +574,8 @@ mod tests {
         Scene::from_file(Path::new("t.toml"), file)
     }
 
-    const CAMERA: &str = "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [32, 24]\n";
+    const CAMERA: &str =
+        "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [32, 24]\n";
 
     #[test]
     fn a_minimal_scene_loads() {
@@ -552,9 +587,15 @@ mod tests {
 
     #[test]
     fn unknown_keys_and_bad_values_are_errors() {
-        let e = parse(&format!("{CAMERA}[[object]]\nshape = \"cube\"\ncolour = 1\n")).unwrap_err();
+        let e = parse(&format!(
+            "{CAMERA}[[object]]\nshape = \"cube\"\ncolour = 1\n"
+        ))
+        .unwrap_err();
         assert!(e.to_string().contains("colour"), "{e}");
-        let e = parse(&format!("{CAMERA}[[object]]\nshape = \"cube\"\nmaterial = {{ type = \"glass\", iorr = 1.5 }}\n")).unwrap_err();
+        let e = parse(&format!(
+            "{CAMERA}[[object]]\nshape = \"cube\"\nmaterial = {{ type = \"glass\", iorr = 1.5 }}\n"
+        ))
+        .unwrap_err();
         assert!(e.to_string().contains("iorr"), "{e}");
         let e = parse(&CAMERA.replace("[32, 24]", "[1000000, 1000000]")).unwrap_err();
         assert!(e.to_string().contains("camera.resolution"), "{e}");
@@ -582,7 +623,9 @@ mod tests {
         let b0 = s.view(0.0).unwrap().meshes[0].bounds();
         let b1 = s.view(1.0).unwrap().meshes[0].bounds();
         assert!((b0.center() - b1.center()).length() < 1e-5);
-        let p = s.objects[0].world_from_object_at(1.0).transform_point3(Vec3::new(0.5, 0.0, 0.0));
+        let p = s.objects[0]
+            .world_from_object_at(1.0)
+            .transform_point3(Vec3::new(0.5, 0.0, 0.0));
         assert!((p - Vec3::new(1.0, 0.0, -0.5)).length() < 1e-5, "{p}");
     }
 }

@@ -43,7 +43,11 @@ impl Bvh {
             };
         }
         let mut build_time = std::time::Duration::default();
-        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut build_time);
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut build_time,
+        );
         let corners = bvh
             .primitive_indices
             .iter()
@@ -52,7 +56,11 @@ impl Bvh {
                 [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)]
             })
             .collect();
-        let source = bvh.primitive_indices.iter().map(|&i| source[i as usize]).collect();
+        let source = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| source[i as usize])
+            .collect();
         Bvh {
             bvh,
             corners,
@@ -83,15 +91,18 @@ impl RayQuery for Bvh {
         }
         let mut best: Option<(usize, TriangleHit)> = None;
         let mut rec = obvhs::ray::RayHit::none();
-        self.bvh.ray_traverse(Self::obvhs_ray(ray, t_max), &mut rec, |r, id| {
-            match intersect_triangle(ray, self.corners[id], 0.0, r.tmax) {
-                Some(h) => {
-                    best = Some((id, h));
-                    h.t
-                }
-                None => f32::INFINITY,
-            }
-        });
+        self.bvh
+            .ray_traverse(
+                Self::obvhs_ray(ray, t_max),
+                &mut rec,
+                |r, id| match intersect_triangle(ray, self.corners[id], 0.0, r.tmax) {
+                    Some(h) => {
+                        best = Some((id, h));
+                        h.t
+                    }
+                    None => f32::INFINITY,
+                },
+            );
         best.map(|(id, h)| {
             let (o, t) = self.source[id];
             surface_hit(&self.meshes[o as usize], o, t, ray, h)
@@ -102,14 +113,23 @@ impl RayQuery for Bvh {
         if self.corners.is_empty() {
             return false;
         }
-        !self.bvh.ray_traverse_miss(Self::obvhs_ray(ray, t_max), |r, id| {
-            intersect_triangle(ray, self.corners[id], 0.0, r.tmax).map_or(f32::INFINITY, |h| h.t)
-        })
+        !self
+            .bvh
+            .ray_traverse_miss(Self::obvhs_ray(ray, t_max), |r, id| {
+                intersect_triangle(ray, self.corners[id], 0.0, r.tmax)
+                    .map_or(f32::INFINITY, |h| h.t)
+            })
     }
 }
 
 /// Fills a hit record from a triangle hit: interpolated normal and UV.
-pub(crate) fn surface_hit(mesh: &Mesh, object: u32, triangle: u32, ray: &Ray, h: TriangleHit) -> Hit {
+pub(crate) fn surface_hit(
+    mesh: &Mesh,
+    object: u32,
+    triangle: u32,
+    ray: &Ray,
+    h: TriangleHit,
+) -> Hit {
     let [i0, i1, i2] = mesh.triangles[triangle as usize].map(|i| i as usize);
     let (b1, b2) = (h.bary.x, h.bary.y);
     let b0 = 1.0 - b1 - b2;

@@ -7,7 +7,7 @@
 
 mod bvh;
 
-pub use bvh::{Bvh, BruteForce};
+pub use bvh::{BruteForce, Bvh};
 
 use crate::frame::envmap::EnvMap;
 use crate::geom::Ray;

@@ -17,7 +17,8 @@ use std::sync::Arc;
 /// Loads a `.gltf` or `.glb` file.
 pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let bytes = read_file(path)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| malformed(path, "document", e.to_string()))?;
+    let gltf =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| malformed(path, "document", e.to_string()))?;
     let base = path.parent().unwrap_or(Path::new("."));
     check_external_files(path, base, &gltf.document)?;
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
@@ -28,7 +29,12 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
             return Err(malformed(
                 path,
                 format!("bufferView {}", view.index()),
-                format!("bytes {}..{} past the end of buffer {} ({len} bytes)", view.offset(), view.offset() + view.length(), view.buffer().index()),
+                format!(
+                    "bytes {}..{} past the end of buffer {} ({len} bytes)",
+                    view.offset(),
+                    view.offset() + view.length(),
+                    view.buffer().index()
+                ),
             ));
         }
     }
@@ -82,14 +88,22 @@ fn check_external_files(path: &Path, base: &Path, doc: &gltf::Document) -> Resul
     for b in doc.buffers() {
         if let gltf::buffer::Source::Uri(uri) = b.source() {
             if !uri.starts_with("data:") && !base.join(uri).is_file() {
-                return Err(malformed(path, format!("buffer {}", b.index()), format!("file {uri:?} not found")));
+                return Err(malformed(
+                    path,
+                    format!("buffer {}", b.index()),
+                    format!("file {uri:?} not found"),
+                ));
             }
         }
     }
     for i in doc.images() {
         if let gltf::image::Source::Uri { uri, .. } = i.source() {
             if !uri.starts_with("data:") && !base.join(uri).is_file() {
-                return Err(malformed(path, format!("image {}", i.index()), format!("file {uri:?} not found")));
+                return Err(malformed(
+                    path,
+                    format!("image {}", i.index()),
+                    format!("file {uri:?} not found"),
+                ));
             }
         }
     }
@@ -102,7 +116,11 @@ type VertexKey = (Option<usize>, Option<usize>, Option<usize>);
 fn vertex_key(prim: &gltf::Primitive) -> VertexKey {
     use gltf::Semantic;
     let index = |s: Semantic| prim.get(&s).map(|a| a.index());
-    (index(Semantic::Positions), index(Semantic::Normals), index(Semantic::TexCoords(0)))
+    (
+        index(Semantic::Positions),
+        index(Semantic::Normals),
+        index(Semantic::TexCoords(0)),
+    )
 }
 
 /// Node hierarchies deeper than this are refused (cycles are invalid glTF but must not hang).
@@ -123,7 +141,11 @@ struct Flatten<'a> {
 impl Flatten<'_> {
     fn visit(&mut self, node: &gltf::Node, parent: Mat4, depth: usize) -> Result<(), MeshError> {
         if depth > MAX_NODE_DEPTH {
-            return Err(malformed(self.path, format!("node {}", node.index()), "hierarchy too deep (a cycle?)"));
+            return Err(malformed(
+                self.path,
+                format!("node {}", node.index()),
+                "hierarchy too deep (a cycle?)",
+            ));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if !world.is_finite() {
@@ -148,7 +170,11 @@ impl Flatten<'_> {
     fn check(&self, accessor: &gltf::Accessor, what: &str) -> Result<(), MeshError> {
         let element = format!("accessor {} ({what})", accessor.index());
         let Some(view) = accessor.view() else {
-            return Err(malformed(self.path, element, "sparse or view-less accessors are not supported"));
+            return Err(malformed(
+                self.path,
+                element,
+                "sparse or view-less accessors are not supported",
+            ));
         };
         let elem = accessor.size();
         let stride = view.stride().unwrap_or(elem);
@@ -160,7 +186,12 @@ impl Flatten<'_> {
             return Err(malformed(
                 self.path,
                 element,
-                format!("{} items need {need} bytes but bufferView {} holds {}", accessor.count(), view.index(), view.length()),
+                format!(
+                    "{} items need {need} bytes but bufferView {} holds {}",
+                    accessor.count(),
+                    view.index(),
+                    view.length()
+                ),
             ));
         }
         Ok(())
@@ -176,7 +207,12 @@ impl Flatten<'_> {
         if prim.mode() != gltf::mesh::Mode::Triangles {
             self.warnings.push(Warning::Skipped {
                 path: self.path.to_path_buf(),
-                what: format!("mesh {} primitive {}: mode {:?} is not triangles", mesh.index(), prim.index(), prim.mode()),
+                what: format!(
+                    "mesh {} primitive {}: mode {:?} is not triangles",
+                    mesh.index(),
+                    prim.index(),
+                    prim.mode()
+                ),
             });
             return Ok(());
         }
@@ -196,16 +232,23 @@ impl Flatten<'_> {
             .collect();
         let n = positions.len();
         let normal_m = glam::Mat3::from_mat4(*world).inverse().transpose();
-        let normals: Option<Vec<Vec3>> = reader
-            .read_normals()
-            .map(|it| it.map(|v| (normal_m * Vec3::from(v)).normalize_or_zero()).collect());
-        let uvs: Option<Vec<Vec2>> = reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect());
+        let normals: Option<Vec<Vec3>> = reader.read_normals().map(|it| {
+            it.map(|v| (normal_m * Vec3::from(v)).normalize_or_zero())
+                .collect()
+        });
+        let uvs: Option<Vec<Vec2>> = reader
+            .read_tex_coords(0)
+            .map(|t| t.into_f32().map(Vec2::from).collect());
         let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().collect(),
             None => (0..n as u32).collect(),
         };
         if indices.len() % 3 != 0 {
-            return Err(malformed(self.path, element(), format!("{} indices is not a multiple of 3", indices.len())));
+            return Err(malformed(
+                self.path,
+                element(),
+                format!("{} indices is not a multiple of 3", indices.len()),
+            ));
         }
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
             return Err(MeshError::IndexOutOfRange {
@@ -218,7 +261,11 @@ impl Flatten<'_> {
         let material = self.material(&prim.material())?;
         let flip = world.determinant() < 0.0;
         let oriented = |t: &[u32], base: u32| {
-            if flip { [t[0] + base, t[2] + base, t[1] + base] } else { [t[0] + base, t[1] + base, t[2] + base] }
+            if flip {
+                [t[0] + base, t[2] + base, t[1] + base]
+            } else {
+                [t[0] + base, t[1] + base, t[2] + base]
+            }
         };
         self.source.triangles += indices.len() / 3;
         let key = vertex_key(prim);
@@ -233,7 +280,9 @@ impl Flatten<'_> {
         self.normals_present &= normals.as_ref().is_some_and(|v| v.len() == n);
         self.source.vertices += n;
         let part = Mesh {
-            normals: normals.filter(|v| v.len() == n).unwrap_or_else(|| vec![Vec3::ZERO; n]),
+            normals: normals
+                .filter(|v| v.len() == n)
+                .unwrap_or_else(|| vec![Vec3::ZERO; n]),
             uvs: uvs.filter(|v| v.len() == n),
             triangles: indices.chunks_exact(3).map(|t| oriented(t, 0)).collect(),
             face_material: vec![0; indices.len() / 3],
@@ -283,7 +332,11 @@ impl Flatten<'_> {
             gltf::image::Format::R8G8B8 => 3,
             gltf::image::Format::R8G8B8A8 => 4,
             other => {
-                return Err(malformed(self.path, format!("image {image}"), format!("pixel format {other:?} is not supported")));
+                return Err(malformed(
+                    self.path,
+                    format!("image {image}"),
+                    format!("pixel format {other:?} is not supported"),
+                ));
             }
         };
         let px: Vec<Vec4> = data
@@ -291,7 +344,11 @@ impl Flatten<'_> {
             .chunks_exact(channels)
             .map(|p| {
                 let c = |i: usize| srgb_to_linear(p[i.min(channels - 1)] as f32 / 255.0);
-                let a = if channels == 4 { p[3] as f32 / 255.0 } else { 1.0 };
+                let a = if channels == 4 {
+                    p[3] as f32 / 255.0
+                } else {
+                    1.0
+                };
                 if channels <= 2 {
                     Vec4::new(c(0), c(0), c(0), a)
                 } else {
@@ -299,11 +356,12 @@ impl Flatten<'_> {
                 }
             })
             .collect();
-        let img = Image::from_vec(data.width, data.height, px).map_err(|source| MeshError::Texture {
-            path: self.path.to_path_buf(),
-            texture: format!("image {image}"),
-            source,
-        })?;
+        let img =
+            Image::from_vec(data.width, data.height, px).map_err(|source| MeshError::Texture {
+                path: self.path.to_path_buf(),
+                texture: format!("image {image}"),
+                source,
+            })?;
         let t = Arc::new(img);
         self.textures.insert(image, t.clone());
         Ok(t)

@@ -58,10 +58,11 @@ fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>)
 
 fn load_texture(mesh_path: &Path, name: &str) -> Result<super::Texture, MeshError> {
     let dir = mesh_path.parent().unwrap_or(Path::new("."));
-    let image = crate::frame::io::read_png(&dir.join(name)).map_err(|source| MeshError::Texture {
-        path: mesh_path.to_path_buf(),
-        texture: name.to_string(),
-        source,
-    })?;
+    let image =
+        crate::frame::io::read_png(&dir.join(name)).map_err(|source| MeshError::Texture {
+            path: mesh_path.to_path_buf(),
+            texture: name.to_string(),
+            source,
+        })?;
     Ok(std::sync::Arc::new(image))
 }

@@ -35,7 +35,9 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         let element = || format!("line {}", line_no + 1);
         let line = line.split('#').next().unwrap_or("").trim();
         let mut tokens = line.split_whitespace();
-        let Some(keyword) = tokens.next() else { continue };
+        let Some(keyword) = tokens.next() else {
+            continue;
+        };
         match keyword {
             "v" => v.push(parse_vec3(path, &element(), &mut tokens)?),
             "vn" => vn.push(parse_vec3(path, &element(), &mut tokens)?),
@@ -51,8 +53,14 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 let mut poly: Vec<u32> = Vec::with_capacity(4);
                 for tok in tokens {
                     let mut parts = tok.split('/');
-                    let iv = resolve(path, &element(), parts.next(), v.len())?
-                        .ok_or_else(|| malformed(path, element(), format!("face corner {tok:?} has no vertex index")))?;
+                    let iv =
+                        resolve(path, &element(), parts.next(), v.len())?.ok_or_else(|| {
+                            malformed(
+                                path,
+                                element(),
+                                format!("face corner {tok:?} has no vertex index"),
+                            )
+                        })?;
                     let it = resolve(path, &element(), parts.next(), vt.len())?;
                     let inn = resolve(path, &element(), parts.next(), vn.len())?;
                     any_vt |= it.is_some();
@@ -66,7 +74,11 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     poly.push(idx);
                 }
                 if poly.len() < 3 {
-                    return Err(malformed(path, element(), "a face needs at least 3 vertices"));
+                    return Err(malformed(
+                        path,
+                        element(),
+                        "a face needs at least 3 vertices",
+                    ));
                 }
                 for k in 1..poly.len() - 1 {
                     triangles.push([poly[0], poly[k], poly[k + 1]]);
@@ -116,7 +128,16 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         vertices: v.len(),
         triangles: triangles.len(),
     };
-    let mesh = Mesh::from_parts(path, positions, normals, uvs, triangles, face_material, materials, &mut warnings)?;
+    let mesh = Mesh::from_parts(
+        path,
+        positions,
+        normals,
+        uvs,
+        triangles,
+        face_material,
+        materials,
+        &mut warnings,
+    )?;
     Ok(LoadedMesh {
         mesh,
         source,
@@ -138,7 +159,11 @@ fn parse_f32(path: &Path, element: &str, tok: Option<&str>) -> Result<f32, MeshE
     Ok(x)
 }
 
-fn parse_vec3<'a>(path: &Path, element: &str, tokens: &mut impl Iterator<Item = &'a str>) -> Result<Vec3, MeshError> {
+fn parse_vec3<'a>(
+    path: &Path,
+    element: &str,
+    tokens: &mut impl Iterator<Item = &'a str>,
+) -> Result<Vec3, MeshError> {
     Ok(Vec3::new(
         parse_f32(path, element, tokens.next())?,
         parse_f32(path, element, tokens.next())?,
@@ -147,7 +172,12 @@ fn parse_vec3<'a>(path: &Path, element: &str, tokens: &mut impl Iterator<Item = 
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index; `None` for an empty field.
-fn resolve(path: &Path, element: &str, field: Option<&str>, count: usize) -> Result<Option<u32>, MeshError> {
+fn resolve(
+    path: &Path,
+    element: &str,
+    field: Option<&str>,
+    count: usize,
+) -> Result<Option<u32>, MeshError> {
     let Some(field) = field.filter(|f| !f.is_empty()) else {
         return Ok(None);
     };
@@ -178,7 +208,9 @@ fn load_mtl(
         let element = format!("line {}", line_no + 1);
         let line = line.split('#').next().unwrap_or("").trim();
         let mut tokens = line.split_whitespace();
-        let Some(keyword) = tokens.next() else { continue };
+        let Some(keyword) = tokens.next() else {
+            continue;
+        };
         match keyword {
             "newmtl" => {
                 let name = tokens.collect::<Vec<_>>().join(" ");
@@ -203,7 +235,9 @@ fn load_mtl(
             }
             "map_Kd" => {
                 // Options (-s, -o …) precede the file name; the name is the last token.
-                let name = tokens.last().ok_or_else(|| malformed(path, &element, "map_Kd names no file"))?;
+                let name = tokens
+                    .last()
+                    .ok_or_else(|| malformed(path, &element, "map_Kd names no file"))?;
                 let tex = load_texture(path, name)?;
                 if let Some(m) = current.and_then(|i| materials.get_mut(i)) {
                     m.texture = Some(tex);

@@ -55,8 +55,15 @@ impl Scalar {
 
 #[derive(Clone, Debug)]
 enum Property {
-    Scalar { name: String, ty: Scalar },
-    List { name: String, count: Scalar, item: Scalar },
+    Scalar {
+        name: String,
+        ty: Scalar,
+    },
+    List {
+        name: String,
+        count: Scalar,
+        item: Scalar,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -95,7 +102,11 @@ struct Body<'a> {
 
 impl Body<'_> {
     fn truncated(&self) -> MeshError {
-        malformed(self.path, self.element.clone(), "file ends early (truncated)")
+        malformed(
+            self.path,
+            self.element.clone(),
+            "file ends early (truncated)",
+        )
     }
 
     fn read(&mut self, ty: Scalar) -> Result<f64, MeshError> {
@@ -112,8 +123,13 @@ impl Body<'_> {
                     return Err(self.truncated());
                 }
                 let tok = std::str::from_utf8(&self.bytes[start..self.pos]).unwrap_or("?");
-                tok.parse::<f64>()
-                    .map_err(|_| malformed(self.path, self.element.clone(), format!("{tok:?} is not a number")))
+                tok.parse::<f64>().map_err(|_| {
+                    malformed(
+                        self.path,
+                        self.element.clone(),
+                        format!("{tok:?} is not a number"),
+                    )
+                })
             }
             Format::BinaryLe | Format::BinaryBe => {
                 let n = ty.size();
@@ -169,7 +185,10 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
             return Err(malformed(
                 path,
                 format!("element {}", el.name),
-                format!("declares {} items but only {left} bytes follow (truncated)", el.count),
+                format!(
+                    "declares {} items but only {left} bytes follow (truncated)",
+                    el.count
+                ),
             ));
         }
         match el.name.as_str() {
@@ -180,10 +199,17 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 };
                 let xyz = [find(&["x"]), find(&["y"]), find(&["z"])];
                 let [Some(ix), Some(iy), Some(iz)] = xyz else {
-                    return Err(malformed(path, "element vertex", "needs scalar properties x, y and z"));
+                    return Err(malformed(
+                        path,
+                        "element vertex",
+                        "needs scalar properties x, y and z",
+                    ));
                 };
                 let nrm = [find(&["nx"]), find(&["ny"]), find(&["nz"])];
-                let uv = [find(&["u", "s", "texture_u"]), find(&["v", "t", "texture_v"])];
+                let uv = [
+                    find(&["u", "s", "texture_u"]),
+                    find(&["v", "t", "texture_v"]),
+                ];
                 has_normals = nrm.iter().all(Option::is_some);
                 has_uvs = uv.iter().all(Option::is_some);
                 positions.reserve(el.count);
@@ -202,7 +228,11 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     }
                     positions.push(p);
                     if let [Some(a), Some(b), Some(c)] = nrm {
-                        normals.push(Vec3::new(values[a] as f32, values[b] as f32, values[c] as f32));
+                        normals.push(Vec3::new(
+                            values[a] as f32,
+                            values[b] as f32,
+                            values[c] as f32,
+                        ));
                     }
                     if let [Some(a), Some(b)] = uv {
                         uvs.push(Vec2::new(values[a] as f32, 1.0 - values[b] as f32));
@@ -214,7 +244,11 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     matches!(p, Property::List { name, .. } if name == "vertex_indices" || name == "vertex_index")
                 });
                 let Some(list) = list else {
-                    return Err(malformed(path, "element face", "needs a list property vertex_indices"));
+                    return Err(malformed(
+                        path,
+                        "element face",
+                        "needs a list property vertex_indices",
+                    ));
                 };
                 triangles.reserve(el.count);
                 for f in 0..el.count {
@@ -224,10 +258,16 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                             read_property(&mut body, p)?;
                             continue;
                         }
-                        let Property::List { count, item, .. } = p else { continue };
+                        let Property::List { count, item, .. } = p else {
+                            continue;
+                        };
                         let n = body.read(*count)?;
                         if !(3.0..=MAX_FACE_VERTICES as f64).contains(&n) {
-                            return Err(malformed(path, body.element.clone(), format!("a face with {n} vertices")));
+                            return Err(malformed(
+                                path,
+                                body.element.clone(),
+                                format!("a face with {n} vertices"),
+                            ));
                         }
                         let mut poly = Vec::with_capacity(n as usize);
                         for _ in 0..n as usize {
@@ -290,7 +330,11 @@ fn read_property(body: &mut Body, p: &Property) -> Result<f64, MeshError> {
         Property::List { count, item, .. } => {
             let n = body.read(*count)?;
             if !(0.0..=MAX_FACE_VERTICES as f64).contains(&n) {
-                return Err(malformed(body.path, body.element.clone(), format!("a list of {n} items")));
+                return Err(malformed(
+                    body.path,
+                    body.element.clone(),
+                    format!("a list of {n} items"),
+                ));
             }
             for _ in 0..n as usize {
                 body.read(*item)?;
@@ -304,7 +348,8 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Format, Vec<Element>, usiz
     if !bytes.starts_with(b"ply") {
         return Err(malformed(path, "line 1", "not a PLY file (no 'ply' magic)"));
     }
-    let end = find(bytes, b"end_header").ok_or_else(|| malformed(path, "header", "no end_header (truncated)"))?;
+    let end = find(bytes, b"end_header")
+        .ok_or_else(|| malformed(path, "header", "no end_header (truncated)"))?;
     let mut body_start = end + b"end_header".len();
     // The body starts after the end_header line's terminator (\n or \r\n).
     if bytes.get(body_start) == Some(&b'\r') {
@@ -326,13 +371,19 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Format, Vec<Element>, usiz
                     "ascii" => Format::Ascii,
                     "binary_little_endian" => Format::BinaryLe,
                     "binary_big_endian" => Format::BinaryBe,
-                    other => return Err(malformed(path, element, format!("unknown format {other:?}"))),
+                    other => {
+                        return Err(malformed(
+                            path,
+                            element,
+                            format!("unknown format {other:?}"),
+                        ));
+                    }
                 })
             }
             ["element", name, count] => {
-                let count = count
-                    .parse()
-                    .map_err(|_| malformed(path, element.clone(), format!("bad count {count:?}")))?;
+                let count = count.parse().map_err(|_| {
+                    malformed(path, element.clone(), format!("bad count {count:?}"))
+                })?;
                 elements.push(Element {
                     name: name.to_string(),
                     count,
@@ -341,9 +392,15 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Format, Vec<Element>, usiz
             }
             ["property", "list", c, i, name] => {
                 let (Some(count), Some(item)) = (Scalar::parse(c), Scalar::parse(i)) else {
-                    return Err(malformed(path, element, format!("unknown list types {c:?} {i:?}")));
+                    return Err(malformed(
+                        path,
+                        element,
+                        format!("unknown list types {c:?} {i:?}"),
+                    ));
                 };
-                let el = elements.last_mut().ok_or_else(|| malformed(path, element.clone(), "property before any element"))?;
+                let el = elements.last_mut().ok_or_else(|| {
+                    malformed(path, element.clone(), "property before any element")
+                })?;
                 el.properties.push(Property::List {
                     name: name.to_string(),
                     count,
@@ -351,8 +408,12 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Format, Vec<Element>, usiz
                 });
             }
             ["property", ty, name] => {
-                let ty = Scalar::parse(ty).ok_or_else(|| malformed(path, element.clone(), format!("unknown type {ty:?}")))?;
-                let el = elements.last_mut().ok_or_else(|| malformed(path, element.clone(), "property before any element"))?;
+                let ty = Scalar::parse(ty).ok_or_else(|| {
+                    malformed(path, element.clone(), format!("unknown type {ty:?}"))
+                })?;
+                let el = elements.last_mut().ok_or_else(|| {
+                    malformed(path, element.clone(), "property before any element")
+                })?;
                 el.properties.push(Property::Scalar {
                     name: name.to_string(),
                     ty,
