@@ -503,6 +503,9 @@ fn load_object(
         Quat::from_euler(EulerRot::ZYX, rz, ry, rx),
         Vec3::from_array(o.translate),
     );
+    if !mesh.bounds().transformed(&world_from_object).extent().is_finite() {
+        return Err(invalid("", "the transformed mesh has coordinates too large to represent".into()));
+    }
     let surface = match &o.material {
         None => Surface::Diffuse(None),
         Some(MaterialFile::Diffuse { color, texture }) => {
