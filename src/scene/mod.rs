@@ -503,8 +503,16 @@ fn load_object(
         Quat::from_euler(EulerRot::ZYX, rz, ry, rx),
         Vec3::from_array(o.translate),
     );
-    if !mesh.bounds().transformed(&world_from_object).extent().is_finite() {
-        return Err(invalid("", "the transformed mesh has coordinates too large to represent".into()));
+    if !mesh
+        .bounds()
+        .transformed(&world_from_object)
+        .extent()
+        .is_finite()
+    {
+        return Err(invalid(
+            "",
+            "the transformed mesh has coordinates too large to represent".into(),
+        ));
     }
     let surface = match &o.material {
         None => Surface::Diffuse(None),
