@@ -64,3 +64,57 @@ fn teapot_normals_are_smooth_across_its_duplicated_seams() {
     }
     assert_eq!(by_pos.len(), 529);
 }
+
+#[test]
+fn binary_ply_of_the_bunny_loads_like_the_obj() {
+    // Write the Stanford bunny as binary little-endian PLY (its native format) and read it back.
+    let obj = load(&shared("meshes/bunny.obj")).unwrap().mesh;
+    let dir = common::scratch("ply_bunny");
+    let path = dir.join("bunny.ply");
+    let mut bytes = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by a trompe test\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        obj.positions.len(),
+        obj.triangles.len()
+    )
+    .into_bytes();
+    for p in &obj.positions {
+        for c in p.to_array() {
+            bytes.extend(c.to_le_bytes());
+        }
+    }
+    for t in &obj.triangles {
+        bytes.push(3);
+        for i in t {
+            bytes.extend((*i as i32).to_le_bytes());
+        }
+    }
+    std::fs::write(&path, bytes).unwrap();
+    let ply = load(&path).unwrap();
+    assert_eq!(ply.source.vertices, 28088);
+    assert_eq!(ply.source.triangles, 56172);
+    assert_eq!(ply.mesh.positions, obj.positions);
+    assert_eq!(ply.mesh.triangles, obj.triangles);
+}
+
+#[test]
+fn panoramas_load_with_their_published_statistics() {
+    // SOURCES.md: the courtyard EXR is 1024 × 512, radiance max 55.56, mean 0.5579.
+    let exr =
+        trompe::frame::io::read_exr_rgba(&shared("envmaps/blender_courtyard_1k.exr")).unwrap();
+    assert_eq!(exr.size(), (1024, 512));
+    let rgb: Vec<f32> = exr.pixels().iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    let mean = rgb.iter().map(|&v| v as f64).sum::<f64>() / rgb.len() as f64;
+    let max = rgb.iter().copied().fold(f32::MIN, f32::max);
+    assert!((mean - 0.5579).abs() < 0.001, "mean {mean}");
+    assert!((max - 55.56).abs() < 0.01, "max {max}");
+    for name in ["studio", "city", "forest", "apartment", "sunset", "night"] {
+        let hdr = trompe::frame::io::read_hdr(&shared(&format!("envmaps/{name}.hdr"))).unwrap();
+        assert_eq!(hdr.size(), (512, 256), "{name}");
+        assert!(
+            hdr.pixels()
+                .iter()
+                .all(|p| p.is_finite() && p.min_element() >= 0.0),
+            "{name}"
+        );
+    }
+}

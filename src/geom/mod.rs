@@ -118,10 +118,70 @@ pub struct TriangleHit {
     pub bary: Vec2,
 }
 
-/// Möller–Trumbore ray–triangle intersection (Möller & Trumbore 1997), two-sided, for hits with
-/// `t_min < t < t_max`.
+/// Watertight ray–triangle intersection (Woop, Benthin and Wald 2013, "Watertight
+/// Ray/Triangle Intersection", JCGT 2(1)), two-sided, for hits with `t_min < t < t_max`.
+///
+/// The triangle is sheared into a frame where the ray runs along `+z` from the origin; the 2-D
+/// edge functions `U`, `V`, `W` are then exact in sign for rays through shared edges and vertices
+/// (recomputed in `f64` when one is exactly zero), so a ray never slips between two triangles.
 #[inline]
 pub fn intersect_triangle(ray: &Ray, p: [Vec3; 3], t_min: f32, t_max: f32) -> Option<TriangleHit> {
+    let d = ray.dir;
+    // kz: the dimension where the direction is largest; kx, ky follow, swapped to keep winding.
+    let ad = d.abs();
+    let kz = if ad.x >= ad.y && ad.x >= ad.z {
+        0
+    } else if ad.y >= ad.z {
+        1
+    } else {
+        2
+    };
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    if d[kz] == 0.0 || !d[kz].is_finite() {
+        return None;
+    }
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let [a, b, c] = p.map(|v| v - ray.origin);
+    let shear = |v: Vec3| (v[kx] - sx * v[kz], v[ky] - sy * v[kz]);
+    let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        let (ax, ay, bx, by, cx, cy) = (
+            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+        );
+        u = (cx * by - cy * bx) as f32;
+        v = (ax * cy - ay * cx) as f32;
+        w = (bx * ay - by * ax) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let t = (u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz])) / det;
+    (t > t_min && t < t_max).then_some(TriangleHit {
+        t,
+        bary: Vec2::new(v / det, w / det),
+    })
+}
+
+/// Möller–Trumbore ray–triangle intersection (Möller & Trumbore 1997): fewer operations than
+/// [`intersect_triangle`] but not watertight — a ray through a shared vertex or edge can miss
+/// every triangle around it. Kept as the peer the watertight test is measured against.
+#[inline]
+pub fn intersect_triangle_mt(
+    ray: &Ray,
+    p: [Vec3; 3],
+    t_min: f32,
+    t_max: f32,
+) -> Option<TriangleHit> {
     let e1 = p[1] - p[0];
     let e2 = p[2] - p[0];
     let pv = ray.dir.cross(e2);
@@ -161,6 +221,48 @@ mod tests {
         assert!(intersect_triangle(&ray, tri, 0.0, 1.5).is_none());
         let miss = Ray::new(Vec3::new(0.8, 0.8, 2.0), -Vec3::Z);
         assert!(intersect_triangle(&miss, tri, 0.0, f32::INFINITY).is_none());
+        // Both windings, any axis.
+        let flipped = [tri[0], tri[2], tri[1]];
+        let h = intersect_triangle(&ray, flipped, 0.0, f32::INFINITY).unwrap();
+        assert!((h.bary - Vec2::new(0.5, 0.25)).length() < 1e-6);
+        let mt = intersect_triangle_mt(&ray, tri, 0.0, f32::INFINITY).unwrap();
+        assert!((mt.t - hit.t).abs() < 1e-6 && (mt.bary - hit.bary).length() < 1e-6);
+    }
+
+    #[test]
+    fn rays_through_shared_vertices_and_edges_always_hit() {
+        // A fan of triangles around a vertex, and rays aimed exactly at the vertex and at
+        // points on the shared edges: each must hit at least one triangle.
+        let k = 7;
+        let centre = Vec3::new(0.3, -0.2, 0.0);
+        let rim: Vec<Vec3> = (0..k)
+            .map(|i| {
+                let a = i as f32 / k as f32 * std::f32::consts::TAU + 0.1;
+                centre + Vec3::new(a.cos(), a.sin(), 0.0) * 0.7
+            })
+            .collect();
+        let tris: Vec<[Vec3; 3]> = (0..k).map(|i| [centre, rim[i], rim[(i + 1) % k]]).collect();
+        let origins = [
+            Vec3::new(0.1, 0.3, 5.0),
+            Vec3::new(-3.0, 1.0, 2.0),
+            Vec3::new(0.7, -0.9, -4.0),
+        ];
+        for o in origins {
+            let mut targets = vec![centre];
+            for r in &rim {
+                for s in [0.25f32, 0.5, 0.75] {
+                    targets.push(centre + (*r - centre) * s);
+                }
+            }
+            for t in targets {
+                let ray = Ray::new(o, (t - o).normalize());
+                let hits = tris
+                    .iter()
+                    .filter(|p| intersect_triangle(&ray, **p, 0.0, f32::INFINITY).is_some())
+                    .count();
+                assert!(hits >= 1, "ray from {o} to {t} slipped through");
+            }
+        }
     }
 
     #[test]

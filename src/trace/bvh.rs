@@ -80,7 +80,12 @@ impl Bvh {
     }
 
     fn obvhs_ray(ray: &Ray, t_max: f32) -> obvhs::ray::Ray {
-        obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), 0.0, t_max)
+        // `+ 0.0` turns −0.0 components into +0.0: obvhs 0.4 picks the traversal octant with
+        // `d < 0.0` (so −0.0 counts as positive) but inverts −0.0 to −1/ε, and the two disagree:
+        // a ray along −Z built as `-Vec3::Z` skipped every node. (Regression test:
+        // `trace::tests::environment_answers_what_geometry_does_not`.)
+        let dir = Vec3A::from(ray.dir) + Vec3A::ZERO;
+        obvhs::ray::Ray::new(Vec3A::from(ray.origin), dir, 0.0, t_max)
     }
 }
 

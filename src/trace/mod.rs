@@ -84,3 +84,27 @@ impl<A: RayQuery, B: RayQuery> RayQuery for Nearest<A, B> {
         self.0.any_hit(ray, t_max) || self.1.any_hit(ray, t_max)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{Mesh, icosphere};
+    use std::sync::Arc;
+
+    #[test]
+    fn environment_answers_what_geometry_does_not() {
+        let sphere: Arc<Mesh> = Arc::new(icosphere(2));
+        let scene = Nearest(Bvh::build(vec![sphere]), EnvMap::constant(Vec3::ONE));
+        let toward = Ray::new(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z);
+        let hit = scene.closest_hit(&toward, f32::INFINITY).unwrap();
+        assert_eq!(hit.object, 0);
+        assert!((hit.t - 2.5).abs() < 0.01, "{}", hit.t);
+        let away = Ray::new(Vec3::new(0.0, 0.0, 3.0), Vec3::Z);
+        let sky = scene.closest_hit(&away, f32::INFINITY).unwrap();
+        assert_eq!(sky.object, ENVIRONMENT);
+        assert_eq!(sky.radiance, Some(Vec3::ONE));
+        // A bounded query never reaches infinity.
+        assert!(scene.closest_hit(&away, 100.0).is_none());
+        assert!(!scene.any_hit(&away, 100.0));
+    }
+}
