@@ -67,7 +67,10 @@ fn bvh_hits_equal_brute_force_hits() {
     // Axis-aligned rays, negative zeros included (`-Vec3::Z` is (−0, −0, −1)).
     for axis in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
         let ray = Ray::new(b.center() - axis * b.radius() * 3.0, axis);
-        let (x, y) = (bvh.closest_hit(&ray, f32::INFINITY), brute.closest_hit(&ray, f32::INFINITY));
+        let (x, y) = (
+            bvh.closest_hit(&ray, f32::INFINITY),
+            brute.closest_hit(&ray, f32::INFINITY),
+        );
         assert_eq!(x.map(|h| h.t), y.map(|h| h.t), "axis {axis}");
     }
 }

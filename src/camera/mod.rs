@@ -1,5 +1,5 @@
-//! Cameras: the [`Projection`] trait every camera model implements, and the pinhole camera
-//! (paper 1 §3; algorithms.md §1).
+//! Cameras: the [`Projection`] trait every camera model implements; the pinhole, orthographic and
+//! single-pole occlusion cameras (paper 1 §3–4; algorithms.md §1, §3).
 //!
 //! A projection maps a world point to continuous image coordinates `(u, v)` (pixels, origin
 //! top-left, pixel centres at `+0.5`) and a **generalized depth** `gd` (algorithms.md §1.2):
@@ -10,9 +10,13 @@
 //! in the world point and non-negative exactly where `project` is valid. Projection arithmetic is
 //! `f64` (algorithms.md: "use f64 for all geometry").
 
+mod orthographic;
 mod pinhole;
+mod spoc;
 
+pub use orthographic::Orthographic;
 pub use pinhole::Pinhole;
+pub use spoc::{SPOC_STRENGTH_RANGE, Spoc};
 
 use glam::{DVec2, DVec3, Vec3};
 use thiserror::Error;
@@ -25,6 +29,10 @@ pub struct ImagePoint {
     /// Generalized depth `gd = 1/t` (algorithms.md §1.2): larger is nearer, never ≤ 0 for a
     /// point the camera sees.
     pub gd: f64,
+    /// Reciprocal of the homogeneous `w`: on a plane, attributes × `inv_w` are affine in image
+    /// space (perspective-correct interpolation). Equals `gd` for perspective cameras, 1 for the
+    /// orthographic camera.
+    pub inv_w: f64,
 }
 
 /// A camera model: world point → `(u, v, gd)` and back. The rasterizer and the ray walks are

@@ -133,6 +133,7 @@ impl Projection for Pinhole {
         Some(ImagePoint {
             uv: DVec2::new(w.x / w.z, w.y / w.z),
             gd: 1.0 / w.z,
+            inv_w: 1.0 / w.z,
         })
     }
 

@@ -12,8 +12,9 @@
 //! - **Depth**: `gd` (algorithms.md §1.2) is interpolated linearly in image space from the
 //!   unsnapped vertices; a fragment is kept when its `gd` is strictly larger (nearer) than the
 //!   stored one, so the earlier triangle wins a tie. Empty pixels hold `gd = 0`.
-//! - **Perspective-correct attributes**: `gd·b` is interpolated linearly and divided by `gd`, which
-//!   is exact for any camera whose `gd` is affine on planes (pinhole, orthographic).
+//! - **Perspective-correct attributes**: `b/w` and `1/w` are interpolated linearly and divided,
+//!   which is exact for any camera that is projective on planes (pinhole, orthographic, each
+//!   graph-camera frustum).
 //! - **Deterministic**: each band processes triangles in input order; the result is the same for
 //!   any thread count.
 //! - `raster` never knows which camera it projects through.

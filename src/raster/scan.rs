@@ -61,7 +61,7 @@ impl<T: Copy> Band<'_, T> {
             Edge::new(c, a, px, py),
             Edge::new(a, b, px, py),
         ];
-        let [gd_p, q0, q1, q2] = t.planes;
+        let [gd_p, w_p, q0, q1, q2] = t.planes;
         for y in y0..=y1 {
             let mut w = [e[0].value, e[1].value, e[2].value];
             let row = (y - self.first_row) as usize * self.width as usize;

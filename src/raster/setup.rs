@@ -34,8 +34,9 @@ pub(super) struct ScreenTri {
     pub cols: (u32, u32),
     /// Image position `(x0, y0)` the attribute planes are anchored at.
     pub origin: DVec2,
-    /// `gd`, then `gd·b0`, `gd·b1`, `gd·b2` (b = barycentrics of the source triangle).
-    pub planes: [Plane; 4],
+    /// `gd`, `inv_w`, then `inv_w·b0`, `inv_w·b1`, `inv_w·b2` (b = barycentrics of the source
+    /// triangle).
+    pub planes: [Plane; 5],
     /// Source object and triangle.
     pub item: ItemId,
 }
@@ -47,7 +48,8 @@ struct Corner {
     world: DVec3,
     uv: DVec2,
     gd: f64,
-    /// `gd·b` after projection; `b` before.
+    inv_w: f64,
+    /// `inv_w·b` after projection; `b` before.
     q: DVec3,
 }
 
@@ -143,7 +145,8 @@ fn setup_triangle<P: Projection>(
                     world,
                     uv: q.uv,
                     gd: q.gd,
-                    q: b * q.gd,
+                    inv_w: q.inv_w,
+                    q: b * q.inv_w,
                 };
                 let c3 = [
                     corner(a, p[0], DVec3::X),
@@ -172,6 +175,7 @@ fn setup_clipped<P: Projection>(
         world,
         uv: DVec2::ZERO,
         gd: 0.0,
+        inv_w: 0.0,
         q: b,
     };
     let mut poly = vec![
@@ -207,7 +211,8 @@ fn setup_clipped<P: Projection>(
         }
         c.uv = ip.uv;
         c.gd = ip.gd;
-        c.q *= ip.gd;
+        c.inv_w = ip.inv_w;
+        c.q *= ip.inv_w;
     }
     // 3. Guard band, in image space (gd and gd·b are affine in image space).
     let (wf, hf) = (w as f64, h as f64);
@@ -291,7 +296,7 @@ fn screen_triangle(c: [Corner; 3], item: ItemId, w: u32, h: u32) -> Option<Scree
         return None;
     }
     let origin = c[0].uv;
-    let values = |c: &Corner| [c.gd, c.q.x, c.q.y, c.q.z];
+    let values = |c: &Corner| [c.gd, c.inv_w, c.q.x, c.q.y, c.q.z];
     Some(ScreenTri {
         fixed,
         rows: (y0 as u32, y1 as u32),
@@ -307,7 +312,7 @@ fn screen_triangle(c: [Corner; 3], item: ItemId, w: u32, h: u32) -> Option<Scree
 
 /// The affine functions through the corners' values `f[corner][k]`, from unsnapped positions
 /// (`e` = corners 1 and 2 relative to corner 0).
-fn planes(e: [DVec2; 2], f: [[f64; 4]; 3]) -> [Plane; 4] {
+fn planes(e: [DVec2; 2], f: [[f64; 5]; 3]) -> [Plane; 5] {
     let [e1, e2] = e;
     let det = e1.x * e2.y - e1.y * e2.x;
     std::array::from_fn(|k| {

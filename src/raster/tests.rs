@@ -16,6 +16,7 @@ impl Projection for ScreenSpace {
         (p.z > 0.0).then(|| ImagePoint {
             uv: p.truncate(),
             gd: 1.0 / p.z,
+            inv_w: 1.0 / p.z,
         })
     }
     fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
@@ -188,6 +189,7 @@ fn barycentrics_are_perspective_correct() {
             (p.z > 0.0).then(|| ImagePoint {
                 uv: DVec2::new(p.x / p.z, p.y / p.z),
                 gd: 1.0 / p.z,
+                inv_w: 1.0 / p.z,
             })
         }
         fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {

@@ -1,0 +1,220 @@
+//! The single-pole occlusion camera (SPOC; Mei, Popescu and Sacks 2005; paper 1 §4;
+//! algorithms.md §3.2 — the distortion there is a proposal honouring everything the papers state,
+//! implemented as written).
+//!
+//! A planar pinhole projection followed by a radial push away from the pole `p0` (the image of
+//! the object's centre) that grows with depth: `(u′, v′) = p0 + (1 + κ(z))(q − p0)`, with
+//! `κ(z) = k · max(0, (z − z_n)/(z_f − z_n))`. Deeper samples move farther out, so surfaces just
+//! behind the silhouette escape it and the impostor captures more of the object than a pinhole.
+//!
+//! Invariants: one projection per point; continuous (the displacement vanishes at the pole); for
+//! a fixed depth the map is a uniform scaling about `p0`, so points at one depth never collide;
+//! `S⁻¹(S(X)) = X`; points with `z ≤ z_n` are not moved.
+
+use super::{CameraError, ImagePoint, Pinhole, Projection};
+use glam::{DVec2, DVec3, Vec3};
+
+/// Smallest and largest strength the selection rule returns (algorithms.md §3.2).
+pub const SPOC_STRENGTH_RANGE: (f64, f64) = (0.2, 1.5);
+
+/// A SPOC around a bounding sphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spoc {
+    ppc: Pinhole,
+    pole: DVec2,
+    z_near: f64,
+    z_far: f64,
+    k: f64,
+}
+
+impl Spoc {
+    /// The distortion strength for secondary rays coming from a region of radius `delta` around
+    /// the eye, the object's centre at depth `z_o`: `k ≈ 2Δ/z_O`, clamped to
+    /// [`SPOC_STRENGTH_RANGE`] (the parallax argument of algorithms.md §3.2).
+    pub fn strength_for_region(delta: f64, z_o: f64) -> f64 {
+        (2.0 * delta / z_o).clamp(SPOC_STRENGTH_RANGE.0, SPOC_STRENGTH_RANGE.1)
+    }
+
+    /// A SPOC at `eye` looking at a sphere (`center`, `radius`) with strength `k`, `size × size`
+    /// pixels. The field of view is widened so the pushed-out silhouette, `(1 + k)` times the
+    /// sphere's image radius, still fits with a 5 % margin.
+    pub fn around(
+        eye: Vec3,
+        center: Vec3,
+        radius: f32,
+        k: f64,
+        size: u32,
+    ) -> Result<Self, CameraError> {
+        let d = (center - eye).length() as f64;
+        let r = radius as f64;
+        if !(r > 0.0 && d > r * 1.0001) {
+            return Err(CameraError::Degenerate(
+                "the SPOC eye must be outside the bounding sphere",
+            ));
+        }
+        if !(k >= 0.0 && k.is_finite()) {
+            return Err(CameraError::Degenerate(
+                "SPOC strength must be non-negative",
+            ));
+        }
+        // Image radius of the sphere at unit focal distance: tan(asin(R/d)).
+        let r_s = r / (d * d - r * r).sqrt();
+        let half = r_s * (1.0 + k) * 1.05;
+        let fov = 2.0 * half.atan().to_degrees();
+        let up = if ((center - eye).normalize().dot(Vec3::Y)).abs() > 0.99 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        let ppc = Pinhole::look_at(eye, center, up, fov, size, size)?.with_near((d - r) * 0.5);
+        let pole = ppc
+            .project(center.as_dvec3())
+            .map(|p| p.uv)
+            .unwrap_or(DVec2::splat(size as f64 / 2.0));
+        // Eye-space depth of the centre, z_O = (O − C)·n̂ (algorithms.md §3.2).
+        let z_o = (center.as_dvec3() - ppc.position()).dot(ppc.forward());
+        Ok(Self {
+            ppc,
+            pole,
+            z_near: z_o - r,
+            z_far: z_o + r,
+            k,
+        })
+    }
+
+    /// Rebuilds a SPOC from its reference camera and parameters (for loading impostors).
+    pub fn from_parts(
+        ppc: Pinhole,
+        pole: DVec2,
+        z_near: f64,
+        z_far: f64,
+        k: f64,
+    ) -> Result<Self, CameraError> {
+        if !(pole.is_finite() && z_near.is_finite() && z_far > z_near && k >= 0.0 && k.is_finite())
+        {
+            return Err(CameraError::Degenerate("SPOC parameters are degenerate"));
+        }
+        Ok(Self {
+            ppc,
+            pole,
+            z_near,
+            z_far,
+            k,
+        })
+    }
+
+    /// The reference pinhole camera.
+    pub fn pinhole(&self) -> &Pinhole {
+        &self.ppc
+    }
+    /// The pole `p0`.
+    pub fn pole(&self) -> DVec2 {
+        self.pole
+    }
+    /// `(z_n, z_f)`: where the depth ramp starts and where it reaches `k`.
+    pub fn depth_range(&self) -> (f64, f64) {
+        (self.z_near, self.z_far)
+    }
+    /// The strength `k`.
+    pub fn strength(&self) -> f64 {
+        self.k
+    }
+
+    /// The depth ramp `κ(z)`.
+    fn kappa(&self, z: f64) -> f64 {
+        self.k * ((z - self.z_near) / (self.z_far - self.z_near)).max(0.0)
+    }
+}
+
+impl Projection for Spoc {
+    fn resolution(&self) -> (u32, u32) {
+        self.ppc.resolution()
+    }
+
+    /// `(u′, v′) = p0 + (1 + κ(z))(q − p0)`, `gd = 1/t` of the undistorted pinhole point.
+    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+        let q = self.ppc.project(p)?;
+        let z = self.ppc.focal() / q.gd;
+        Some(ImagePoint {
+            uv: self.pole + (q.uv - self.pole) * (1.0 + self.kappa(z)),
+            ..q
+        })
+    }
+
+    /// `t = 1/gd`, `q = p0 + ((u′, v′) − p0)/(1 + κ(z))`, `X = C + t·M·(q, 1)`.
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+        let z = self.ppc.focal() / gd;
+        let q = self.pole + (uv - self.pole) / (1.0 + self.kappa(z));
+        self.ppc.unproject(q, gd)
+    }
+
+    fn clip_distance(&self, p: DVec3) -> f64 {
+        self.ppc.clip_distance(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spoc() -> Spoc {
+        Spoc::around(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 1.0, 0.8, 128).unwrap()
+    }
+
+    fn random_point(i: u32) -> DVec3 {
+        let h = |k: u32| {
+            ((i.wrapping_mul(2_654_435_761) ^ k.wrapping_mul(40_503)) % 10_007) as f64 / 10_007.0
+        };
+        DVec3::new(h(1) - 0.5, h(2) - 0.5, h(3) - 0.5) * 2.0
+    }
+
+    #[test]
+    fn unproject_inverts_project() {
+        let s = spoc();
+        for i in 0..2000 {
+            let p = random_point(i);
+            let q = s.project(p).unwrap();
+            assert!((s.unproject(q.uv, q.gd) - p).length() < 1e-9, "{p}");
+        }
+    }
+
+    #[test]
+    fn near_points_are_unmoved_and_deep_points_pushed_out() {
+        let s = spoc();
+        let ppc = s.pinhole();
+        // In front of z_n: identical to the pinhole.
+        let front = DVec3::new(0.3, 0.2, 1.5);
+        assert_eq!(s.project(front).unwrap().uv, ppc.project(front).unwrap().uv);
+        // Behind: farther from the pole than the pinhole image, by (1 + κ).
+        let back = DVec3::new(0.3, 0.2, -0.5);
+        let (a, b) = (
+            s.project(back).unwrap().uv - s.pole(),
+            ppc.project(back).unwrap().uv - s.pole(),
+        );
+        assert!(a.length() > b.length() * 1.3);
+        assert!((a.normalize() - b.normalize()).length() < 1e-9, "radial");
+    }
+
+    #[test]
+    fn continuous_with_a_single_projection_per_point() {
+        let s = spoc();
+        // Nearby points project nearby (no tear), including across z_n and at the pole.
+        for i in 0..2000 {
+            let p = random_point(i);
+            let e = DVec3::new(1e-7, -2e-7, 1.5e-7);
+            let (a, b) = (s.project(p).unwrap(), s.project(p + e).unwrap());
+            assert!((a.uv - b.uv).length() < 1e-3, "{p}");
+        }
+        // Points at one depth never collide: the map is a scaling about the pole.
+        let p0 = s.project(DVec3::new(0.2, 0.0, -0.3)).unwrap();
+        let p1 = s.project(DVec3::new(0.2001, 0.0, -0.3)).unwrap();
+        assert!((p0.uv - p1.uv).length() > 0.0);
+    }
+
+    #[test]
+    fn strength_rule_follows_the_parallax_argument() {
+        assert!((Spoc::strength_for_region(1.0, 5.0) - 0.4).abs() < 1e-12);
+        assert_eq!(Spoc::strength_for_region(100.0, 5.0), SPOC_STRENGTH_RANGE.1);
+        assert_eq!(Spoc::strength_for_region(0.01, 5.0), SPOC_STRENGTH_RANGE.0);
+    }
+}
