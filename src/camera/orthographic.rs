@@ -89,7 +89,12 @@ impl Orthographic {
     ) -> Result<Self, CameraError> {
         crate::frame::check_size(width as u64, height as u64)?;
         let finite = corner.is_finite() && a.is_finite() && b.is_finite() && dir.is_finite();
-        if !finite || a.length_squared() == 0.0 || b.length_squared() == 0.0 || !(depth > 0.0) {
+        if !finite
+            || a.length_squared() == 0.0
+            || b.length_squared() == 0.0
+            || depth.is_nan()
+            || depth <= 0.0
+        {
             return Err(CameraError::Degenerate(
                 "orthographic parameters are degenerate",
             ));

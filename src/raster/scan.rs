@@ -74,9 +74,13 @@ impl<T: Copy> Band<'_, T> {
                     let idx = row + x as usize;
                     let gd32 = gd as f32;
                     if gd32 > self.gd[idx] {
-                        let q = [q0, q1, q2].map(|p| p.f0 + p.dfdx * dx + p.dfdy * dy);
-                        let bary =
-                            Vec3::new((q[0] / gd) as f32, (q[1] / gd) as f32, (q[2] / gd) as f32);
+                        let [inv_w, q0, q1, q2] =
+                            [w_p, q0, q1, q2].map(|p| p.f0 + p.dfdx * dx + p.dfdy * dy);
+                        let bary = Vec3::new(
+                            (q0 / inv_w) as f32,
+                            (q1 / inv_w) as f32,
+                            (q2 / inv_w) as f32,
+                        );
                         let fragment = Fragment {
                             x,
                             y,
