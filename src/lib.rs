@@ -49,3 +49,4 @@ pub use geom::{Aabb, Mesh, Ray};
 pub use raster::{Fragment, FragmentShader, ItemId, rasterize};
 pub use scene::Scene;
 pub use trace::{Bvh, Hit, RayQuery};
+pub mod impostor;

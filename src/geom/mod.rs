@@ -10,9 +10,11 @@
 pub mod io;
 mod mesh;
 mod primitives;
+mod sampling;
 
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
 pub use primitives::{cube, icosphere, plane};
+pub use sampling::{SplitMix64, sample_surface};
 
 use glam::{Mat4, Vec2, Vec3};
 

@@ -1,0 +1,221 @@
+//! Impostor construction (paper 1 §3.1; algorithms.md §2.2): rasterize the mesh through the
+//! camera, keeping the largest `gd`; curved cameras first tessellate it adaptively.
+
+use super::{Impostor, ImpostorCamera};
+use crate::camera::Projection;
+use crate::frame::FrameError;
+use crate::geom::{Aabb, Material, Mesh};
+use crate::raster::{Fragment, FragmentShader, rasterize};
+use crate::trace::NO_OBJECT;
+use glam::{Vec2, Vec3, Vec4};
+
+/// A surface point the impostor stores: what a colour function is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceSample {
+    /// World position.
+    pub position: Vec3,
+    /// Unit shading normal.
+    pub normal: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// Triangle of the source mesh.
+    pub triangle: u32,
+}
+
+/// Largest projected deviation of an edge's midpoint from its chord, in pixels (§2.2).
+const MAX_DEVIATION_PX: f64 = 0.5;
+/// Recursion cap of the tessellation per source triangle.
+const MAX_SPLITS: u32 = 12;
+
+/// A tessellated mesh and, for each of its triangles, the source triangle and the barycentrics
+/// of its three corners in it.
+pub struct Tessellation {
+    /// The sub-triangles (unshared corners).
+    pub mesh: Mesh,
+    /// `(source triangle, corner barycentrics)` per sub-triangle.
+    pub source: Vec<(u32, [Vec3; 3])>,
+}
+
+/// Splits triangles until every edge's projected midpoint lies within 0.5 px of the midpoint of
+/// its projected ends (algorithms.md §2.2). Whether an edge splits depends on that edge alone,
+/// and it splits at its midpoint, so two triangles sharing an edge split it identically: the
+/// tessellation has no T-junctions and the image no cracks.
+pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Tessellation {
+    let needs_split = |a: Vec3, b: Vec3| -> bool {
+        let (Some(pa), Some(pb)) = (camera.project(a.as_dvec3()), camera.project(b.as_dvec3()))
+        else {
+            return false;
+        };
+        if (pa.uv - pb.uv).length() < 1.0 {
+            return false;
+        }
+        let m = (a + b) * 0.5;
+        camera
+            .project(m.as_dvec3())
+            .is_some_and(|pm| (pm.uv - (pa.uv + pb.uv) * 0.5).length() > MAX_DEVIATION_PX)
+    };
+    let mut positions = Vec::new();
+    let mut source = Vec::new();
+    for t in 0..mesh.triangles.len() {
+        let mut stack = vec![(mesh.corners(t), [Vec3::X, Vec3::Y, Vec3::Z], 0u32)];
+        while let Some((p, b, depth)) = stack.pop() {
+            let edges = [(0, 1), (1, 2), (2, 0)];
+            let split = edges
+                .iter()
+                .filter(|&&(i, j)| depth < MAX_SPLITS && needs_split(p[i], p[j]))
+                .max_by(|&&(i, j), &&(k, l)| {
+                    p[i].distance_squared(p[j])
+                        .total_cmp(&p[k].distance_squared(p[l]))
+                });
+            match split {
+                None => {
+                    positions.extend_from_slice(&p);
+                    source.push((t as u32, b));
+                }
+                Some(&(i, j)) => {
+                    let (pm, bm) = ((p[i] + p[j]) * 0.5, (b[i] + b[j]) * 0.5);
+                    let mut first = (p, b);
+                    first.0[j] = pm;
+                    first.1[j] = bm;
+                    let mut second = (p, b);
+                    second.0[i] = pm;
+                    second.1[i] = bm;
+                    stack.push((second.0, second.1, depth + 1));
+                    stack.push((first.0, first.1, depth + 1));
+                }
+            }
+        }
+    }
+    let n = source.len();
+    let sub = Mesh {
+        normals: vec![Vec3::Z; positions.len()],
+        triangles: (0..n as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect(),
+        positions,
+        uvs: None,
+        face_material: vec![0; n],
+        materials: vec![Material::default()],
+    };
+    Tessellation { mesh: sub, source }
+}
+
+#[derive(Clone, Copy)]
+struct Texel {
+    color: Vec3,
+    normal: Vec3,
+    face_normal: Vec3,
+    position: Vec3,
+}
+
+struct TexelShader<'a, F> {
+    camera: &'a ImpostorCamera,
+    mesh: &'a Mesh,
+    source: Option<&'a [(u32, [Vec3; 3])]>,
+    color: &'a F,
+}
+
+impl<F: Fn(&SurfaceSample) -> Vec3 + Sync> FragmentShader for TexelShader<'_, F> {
+    type Output = Option<Texel>;
+    fn shade(&self, f: &Fragment) -> Option<Texel> {
+        let (t, b) = match self.source {
+            Some(src) => {
+                let (t, corners) = src[f.item.triangle as usize];
+                (
+                    t,
+                    corners[0] * f.bary.x + corners[1] * f.bary.y + corners[2] * f.bary.z,
+                )
+            }
+            None => (f.item.triangle, f.bary),
+        };
+        let m = self.mesh;
+        let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
+        let position = m.positions[i0] * b.x + m.positions[i1] * b.y + m.positions[i2] * b.z;
+        let n = (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z)
+            .normalize_or(m.face_normal(t as usize));
+        let uv = m
+            .uvs
+            .as_ref()
+            .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
+        let sample = SurfaceSample {
+            position,
+            normal: n,
+            uv,
+            triangle: t,
+        };
+        Some(Texel {
+            color: (self.color)(&sample),
+            normal: n,
+            face_normal: {
+                let n = m.face_normal(t as usize);
+                if n.as_dvec3()
+                    .dot(self.camera.toward_camera(position.as_dvec3()))
+                    < 0.0
+                {
+                    -n
+                } else {
+                    n
+                }
+            },
+            position,
+        })
+    }
+}
+
+/// Builds an impostor of `mesh` (object id `object`) through `camera`, colouring each texel with
+/// `color` (e.g. the scene's shading of that surface point).
+pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    camera: ImpostorCamera,
+    mesh: &Mesh,
+    object: u32,
+    color: &F,
+) -> Result<Impostor, FrameError> {
+    let tessellation = camera.is_curved().then(|| tessellate(&camera, mesh));
+    let (raster_mesh, source) = match &tessellation {
+        Some(t) => (&t.mesh, Some(t.source.as_slice())),
+        None => (mesh, None),
+    };
+    let shader = TexelShader {
+        camera: &camera,
+        mesh,
+        source,
+        color,
+    };
+    let (target, _) = rasterize(&camera, &[raster_mesh], &shader, None)?;
+    let texels = &target.attributes;
+    let b = mesh.bounds();
+    let pad = b.extent().max_element() * 1e-4;
+    Ok(Impostor {
+        color: texels.map(|t| t.map_or(Vec4::ZERO, |t| t.color.extend(1.0))),
+        normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.normal)),
+        face_normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.face_normal)),
+        position: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.position)),
+        object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
+        gd: target.gd,
+        bounds: Aabb {
+            min: b.min - Vec3::splat(pad),
+            max: b.max + Vec3::splat(pad),
+        },
+        camera,
+    })
+}
+
+/// A colour function that returns the mesh's albedo (material colour × texture), unlit.
+pub fn albedo_of(mesh: &Mesh) -> impl Fn(&SurfaceSample) -> Vec3 + Sync + '_ {
+    move |s: &SurfaceSample| {
+        let m = mesh
+            .face_material
+            .get(s.triangle as usize)
+            .copied()
+            .unwrap_or(0);
+        match mesh.materials.get(m as usize) {
+            Some(mat) => match &mat.texture {
+                Some(t) => {
+                    mat.base_color * t.sample_uv(s.uv, crate::frame::Wrap::Repeat).truncate()
+                }
+                None => mat.base_color,
+            },
+            None => Vec3::splat(0.8),
+        }
+    }
+}

@@ -1,0 +1,288 @@
+//! Fidelity of an impostor against the exact BVH (paper 1 §4 and Fig. 6–7; issue 3): fire a set
+//! of rays at an object, compare every impostor answer with the BVH's, and measure how much of
+//! the surface the impostor captured.
+//!
+//! Agreement of one ray: both miss, or both hit with positions within 1.5 texel footprints (the
+//! footprint of the impostor texel at the exact hit).
+
+use super::Impostor;
+use crate::camera::{Pinhole, Projection};
+use crate::geom::{Mesh, Ray};
+use crate::trace::{Bvh, RayQuery};
+use glam::{DVec2, Vec3};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// Positions within this many texel footprints agree.
+pub const AGREEMENT_FOOTPRINTS: f64 = 1.5;
+
+/// What [`check`] measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FidelityReport {
+    /// Rays fired.
+    pub rays: usize,
+    /// Rays the BVH says hit.
+    pub exact_hits: usize,
+    /// Rays the impostor says hit.
+    pub impostor_hits: usize,
+    /// Rays where both agree (both miss, or both hit within 1.5 footprints).
+    pub agreeing: usize,
+    /// Rays the BVH hits that the impostor misses.
+    pub missed: usize,
+    /// Rays the impostor hits that the BVH misses.
+    pub spurious: usize,
+    /// Mean distance between impostor and exact hit points, over rays both hit (world units).
+    pub mean_position_error: f64,
+    /// The same, in texel footprints.
+    pub mean_error_footprints: f64,
+    /// Mean texel visits per ray.
+    pub texel_visits_per_ray: f64,
+}
+
+impl FidelityReport {
+    /// Fraction of rays that agree.
+    pub fn agreement(&self) -> f64 {
+        self.agreeing as f64 / self.rays.max(1) as f64
+    }
+    /// Fraction of the rays either method says hit on which they agree (stricter: ignores the
+    /// easy rays both miss).
+    pub fn hit_agreement(&self) -> f64 {
+        let either = self.exact_hits + self.spurious;
+        let both_ok = self.agreeing - (self.rays - either);
+        both_ok as f64 / either.max(1) as f64
+    }
+}
+
+/// Compares the impostor's answer to every ray with the exact answer of `exact`.
+pub fn check(impostor: &Impostor, exact: &Bvh, rays: &[Ray]) -> FidelityReport {
+    #[derive(Default, Clone, Copy)]
+    struct One {
+        exact: bool,
+        imp: bool,
+        agree: bool,
+        err: f64,
+        err_fp: f64,
+        visits: u64,
+    }
+    let per_ray: Vec<One> = rays
+        .par_iter()
+        .map(|r| {
+            let e = exact.closest_hit(r, f32::INFINITY);
+            let (i, stats) = impostor.walk(r, f32::INFINITY);
+            let mut one = One {
+                exact: e.is_some(),
+                imp: i.is_some(),
+                visits: stats.texel_visits,
+                ..One::default()
+            };
+            match (e, i) {
+                (None, None) => one.agree = true,
+                (Some(e), Some(i)) => {
+                    let err = e.position.distance(i.position) as f64;
+                    let fp = impostor
+                        .camera
+                        .project(e.position.as_dvec3())
+                        .map_or(f64::INFINITY, |p| impostor.footprint(p.uv, p.gd));
+                    one.err = err;
+                    one.err_fp = err / fp;
+                    one.agree = err <= AGREEMENT_FOOTPRINTS * fp;
+                }
+                _ => {}
+            }
+            one
+        })
+        .collect();
+    let both: Vec<&One> = per_ray.iter().filter(|o| o.exact && o.imp).collect();
+    FidelityReport {
+        rays: rays.len(),
+        exact_hits: per_ray.iter().filter(|o| o.exact).count(),
+        impostor_hits: per_ray.iter().filter(|o| o.imp).count(),
+        agreeing: per_ray.iter().filter(|o| o.agree).count(),
+        missed: per_ray.iter().filter(|o| o.exact && !o.imp).count(),
+        spurious: per_ray.iter().filter(|o| !o.exact && o.imp).count(),
+        mean_position_error: both.iter().map(|o| o.err).sum::<f64>() / both.len().max(1) as f64,
+        mean_error_footprints: both.iter().map(|o| o.err_fp).sum::<f64>()
+            / both.len().max(1) as f64,
+        texel_visits_per_ray: per_ray.iter().map(|o| o.visits as f64).sum::<f64>()
+            / rays.len().max(1) as f64,
+    }
+}
+
+/// Reflected rays of a reflector: `view` looks at `reflector`; every pixel whose ray hits it
+/// spawns the mirror ray about the shading normal (paper 1's setting: the reflector's
+/// secondary rays look up the impostor).
+pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
+    let bvh = Bvh::build(vec![reflector.clone()]);
+    let eps = reflector.bounds().radius() * 1e-4;
+    let (w, h) = view.resolution();
+    (0..w * h)
+        .into_par_iter()
+        .filter_map(|i| {
+            let r = view.ray(DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5));
+            let hit = bvh.closest_hit(&r, f32::INFINITY)?;
+            let n = if hit.normal.dot(r.dir) > 0.0 {
+                -hit.normal
+            } else {
+                hit.normal
+            };
+            let ng = if hit.geometric_normal.dot(r.dir) > 0.0 {
+                -hit.geometric_normal
+            } else {
+                hit.geometric_normal
+            };
+            Some(Ray::new(
+                hit.position + ng * eps,
+                (r.dir - 2.0 * r.dir.dot(n) * n).normalize(),
+            ))
+        })
+        .collect()
+}
+
+/// `count` rays from points spread over a sphere (`center`, `radius`), each aimed at a point of
+/// the box `target` (deterministic for a given `seed`).
+pub fn sphere_rays(
+    center: Vec3,
+    radius: f32,
+    target: crate::geom::Aabb,
+    count: usize,
+    seed: u64,
+) -> Vec<Ray> {
+    let mut rng = crate::geom::SplitMix64::new(seed);
+    (0..count)
+        .map(|_| {
+            let o = center + rng.unit_vector() * radius;
+            let aim = target.min
+                + target.extent() * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            Ray::new(o, (aim - o).normalize_or(Vec3::Y))
+        })
+        .collect()
+}
+
+/// Fraction of the mesh's surface (area-weighted samples) that the impostor stores: a sample
+/// counts when its texel holds a point within 1.5 footprints of it.
+pub fn surface_captured(impostor: &Impostor, mesh: &Mesh, samples: usize, seed: u64) -> f64 {
+    let points = crate::geom::sample_surface(mesh, samples, seed);
+    let captured = points
+        .par_iter()
+        .filter(|p| {
+            let Some(q) = impostor.camera.project(p.as_dvec3()) else {
+                return false;
+            };
+            let Some((x, y)) = impostor.texel(q.uv) else {
+                return false;
+            };
+            if impostor.gd.get(x, y) <= 0.0 {
+                return false;
+            }
+            let stored = impostor.position.get(x, y);
+            (stored.distance(**p) as f64) <= AGREEMENT_FOOTPRINTS * impostor.footprint(q.uv, q.gd)
+        })
+        .count();
+    captured as f64 / points.len().max(1) as f64
+}
+
+/// Which camera to build a checked impostor through.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CheckCamera {
+    /// Planar pinhole at the reflector, framing the target's bounding sphere.
+    Pinhole,
+    /// SPOC at the reflector; strength from [`crate::camera::Spoc::strength_for_region`] unless given.
+    Spoc(Option<f64>),
+}
+
+/// The paper's setting (Fig. 1, 6–7): a target object, a reflector beside it, and a viewer who
+/// sees the target in the reflector. Everything in world space.
+pub struct ReflectorSetup {
+    /// The object replaced by an impostor (largest extent 1, resting on `y = 0` at the origin).
+    pub target: Arc<Mesh>,
+    /// The reflector (largest extent 0.8, along `+x`).
+    pub reflector: Arc<Mesh>,
+    /// The viewer, looking at the reflector from `+z`.
+    pub view: Pinhole,
+}
+
+fn fit(mesh: &Mesh, size: f32, at: Vec3) -> Mesh {
+    let b = mesh.bounds();
+    let s = size / b.extent().max_element().max(f32::MIN_POSITIVE);
+    let base = Vec3::new(b.center().x, b.min.y, b.center().z);
+    mesh.transformed(
+        &(glam::Mat4::from_translation(at)
+            * glam::Mat4::from_scale(Vec3::splat(s))
+            * glam::Mat4::from_translation(-base)),
+    )
+}
+
+impl ReflectorSetup {
+    /// Places `target` and `reflector` (its centre `distance` units along `+x`; 1.1 puts the
+    /// two 0.25 apart) and a `view_size²` viewer.
+    pub fn new(
+        target: &Mesh,
+        reflector: &Mesh,
+        distance: f32,
+        view_size: u32,
+    ) -> Result<Self, crate::camera::CameraError> {
+        let target = Arc::new(fit(target, 1.0, Vec3::ZERO));
+        let reflector = Arc::new(fit(reflector, 0.8, Vec3::new(distance, 0.0, 0.0)));
+        let rc = reflector.bounds().center();
+        let view = Pinhole::look_at(
+            rc + Vec3::new(-1.4, 0.4, 1.6),
+            rc,
+            Vec3::Y,
+            30.0,
+            view_size,
+            view_size,
+        )?;
+        Ok(Self {
+            target,
+            reflector,
+            view,
+        })
+    }
+
+    /// The reflected rays of the viewer's pixels that see the reflector, kept when they enter
+    /// the target's bounding box (the only rays an impostor is ever asked about).
+    pub fn rays(&self) -> Vec<Ray> {
+        let b = self.target.bounds();
+        reflected_rays(&self.view, self.reflector.clone())
+            .into_iter()
+            .filter(|r| b.intersect(r, f32::INFINITY).is_some())
+            .collect()
+    }
+
+    /// An impostor camera at the reflector's centre looking at the target, `size²` texels.
+    pub fn camera(
+        &self,
+        kind: CheckCamera,
+        size: u32,
+    ) -> Result<super::ImpostorCamera, crate::camera::CameraError> {
+        let (eye, tb) = (self.reflector.bounds().center(), self.target.bounds());
+        let (center, radius) = (tb.center(), tb.radius());
+        match kind {
+            CheckCamera::Pinhole => {
+                let d = eye.distance(center) as f64;
+                let half =
+                    (radius as f64 / (d * d - (radius as f64).powi(2)).max(1e-12).sqrt()) * 1.05;
+                let cam = Pinhole::look_at(
+                    eye,
+                    center,
+                    Vec3::Y,
+                    2.0 * half.atan().to_degrees(),
+                    size,
+                    size,
+                )?;
+                Ok(super::ImpostorCamera::Pinhole(
+                    cam.with_near((d - radius as f64) * 0.5),
+                ))
+            }
+            CheckCamera::Spoc(k) => {
+                let delta = self.reflector.bounds().radius() as f64;
+                let k = k.unwrap_or_else(|| {
+                    crate::camera::Spoc::strength_for_region(delta, eye.distance(center) as f64)
+                });
+                Ok(super::ImpostorCamera::Spoc(crate::camera::Spoc::around(
+                    eye, center, radius, k, size,
+                )?))
+            }
+        }
+    }
+}

@@ -1,0 +1,149 @@
+//! Impostors: depth images built through any camera, answering rays (paper 1 §3–4;
+//! algorithms.md §2–3).
+//!
+//! An [`Impostor`] is a camera plus per-texel maps — colour, generalized depth `gd`, normal,
+//! world position and object id — and the bounding box of what it replaces. [`build`] makes one
+//! by rasterizing a mesh through the camera (tessellating adaptively for curved cameras, §2.2);
+//! the impostor implements [`crate::trace::RayQuery`] by walking the ray's projection across the
+//! image (§2.3, [`walk`]); [`file`] saves and loads it (OpenEXR channels + JSON sidecar).
+//!
+//! Invariants: texel `gd` follows algorithms.md §1.2 (0 = empty, larger = nearer); every non-empty
+//! texel holds the world position of the surface point it shows, so a hit's position is exact up
+//! to the texel's footprint; the impostor never consults the mesh after it is built.
+
+mod build;
+pub mod fidelity;
+pub mod file;
+mod walk;
+
+pub use build::{SurfaceSample, Tessellation, albedo_of, build, tessellate};
+pub use walk::WalkStats;
+
+use crate::camera::{ImagePoint, Orthographic, Pinhole, Projection, Spoc};
+use crate::frame::Image;
+use crate::geom::Aabb;
+use glam::{DVec2, DVec3, Vec3};
+
+/// The cameras an impostor can be built through (a closed set, dispatched once per query).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImpostorCamera {
+    /// Planar pinhole.
+    Pinhole(Pinhole),
+    /// Parallel projection.
+    Orthographic(Orthographic),
+    /// Single-pole occlusion camera.
+    Spoc(Spoc),
+}
+
+impl ImpostorCamera {
+    /// True when straight world segments project to curves, so triangles must be tessellated
+    /// and ray walks must sample the curve.
+    pub fn is_curved(&self) -> bool {
+        matches!(self, ImpostorCamera::Spoc(_))
+    }
+
+    /// Direction from world point `p` back toward the camera (its centre of projection, or
+    /// against the viewing direction for parallel projection); not normalized.
+    pub fn toward_camera(&self, p: DVec3) -> DVec3 {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.position() - p,
+            ImpostorCamera::Orthographic(c) => -c.parameters().3,
+            ImpostorCamera::Spoc(c) => c.pinhole().position() - p,
+        }
+    }
+
+    /// Short name (`pinhole`, `orthographic`, `spoc`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ImpostorCamera::Pinhole(_) => "pinhole",
+            ImpostorCamera::Orthographic(_) => "orthographic",
+            ImpostorCamera::Spoc(_) => "spoc",
+        }
+    }
+}
+
+impl Projection for ImpostorCamera {
+    fn resolution(&self) -> (u32, u32) {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.resolution(),
+            ImpostorCamera::Orthographic(c) => c.resolution(),
+            ImpostorCamera::Spoc(c) => c.resolution(),
+        }
+    }
+    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.project(p),
+            ImpostorCamera::Orthographic(c) => c.project(p),
+            ImpostorCamera::Spoc(c) => c.project(p),
+        }
+    }
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.unproject(uv, gd),
+            ImpostorCamera::Orthographic(c) => c.unproject(uv, gd),
+            ImpostorCamera::Spoc(c) => c.unproject(uv, gd),
+        }
+    }
+    fn clip_distance(&self, p: DVec3) -> f64 {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.clip_distance(p),
+            ImpostorCamera::Orthographic(c) => c.clip_distance(p),
+            ImpostorCamera::Spoc(c) => c.clip_distance(p),
+        }
+    }
+}
+
+/// A depth image that stands in for geometry.
+#[derive(Clone, Debug)]
+pub struct Impostor {
+    /// The camera it was built through.
+    pub camera: ImpostorCamera,
+    /// Linear radiance of the surface each texel shows (alpha 1 where covered, 0 where empty).
+    pub color: Image<crate::frame::Rgba>,
+    /// Generalized depth (0 = empty).
+    pub gd: Image<f32>,
+    /// Unit shading normal.
+    pub normal: Image<Vec3>,
+    /// Unit geometric normal of the stored triangle, turned toward the camera: with `position`,
+    /// the texel's exact plane. The walk measures which side of it a ray sample is on, and
+    /// places hits on it.
+    pub face_normal: Image<Vec3>,
+    /// World position of the surface point.
+    pub position: Image<Vec3>,
+    /// Object id ([`crate::trace::NO_OBJECT`] where empty).
+    pub object: Image<u32>,
+    /// World box of the replaced geometry: rays are clipped to it.
+    pub bounds: Aabb,
+}
+
+impl Impostor {
+    /// Stored `gd` at image point `uv` (nearest texel; 0 outside the image).
+    #[inline]
+    pub fn gd_at(&self, uv: DVec2) -> f32 {
+        match self.texel(uv) {
+            Some((x, y)) => self.gd.get(x, y),
+            None => 0.0,
+        }
+    }
+
+    /// The texel containing image point `uv`, if inside the image.
+    #[inline]
+    pub fn texel(&self, uv: DVec2) -> Option<(u32, u32)> {
+        let (w, h) = self.gd.size();
+        let (x, y) = (uv.x.floor(), uv.y.floor());
+        (x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64).then_some((x as u32, y as u32))
+    }
+
+    /// World size of one texel at image point `uv` and depth `gd` (its footprint).
+    pub fn footprint(&self, uv: DVec2, gd: f64) -> f64 {
+        let p = self.camera.unproject(uv, gd);
+        let px = self.camera.unproject(uv + DVec2::X, gd);
+        let py = self.camera.unproject(uv + DVec2::Y, gd);
+        (px - p).length().max((py - p).length())
+    }
+
+    /// Fraction of texels that are covered.
+    pub fn coverage(&self) -> f64 {
+        self.gd.pixels().iter().filter(|&&g| g > 0.0).count() as f64 / self.gd.pixels().len() as f64
+    }
+}

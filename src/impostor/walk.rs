@@ -1,0 +1,165 @@
+//! Ray–impostor intersection (paper 1 §3.2; algorithms.md §2.3): clip the ray to the bounding
+//! box, cut the clipped segment into sub-segments of about one pixel of image path (interpolated
+//! in 3-D, then projected, so the path may curve; twice as dense for the SPOC, §3.4), and stop at
+//! the first sub-segment where the ray passes from in front of the stored surface to behind it.
+//!
+//! Where this departs from §2.3, and why: "in front of" is measured as the signed distance from
+//! the ray sample to the plane of the triangle its texel stores (texels keep the world position
+//! and face normal), not as `gd_ray − gd_stored` — the `gd` difference of the nearest texel is off
+//! by up to half a texel's depth gradient, which produced early false crossings on grazing rays.
+//! The hit is placed on that plane, so along the camera's own rays a pinhole impostor returns
+//! exactly its rasterized point. A crossing whose plane point lies farther than two texel
+//! footprints from the stored point is a false crossing — the ray passed behind an occluding
+//! edge of the single-layer image, or met a texel plane edge-on — and the walk goes on. Empty
+//! texels are "in front" of everything.
+
+use super::{Impostor, ImpostorCamera};
+use crate::camera::{ImagePoint, Projection};
+use crate::geom::Ray;
+use crate::trace::{Hit, RayQuery};
+use glam::{DVec3, Vec2};
+
+/// Thickness, in texel footprints, within which a crossing at a discontinuity is accepted.
+const THICKNESS_FOOTPRINTS: f64 = 2.0;
+/// Upper bound on sub-segments per ray (bounds the work on degenerate input).
+const MAX_STEPS: usize = 1 << 16;
+
+/// Work done by one ray walk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WalkStats {
+    /// Texels whose depth was read.
+    pub texel_visits: u64,
+    /// Length of the ray's image path, in pixels (rounded up).
+    pub projection_length: u64,
+}
+
+#[derive(Clone, Copy)]
+struct Sample {
+    p: ImagePoint,
+    /// The sample's texel, if inside the image.
+    texel: Option<(u32, u32)>,
+    /// Stored `gd` at the sample's texel (0 when empty or outside).
+    stored: f32,
+    /// Signed distance from the sample to its texel's plane, positive on the camera's side
+    /// (+∞ over empty texels): positive while the ray is in front of the stored surface.
+    delta: f64,
+}
+
+impl Impostor {
+    /// The first hit of `ray` with `0 < t < t_max`, and the work it took.
+    pub fn walk(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, WalkStats) {
+        match &self.camera {
+            ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max),
+            ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max),
+            // A curved image path is longer than its chord: sample twice as densely (§3.4).
+            ImpostorCamera::Spoc(c) => self.walk_with(c, 2.0, ray, t_max),
+        }
+    }
+
+    fn sample<P: Projection>(&self, camera: &P, s: DVec3, stats: &mut WalkStats) -> Option<Sample> {
+        let p = camera.project(s)?;
+        stats.texel_visits += 1;
+        let texel = self.texel(p.uv);
+        let (stored, delta) = match texel {
+            Some((x, y)) if self.gd.get(x, y) > 0.0 => {
+                let plane_point = self.position.get(x, y).as_dvec3();
+                let n = self.face_normal.get(x, y).as_dvec3();
+                (self.gd.get(x, y), (s - plane_point).dot(n))
+            }
+            _ => (0.0, f64::INFINITY),
+        };
+        Some(Sample {
+            p,
+            texel,
+            stored,
+            delta,
+        })
+    }
+
+    fn walk_with<P: Projection>(
+        &self,
+        camera: &P,
+        density: f64,
+        ray: &Ray,
+        t_max: f32,
+    ) -> (Option<Hit>, WalkStats) {
+        let mut stats = WalkStats::default();
+        let Some((t0, t1)) = self.bounds.intersect(ray, t_max) else {
+            return (None, stats);
+        };
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        let (c, e) = (o + d * t0 as f64, o + d * t1 as f64);
+        let (Some(pc), Some(pe)) = (camera.project(c), camera.project(e)) else {
+            return (None, stats);
+        };
+        let chord = (pe.uv - pc.uv).length();
+        stats.projection_length = chord.ceil() as u64;
+        let n = ((chord * density).ceil() as usize).clamp(1, MAX_STEPS);
+        let Some(mut prev) = self.sample(camera, c, &mut stats) else {
+            return (None, stats);
+        };
+        for k in 1..=n {
+            let s = c + (e - c) * (k as f64 / n as f64);
+            let Some(cur) = self.sample(camera, s, &mut stats) else {
+                return (None, stats);
+            };
+            if prev.delta > 0.0 && cur.delta <= 0.0 {
+                if let Some(hit) = self.accept(ray, &prev, &cur) {
+                    return (Some(hit), stats);
+                }
+            }
+            prev = cur;
+        }
+        (None, stats)
+    }
+
+    /// Places the hit on the stored surface where the ray crosses it within one sub-segment,
+    /// and applies the discontinuity rules.
+    fn accept(&self, ray: &Ray, a: &Sample, b: &Sample) -> Option<Hit> {
+        if a.stored <= 0.0 || b.stored <= 0.0 {
+            return None;
+        }
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        // Candidates: the ray's crossing of the texel plane at b, then at a; each must lie
+        // within the thickness of the point its texel stores.
+        for sample in [b, a] {
+            let (tx, ty) = sample.texel?;
+            let stored_point = self.position.get(tx, ty).as_dvec3();
+            let n = self.face_normal.get(tx, ty).as_dvec3();
+            let denom = d.dot(n);
+            if denom.abs() < 1e-9 {
+                continue;
+            }
+            let x = o + d * ((stored_point - o).dot(n) / denom);
+            let footprint = self.footprint(sample.p.uv, sample.stored as f64);
+            if (x - stored_point).length() <= THICKNESS_FOOTPRINTS * footprint {
+                return Some(self.hit(ray, x, (tx, ty)));
+            }
+        }
+        // Neither plane is near: the sign change came from a depth discontinuity (the ray passed
+        // behind an occluding edge) or from a texel plane seen edge-on; not a hit.
+        None
+    }
+
+    fn hit(&self, ray: &Ray, x: DVec3, (tx, ty): (u32, u32)) -> Hit {
+        let t = (x - ray.origin.as_dvec3()).dot(ray.dir.as_dvec3()) as f32;
+        let normal = self.normal.get(tx, ty);
+        Hit {
+            t,
+            position: x.as_vec3(),
+            normal,
+            geometric_normal: self.face_normal.get(tx, ty),
+            uv: Vec2::new(tx as f32 + 0.5, ty as f32 + 0.5),
+            bary: Vec2::ZERO,
+            object: self.object.get(tx, ty),
+            triangle: 0,
+            radiance: Some(self.color.get(tx, ty).truncate()),
+        }
+    }
+}
+
+impl RayQuery for Impostor {
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.walk(ray, t_max).0.filter(|h| h.t > 0.0 && h.t < t_max)
+    }
+}
