@@ -90,3 +90,97 @@ fn a_pinhole_impostor_returns_its_own_rasterized_depth() {
     }
     assert!(checked > 1000, "{checked}");
 }
+
+#[test]
+fn impostors_save_and_load_exactly() {
+    use trompe::impostor::file;
+    let s = setup();
+    let dir = common::scratch("impostor_file");
+    for kind in [CheckCamera::Spoc(Some(0.7)), CheckCamera::Pinhole] {
+        let imp = build(
+            s.camera(kind, 96).unwrap(),
+            &s.target,
+            3,
+            &albedo_of(&s.target),
+        )
+        .unwrap();
+        let path = dir.join("teapot.json");
+        file::save(&imp, &path).unwrap();
+        let back = file::load(&path).unwrap();
+        assert_eq!(back.camera, imp.camera, "{kind:?}");
+        assert!(back.gd == imp.gd && back.color == imp.color && back.position == imp.position);
+        assert!(
+            back.normal == imp.normal
+                && back.face_normal == imp.face_normal
+                && back.object == imp.object
+        );
+        assert_eq!(back.bounds, imp.bounds);
+        for r in s.rays().iter().take(500) {
+            assert_eq!(back.walk(r, f32::INFINITY).0, imp.walk(r, f32::INFINITY).0);
+        }
+    }
+}
+
+#[test]
+fn corrupted_impostor_files_are_errors() {
+    use trompe::impostor::file;
+    let s = setup();
+    let dir = common::scratch("impostor_corrupt");
+    let imp = build(
+        s.camera(CheckCamera::Pinhole, 32).unwrap(),
+        &s.target,
+        0,
+        &albedo_of(&s.target),
+    )
+    .unwrap();
+    let path = dir.join("good.json");
+    file::save(&imp, &path).unwrap();
+    let json = std::fs::read_to_string(&path).unwrap();
+    let case = |name: &str, text: &str, expect: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let e = file::load(&p).expect_err(name).to_string();
+        assert!(e.contains(expect), "{name}: expected {expect:?} in {e}");
+    };
+    case("truncated.json", &json[..json.len() / 2], "truncated.json");
+    case(
+        "unknown.json",
+        &json.replacen("\"width\"", "\"colour\": 1, \"width\"", 1),
+        "colour",
+    );
+    case(
+        "version.json",
+        &json.replacen("\"version\": 1", "\"version\": 9", 1),
+        "version 9",
+    );
+    case(
+        "huge.json",
+        &json.replacen("\"width\": 32", "\"width\": 1000000", 1),
+        "invalid image size",
+    );
+    case(
+        "nobounds.json",
+        &json.replacen("\"min\": [", "\"min\": [1e39, ", 1),
+        "nobounds.json",
+    );
+    case(
+        "escape.json",
+        &json.replacen("good.exr", "../good.exr", 1),
+        "beside the sidecar",
+    );
+    // A damaged image file.
+    let exr = std::fs::read(dir.join("good.exr")).unwrap();
+    std::fs::write(dir.join("cut.exr"), &exr[..exr.len() / 3]).unwrap();
+    case(
+        "cut.json",
+        &json.replacen("good.exr", "cut.exr", 1),
+        "cut.exr",
+    );
+    // An image without the channels an impostor needs.
+    trompe::frame::io::write_exr_depth(&dir.join("depth.exr"), &imp.gd).unwrap();
+    case(
+        "channels.json",
+        &json.replacen("good.exr", "depth.exr", 1),
+        "no channel named",
+    );
+}

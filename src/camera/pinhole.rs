@@ -92,6 +92,17 @@ impl Pinhole {
         self
     }
 
+    /// McMillan's `(a, b, c)`: the world steps of one pixel in `u` and `v`, and the vector from
+    /// the centre of projection to the corner of pixel `(0, 0)`.
+    pub fn mcmillan(&self) -> (DVec3, DVec3, DVec3) {
+        (self.m.x_axis, self.m.y_axis, self.m.z_axis)
+    }
+
+    /// Near-plane distance.
+    pub fn near(&self) -> f64 {
+        self.near
+    }
+
     /// Centre of projection.
     pub fn position(&self) -> DVec3 {
         self.c

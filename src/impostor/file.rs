@@ -1,1 +1,416 @@
-//! Saving and loading impostors: placeholder replaced below.
+//! Impostor files: a JSON sidecar (camera, bounds, format version) and an OpenEXR file with the
+//! per-texel maps, so an impostor is baked once and used later.
+//!
+//! `NAME.json`:
+//! ```json
+//! { "format": "trompe-impostor", "version": 1, "exr": "NAME.exr",
+//!   "width": 512, "height": 512,
+//!   "bounds": { "min": [x, y, z], "max": [x, y, z] },
+//!   "camera": { "type": "spoc", "position": [..], "a": [..], "b": [..], "c": [..],
+//!               "near": 0.5, "pole": [u, v], "z_near": 1.0, "z_far": 2.0, "k": 0.8 } }
+//! ```
+//! Cameras: `pinhole` (`position`, McMillan `a`, `b`, `c`, `near`), `spoc` (the pinhole fields plus
+//! `pole`, `z_near`, `z_far`, `k`), `orthographic` (`corner`, `a`, `b`, `dir`, `depth`).
+//!
+//! `NAME.exr` channels (32-bit float): `R G B A` colour, `gd`, `N.X N.Y N.Z` shading normal,
+//! `Ng.X Ng.Y Ng.Z` face normal (toward the camera), `P.X P.Y P.Z` world position, `id` = object
+//! id + 1 (0 where empty; ids below 2^24 are exact).
+//!
+//! Loading validates everything: sizes against the camera, finite values, a sidecar of at most
+//! 1 MiB; a corrupted file is an error naming the file and what is wrong.
+
+use super::{Impostor, ImpostorCamera};
+use crate::camera::{Orthographic, Pinhole, Spoc};
+use crate::frame::io::{read_exr_channels, write_exr_channels};
+use crate::frame::{FrameError, Image};
+use crate::geom::Aabb;
+use crate::trace::NO_OBJECT;
+use glam::{DVec2, DVec3, Vec3, Vec4};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// The sidecar's `format` value.
+pub const FORMAT: &str = "trompe-impostor";
+/// The sidecar version this build writes and reads.
+pub const VERSION: u32 = 1;
+const MAX_SIDECAR_BYTES: u64 = 1 << 20;
+
+/// Errors from saving or loading an impostor.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ImpostorFileError {
+    /// The sidecar could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The sidecar is not valid.
+    #[error("{path}: {reason}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The image file could not be read or written.
+    #[error(transparent)]
+    Image(#[from] FrameError),
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Sidecar {
+    format: String,
+    version: u32,
+    exr: String,
+    width: u32,
+    height: u32,
+    bounds: BoundsFile,
+    camera: CameraFile,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoundsFile {
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum CameraFile {
+    Pinhole {
+        position: [f64; 3],
+        a: [f64; 3],
+        b: [f64; 3],
+        c: [f64; 3],
+        near: f64,
+    },
+    Spoc {
+        position: [f64; 3],
+        a: [f64; 3],
+        b: [f64; 3],
+        c: [f64; 3],
+        near: f64,
+        pole: [f64; 2],
+        z_near: f64,
+        z_far: f64,
+        k: f64,
+    },
+    Orthographic {
+        corner: [f64; 3],
+        a: [f64; 3],
+        b: [f64; 3],
+        dir: [f64; 3],
+        depth: f64,
+    },
+}
+
+fn pinhole_file(p: &Pinhole) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3], f64) {
+    let (a, b, c) = p.mcmillan();
+    (
+        p.position().to_array(),
+        a.to_array(),
+        b.to_array(),
+        c.to_array(),
+        p.near(),
+    )
+}
+
+impl CameraFile {
+    fn from_camera(camera: &ImpostorCamera) -> CameraFile {
+        match camera {
+            ImpostorCamera::Pinhole(p) => {
+                let (position, a, b, c, near) = pinhole_file(p);
+                CameraFile::Pinhole {
+                    position,
+                    a,
+                    b,
+                    c,
+                    near,
+                }
+            }
+            ImpostorCamera::Spoc(s) => {
+                let (position, a, b, c, near) = pinhole_file(s.pinhole());
+                let (z_near, z_far) = s.depth_range();
+                CameraFile::Spoc {
+                    position,
+                    a,
+                    b,
+                    c,
+                    near,
+                    pole: s.pole().to_array(),
+                    z_near,
+                    z_far,
+                    k: s.strength(),
+                }
+            }
+            ImpostorCamera::Orthographic(o) => {
+                let (corner, a, b, dir, depth) = o.parameters();
+                CameraFile::Orthographic {
+                    corner: corner.to_array(),
+                    a: a.to_array(),
+                    b: b.to_array(),
+                    dir: dir.to_array(),
+                    depth,
+                }
+            }
+        }
+    }
+
+    fn to_camera(&self, w: u32, h: u32) -> Result<ImpostorCamera, String> {
+        let v = DVec3::from_array;
+        let pinhole = |position, a, b, c, near: f64| -> Result<Pinhole, String> {
+            let (position, a, b, c) = (v(position), v(a), v(b), v(c));
+            let m = glam::DMat3::from_cols(a, b, c);
+            let finite = position.is_finite() && a.is_finite() && b.is_finite() && c.is_finite();
+            if !finite || !(m.determinant().abs() > 1e-300) || !(near > 0.0 && near.is_finite()) {
+                return Err("camera: degenerate pinhole parameters".into());
+            }
+            crate::frame::check_size(w as u64, h as u64).map_err(|e| e.to_string())?;
+            Ok(Pinhole::from_mcmillan(position, a, b, c, w, h).with_near(near))
+        };
+        Ok(match *self {
+            CameraFile::Pinhole {
+                position,
+                a,
+                b,
+                c,
+                near,
+            } => ImpostorCamera::Pinhole(pinhole(position, a, b, c, near)?),
+            CameraFile::Spoc {
+                position,
+                a,
+                b,
+                c,
+                near,
+                pole,
+                z_near,
+                z_far,
+                k,
+            } => ImpostorCamera::Spoc(
+                Spoc::from_parts(
+                    pinhole(position, a, b, c, near)?,
+                    DVec2::from_array(pole),
+                    z_near,
+                    z_far,
+                    k,
+                )
+                .map_err(|e| e.to_string())?,
+            ),
+            CameraFile::Orthographic {
+                corner,
+                a,
+                b,
+                dir,
+                depth,
+            } => ImpostorCamera::Orthographic(
+                Orthographic::from_parameters(v(corner), v(a), v(b), v(dir), depth, w, h)
+                    .map_err(|e| e.to_string())?,
+            ),
+        })
+    }
+}
+
+/// Writes `impostor` as `json_path` (sidecar) and the EXR beside it (same stem, `.exr`).
+pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileError> {
+    let exr_path = json_path.with_extension("exr");
+    let exr_name = exr_path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| ImpostorFileError::Invalid {
+            path: json_path.to_path_buf(),
+            reason: "the file name is not valid UTF-8".into(),
+        })?
+        .to_string();
+    let (w, h) = impostor.gd.size();
+    if impostor
+        .object
+        .pixels()
+        .iter()
+        .any(|&o| o != NO_OBJECT && o >= (1 << 24) - 1)
+    {
+        return Err(ImpostorFileError::Invalid {
+            path: json_path.to_path_buf(),
+            reason: "object ids must be below 2^24 - 1".into(),
+        });
+    }
+    let split3 =
+        |img: &Image<Vec3>, k: usize| img.pixels().iter().map(|v| v[k]).collect::<Vec<f32>>();
+    let color = |k: usize| {
+        impostor
+            .color
+            .pixels()
+            .iter()
+            .map(|c| c[k])
+            .collect::<Vec<f32>>()
+    };
+    let channels = vec![
+        ("R", color(0)),
+        ("G", color(1)),
+        ("B", color(2)),
+        ("A", color(3)),
+        ("gd", impostor.gd.pixels().to_vec()),
+        ("N.X", split3(&impostor.normal, 0)),
+        ("N.Y", split3(&impostor.normal, 1)),
+        ("N.Z", split3(&impostor.normal, 2)),
+        ("Ng.X", split3(&impostor.face_normal, 0)),
+        ("Ng.Y", split3(&impostor.face_normal, 1)),
+        ("Ng.Z", split3(&impostor.face_normal, 2)),
+        ("P.X", split3(&impostor.position, 0)),
+        ("P.Y", split3(&impostor.position, 1)),
+        ("P.Z", split3(&impostor.position, 2)),
+        (
+            "id",
+            impostor
+                .object
+                .pixels()
+                .iter()
+                .map(|&o| if o == NO_OBJECT { 0.0 } else { (o + 1) as f32 })
+                .collect(),
+        ),
+    ];
+    write_exr_channels(&exr_path, (w, h), channels)?;
+    let sidecar = Sidecar {
+        format: FORMAT.into(),
+        version: VERSION,
+        exr: exr_name,
+        width: w,
+        height: h,
+        bounds: BoundsFile {
+            min: impostor.bounds.min.to_array(),
+            max: impostor.bounds.max.to_array(),
+        },
+        camera: CameraFile::from_camera(&impostor.camera),
+    };
+    let text = serde_json::to_string_pretty(&sidecar).map_err(|e| ImpostorFileError::Invalid {
+        path: json_path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    std::fs::write(json_path, text).map_err(|source| ImpostorFileError::Io {
+        path: json_path.to_path_buf(),
+        source,
+    })
+}
+
+/// Reads an impostor saved by [`save`], validating every field.
+pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
+    let invalid = |reason: String| ImpostorFileError::Invalid {
+        path: json_path.to_path_buf(),
+        reason,
+    };
+    let io = |source| ImpostorFileError::Io {
+        path: json_path.to_path_buf(),
+        source,
+    };
+    let len = std::fs::metadata(json_path).map_err(io)?.len();
+    if len > MAX_SIDECAR_BYTES {
+        return Err(invalid(format!(
+            "sidecar is {len} bytes; at most 1 MiB expected"
+        )));
+    }
+    let text = std::fs::read_to_string(json_path).map_err(io)?;
+    let sidecar: Sidecar = serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+    if sidecar.format != FORMAT || sidecar.version != VERSION {
+        return Err(invalid(format!(
+            "format {:?} version {} (expected {FORMAT:?} version {VERSION})",
+            sidecar.format, sidecar.version
+        )));
+    }
+    let camera = sidecar
+        .camera
+        .to_camera(sidecar.width, sidecar.height)
+        .map_err(invalid)?;
+    let bounds = Aabb {
+        min: Vec3::from_array(sidecar.bounds.min),
+        max: Vec3::from_array(sidecar.bounds.max),
+    };
+    if !(bounds.min.is_finite() && bounds.max.is_finite()) || bounds.is_empty() {
+        return Err(invalid("bounds: empty or not finite".into()));
+    }
+    if sidecar.exr.contains('/') || sidecar.exr.contains('\\') {
+        return Err(invalid("exr: must name a file beside the sidecar".into()));
+    }
+    let exr_path = json_path.with_file_name(&sidecar.exr);
+    let ch = read_exr_channels(&exr_path)?;
+    if (ch.width, ch.height) != (sidecar.width, sidecar.height) {
+        return Err(invalid(format!(
+            "{}: image is {} × {} but the sidecar says {} × {}",
+            exr_path.display(),
+            ch.width,
+            ch.height,
+            sidecar.width,
+            sidecar.height
+        )));
+    }
+    let get = |name: &str| -> Result<Vec<f32>, ImpostorFileError> {
+        let img = ch.channel(name)?;
+        if img.pixels().iter().any(|v| !v.is_finite()) {
+            return Err(ImpostorFileError::Invalid {
+                path: exr_path.clone(),
+                reason: format!("channel {name:?} holds a value that is not finite"),
+            });
+        }
+        Ok(img.into_vec())
+    };
+    let (w, h) = (ch.width, ch.height);
+    let vec3 = |x: Vec<f32>, y: Vec<f32>, z: Vec<f32>| -> Result<Image<Vec3>, FrameError> {
+        Image::from_vec(
+            w,
+            h,
+            x.into_iter()
+                .zip(y)
+                .zip(z)
+                .map(|((x, y), z)| Vec3::new(x, y, z))
+                .collect(),
+        )
+    };
+    let (r, g, b, a) = (get("R")?, get("G")?, get("B")?, get("A")?);
+    let color = Image::from_vec(
+        w,
+        h,
+        r.into_iter()
+            .zip(g)
+            .zip(b)
+            .zip(a)
+            .map(|(((r, g), b), a)| Vec4::new(r, g, b, a))
+            .collect(),
+    )?;
+    let gd = Image::from_vec(w, h, get("gd")?)?;
+    if gd.pixels().iter().any(|&g| g < 0.0) {
+        return Err(invalid(format!(
+            "{}: channel \"gd\" holds negative values",
+            exr_path.display()
+        )));
+    }
+    let ids = get("id")?;
+    if ids
+        .iter()
+        .any(|&i| i < 0.0 || i.fract() != 0.0 || i >= (1 << 24) as f32)
+    {
+        return Err(invalid(format!(
+            "{}: channel \"id\" holds values that are not ids",
+            exr_path.display()
+        )));
+    }
+    Ok(Impostor {
+        camera,
+        color,
+        gd,
+        normal: vec3(get("N.X")?, get("N.Y")?, get("N.Z")?)?,
+        face_normal: vec3(get("Ng.X")?, get("Ng.Y")?, get("Ng.Z")?)?,
+        position: vec3(get("P.X")?, get("P.Y")?, get("P.Z")?)?,
+        object: Image::from_vec(
+            w,
+            h,
+            ids.into_iter()
+                .map(|i| if i == 0.0 { NO_OBJECT } else { i as u32 - 1 })
+                .collect(),
+        )?,
+        bounds,
+    })
+}
