@@ -71,6 +71,9 @@ pub enum Command {
         #[arg(short, long, default_value = "out/demo")]
         output: PathBuf,
     },
+    /// Build, save and check impostors.
+    #[command(subcommand)]
+    Impostor(ImpostorCommand),
     /// Measure throughput against peers measured in the same run.
     Bench {
         /// Shorter timings (less stable figures).
@@ -80,6 +83,49 @@ pub enum Command {
         #[arg(long)]
         mesh: Option<PathBuf>,
     },
+}
+
+/// `trompe impostor …`.
+#[derive(Subcommand, Debug)]
+pub enum ImpostorCommand {
+    /// Fire rays at an object and compare every impostor answer with the exact BVH.
+    Check {
+        /// The object (.obj, .ply, .gltf, .glb); it is scaled to largest extent 1.
+        mesh: PathBuf,
+        /// Impostor camera.
+        #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
+        camera: CameraArg,
+        /// SPOC strength k (default: the rule k = 2Δ/z_O from the reflector's region).
+        #[arg(long)]
+        k: Option<f64>,
+        /// Impostor resolution (square).
+        #[arg(long, default_value_t = 512)]
+        resolution: u32,
+        /// The reflector whose reflected rays are fired (default: the shipped bunny).
+        #[arg(long)]
+        reflector: Option<PathBuf>,
+        /// Distance between the object's and the reflector's centres.
+        #[arg(long, default_value_t = 1.4)]
+        distance: f32,
+        /// Resolution of the view of the reflector that spawns the rays.
+        #[arg(long, default_value_t = 1024)]
+        view: u32,
+        /// Also fire this many rays from a sphere around the object, aimed at it.
+        #[arg(long, default_value_t = 0)]
+        sphere_rays: usize,
+        /// Save the impostor (JSON sidecar; the EXR goes beside it).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+}
+
+/// `--camera` of `impostor`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum CameraArg {
+    /// Planar pinhole depth image.
+    Pinhole,
+    /// Single-pole occlusion camera.
+    Spoc,
 }
 
 /// `--method`.
@@ -277,6 +323,97 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 );
             }
             println!("wrote {}", summary.index.display());
+        }
+        Command::Impostor(ImpostorCommand::Check {
+            mesh,
+            camera,
+            k,
+            resolution,
+            reflector,
+            distance,
+            view,
+            sphere_rays,
+            output,
+        }) => {
+            use trompe::impostor::fidelity::{self, CheckCamera, ReflectorSetup};
+            if let Some(o) = &output {
+                check_output(o, &[&mesh])?;
+            }
+            let target = trompe::geom::io::load(&mesh)?.mesh;
+            let reflector_path = reflector.unwrap_or_else(|| {
+                trompe::report::DemoInputs::locate()
+                    .assets
+                    .join("meshes/bunny.obj")
+            });
+            let refl = trompe::geom::io::load(&reflector_path)?.mesh;
+            let setup = ReflectorSetup::new(&target, &refl, distance, view)
+                .context("placing the reflector")?;
+            let kind = match camera {
+                CameraArg::Pinhole => CheckCamera::Pinhole,
+                CameraArg::Spoc => CheckCamera::Spoc(k),
+            };
+            let mut timings = Timings::default();
+            let cam = setup
+                .camera(kind, resolution)
+                .context("building the impostor camera")?;
+            if let trompe::impostor::ImpostorCamera::Spoc(s) = &cam {
+                println!("SPOC strength k = {:.3}", s.strength());
+            }
+            let imp = timings
+                .time("build impostor", || {
+                    trompe::impostor::build(
+                        cam,
+                        &setup.target,
+                        0,
+                        &trompe::impostor::albedo_of(&setup.target),
+                    )
+                })
+                .context("building the impostor")?;
+            let exact = timings.time("build BVH", || {
+                trompe::trace::Bvh::build(vec![setup.target.clone()])
+            });
+            let mut rays = timings.time("reflected rays", || setup.rays());
+            let b = setup.target.bounds();
+            rays.extend(fidelity::sphere_rays(
+                b.center(),
+                b.radius() * 3.0,
+                b,
+                sphere_rays,
+                1,
+            ));
+            let r = timings.time("check", || fidelity::check(&imp, &exact, &rays));
+            let captured = fidelity::surface_captured(&imp, &setup.target, 50_000, 1);
+            println!(
+                "impostor  {} {resolution}², {:.1} % of texels covered",
+                imp.camera.kind(),
+                imp.coverage() * 100.0
+            );
+            println!("rays      {} ({} hit the object)", r.rays, r.exact_hits);
+            println!(
+                "agreement {:.3} % of rays (hit/miss and position within 1.5 texels)",
+                r.agreement() * 100.0
+            );
+            println!(
+                "          {:.3} % of the rays that either method says hit",
+                r.hit_agreement() * 100.0
+            );
+            println!("missed    {}   spurious {}", r.missed, r.spurious);
+            println!(
+                "position  mean error {:.3e} world units = {:.3} texel footprints",
+                r.mean_position_error, r.mean_error_footprints
+            );
+            println!("surface   {:.1} % captured", captured * 100.0);
+            println!(
+                "walk      {:.1} texel visits per ray",
+                r.texel_visits_per_ray
+            );
+            if let Some(o) = &output {
+                trompe::impostor::file::save(&imp, o).context("saving the impostor")?;
+                eprintln!("wrote {}", o.display());
+            }
+            if cli.verbose {
+                print_timings(&timings);
+            }
         }
         Command::Bench { quick, mesh } => {
             let path = mesh.unwrap_or_else(|| {
