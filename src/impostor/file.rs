@@ -168,7 +168,8 @@ impl CameraFile {
             let (position, a, b, c) = (v(position), v(a), v(b), v(c));
             let m = glam::DMat3::from_cols(a, b, c);
             let finite = position.is_finite() && a.is_finite() && b.is_finite() && c.is_finite();
-            if !finite || !(m.determinant().abs() > 1e-300) || !(near > 0.0 && near.is_finite()) {
+            let valid = finite && m.determinant().abs() > 1e-300 && near > 0.0 && near.is_finite();
+            if !valid {
                 return Err("camera: degenerate pinhole parameters".into());
             }
             crate::frame::check_size(w as u64, h as u64).map_err(|e| e.to_string())?;
