@@ -50,3 +50,4 @@ pub use raster::{Fragment, FragmentShader, ItemId, rasterize};
 pub use scene::Scene;
 pub use trace::{Bvh, Hit, RayQuery};
 pub mod impostor;
+pub mod reflect;
