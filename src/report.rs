@@ -372,22 +372,15 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
     let mut scores_table = String::from(
         "<table><tr><th>reflected rays answered by</th><th>PSNR (dB)</th><th>SSIM</th><th>FLIP</th></tr>\n",
     );
-    let answers: [(
-        &str,
-        &dyn Fn() -> Result<crate::frame::Image<crate::frame::Rgba>, FrameError>,
-    ); 3] = [
-        ("SPOC impostor", &|| {
-            crate::reflect::mirror_frame(&scene, &impostors[1]).map(|f| f.0)
-        }),
-        ("pinhole impostor", &|| {
-            crate::reflect::mirror_frame(&scene, &impostors[0]).map(|f| f.0)
-        }),
-        ("environment map only", &|| {
-            crate::reflect::mirror_frame(&scene, &crate::reflect::Nothing).map(|f| f.0)
-        }),
-    ];
-    for (i, (label, render)) in answers.iter().enumerate() {
-        let img = render()?;
+    for (i, label) in ["SPOC impostor", "pinhole impostor", "environment map only"]
+        .into_iter()
+        .enumerate()
+    {
+        let img = match i {
+            0 => crate::reflect::mirror_frame(&scene, &impostors[1])?.0,
+            1 => crate::reflect::mirror_frame(&scene, &impostors[0])?.0,
+            _ => crate::reflect::mirror_frame(&scene, &crate::reflect::Nothing)?.0,
+        };
         let file = format!("mirror-{i}.png");
         io::write_png(&out.join(&file), &img)?;
         let sc = metrics::compare(&reference, &img, Some(&mask))?;
