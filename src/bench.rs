@@ -179,3 +179,97 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     }
     out
 }
+
+/// Impostor workloads (issue 3): building a SPOC impostor of `mesh` beside a plain pinhole
+/// rasterization of it at the same resolution; and walking reflected rays through SPOC
+/// impostors of `target` at resolutions 128 … 1024 (ns and texel visits per ray, and the length
+/// of the rays' image paths, as in paper 1's Table 2).
+pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> Vec<Figure> {
+    use crate::impostor::fidelity::{CheckCamera, ReflectorSetup};
+    use crate::impostor::{ImpostorCamera, albedo_of, build};
+    let min = Duration::from_millis(if quick { 200 } else { 1500 });
+    let mut out = Vec::new();
+    let b = mesh.bounds();
+    let eye = b.center() + Vec3::new(0.3, 0.2, 1.0).normalize() * b.radius() * 3.0;
+    let size = 512;
+    let spoc = crate::camera::Spoc::around(eye, b.center(), b.radius(), 0.8, size)
+        .expect("eye outside the sphere");
+    let plain = spoc.pinhole().clone();
+    let color = albedo_of(mesh);
+    let t_spoc = time_median(min, || {
+        build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
+    });
+    let t_plain = time_median(min, || {
+        raster_once(&plain, mesh);
+    });
+    let t_pinhole = time_median(min, || {
+        build(ImpostorCamera::Pinhole(plain.clone()), mesh, 0, &color).expect("valid size");
+    });
+    out.push(Figure {
+        name: format!(
+            "build SPOC impostor {size}², {} triangles",
+            mesh.triangle_count()
+        ),
+        value: t_spoc.as_secs_f64() * 1e3,
+        unit: "ms",
+        versus: Some((
+            t_spoc.as_secs_f64() / t_plain.as_secs_f64(),
+            "× a plain pinhole rasterization (depth + ids; goal ≤ 1.5)".into(),
+        )),
+    });
+    out.push(Figure {
+        name: format!("build pinhole impostor {size}² (same maps)"),
+        value: t_pinhole.as_secs_f64() * 1e3,
+        unit: "ms",
+        versus: Some((
+            t_spoc.as_secs_f64() / t_pinhole.as_secs_f64(),
+            "= SPOC build time / this".into(),
+        )),
+    });
+    let Ok(setup) = ReflectorSetup::new(target, reflector, 1.4, 512) else {
+        return out;
+    };
+    let rays = setup.rays();
+    for res in [128u32, 256, 512, 1024] {
+        let Ok(cam) = setup.camera(CheckCamera::Spoc(None), res) else {
+            continue;
+        };
+        let Ok(imp) = build(cam, &setup.target, 0, &albedo_of(&setup.target)) else {
+            continue;
+        };
+        let stats: Vec<crate::impostor::WalkStats> =
+            rays.iter().map(|r| imp.walk(r, f32::INFINITY).1).collect();
+        let t = time_median(min, || {
+            rays.par_iter().for_each(|r| {
+                std::hint::black_box(imp.walk(r, f32::INFINITY));
+            });
+        });
+        let n = rays.len().max(1) as f64;
+        let visits = stats.iter().map(|s| s.texel_visits as f64).sum::<f64>() / n;
+        let max_len = stats.iter().map(|s| s.projection_length).max().unwrap_or(0);
+        let mean_len = stats
+            .iter()
+            .map(|s| s.projection_length as f64)
+            .sum::<f64>()
+            / n;
+        out.push(Figure {
+            name: format!("SPOC walk {res}²: time per ray"),
+            value: t.as_secs_f64() * 1e9 / n * rayon::current_num_threads() as f64,
+            unit: "ns",
+            versus: None,
+        });
+        out.push(Figure {
+            name: format!("SPOC walk {res}²: texel visits per ray"),
+            value: visits,
+            unit: "texels",
+            versus: None,
+        });
+        out.push(Figure {
+            name: format!("SPOC walk {res}²: ray image path, max / mean"),
+            value: max_len as f64,
+            unit: "px",
+            versus: Some((mean_len, "px mean".into())),
+        });
+    }
+    out
+}

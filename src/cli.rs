@@ -428,11 +428,17 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 m.triangle_count(),
                 rayon::current_num_threads()
             );
-            for f in trompe::bench::foundation(&m, quick) {
+            let assets = trompe::report::DemoInputs::locate().assets;
+            let teapot = trompe::geom::io::load(&assets.join("meshes/teapot.obj"))?.mesh;
+            let bunny = trompe::geom::io::load(&assets.join("meshes/bunny.obj"))?.mesh;
+            let figures = trompe::bench::foundation(&m, quick)
+                .into_iter()
+                .chain(trompe::bench::impostors(&m, &teapot, &bunny, quick));
+            for f in figures {
                 let versus = f
                     .versus
                     .map_or(String::new(), |(r, peer)| format!("   ({r:.2} {peer})"));
-                println!("  {:<40} {:>14.4e} {:<7}{versus}", f.name, f.value, f.unit);
+                println!("  {:<48} {:>12.4} {:<7}{versus}", f.name, f.value, f.unit);
             }
         }
     }

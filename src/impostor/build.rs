@@ -8,6 +8,7 @@ use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{Fragment, FragmentShader, rasterize};
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
 /// A surface point the impostor stores: what a colour function is given.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,51 +41,97 @@ pub struct Tessellation {
 /// its projected ends (algorithms.md §2.2). Whether an edge splits depends on that edge alone,
 /// and it splits at its midpoint, so two triangles sharing an edge split it identically: the
 /// tessellation has no T-junctions and the image no cracks.
-pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Tessellation {
-    let needs_split = |a: Vec3, b: Vec3| -> bool {
-        let (Some(pa), Some(pb)) = (camera.project(a.as_dvec3()), camera.project(b.as_dvec3()))
-        else {
-            return false;
-        };
-        if (pa.uv - pb.uv).length() < 1.0 {
+/// Returns `None` when no edge needs a split (the mesh can be rasterized as it is).
+pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation> {
+    // Split decisions depend on the edge alone (see above).
+    // Whether edge (a, b), whose ends project to (pa, pb), must split.
+    let split_projected = |a: Vec3, b: Vec3, pa: glam::DVec2, pb: glam::DVec2| -> bool {
+        if (pa - pb).length() < 1.0 {
             return false;
         }
         let m = (a + b) * 0.5;
         camera
             .project(m.as_dvec3())
-            .is_some_and(|pm| (pm.uv - (pa.uv + pb.uv) * 0.5).length() > MAX_DEVIATION_PX)
+            .is_some_and(|pm| (pm.uv - (pa + pb) * 0.5).length() > MAX_DEVIATION_PX)
     };
-    let mut positions = Vec::new();
-    let mut source = Vec::new();
-    for t in 0..mesh.triangles.len() {
-        let mut stack = vec![(mesh.corners(t), [Vec3::X, Vec3::Y, Vec3::Z], 0u32)];
-        while let Some((p, b, depth)) = stack.pop() {
-            let edges = [(0, 1), (1, 2), (2, 0)];
-            let split = edges
-                .iter()
-                .filter(|&&(i, j)| depth < MAX_SPLITS && needs_split(p[i], p[j]))
-                .max_by(|&&(i, j), &&(k, l)| {
-                    p[i].distance_squared(p[j])
-                        .total_cmp(&p[k].distance_squared(p[l]))
-                });
-            match split {
-                None => {
-                    positions.extend_from_slice(&p);
-                    source.push((t as u32, b));
+    let needs_split = |a: Vec3, b: Vec3| -> bool {
+        match (camera.project(a.as_dvec3()), camera.project(b.as_dvec3())) {
+            (Some(pa), Some(pb)) => split_projected(a, b, pa.uv, pb.uv),
+            _ => false,
+        }
+    };
+    // Most triangles of a detailed mesh need no split (the paper notes this): find them from
+    // the projected vertices alone, and give back the mesh untouched when none does.
+    let projected: Vec<Option<glam::DVec2>> = mesh
+        .positions
+        .par_iter()
+        .map(|p| camera.project(p.as_dvec3()).map(|q| q.uv))
+        .collect();
+    let needs_any_split = |t: usize| {
+        let [a, b, c] = mesh.triangles[t].map(|i| i as usize);
+        [(a, b), (b, c), (c, a)]
+            .iter()
+            .any(|&(i, j)| match (projected[i], projected[j]) {
+                (Some(pi), Some(pj)) => {
+                    split_projected(mesh.positions[i], mesh.positions[j], pi, pj)
                 }
-                Some(&(i, j)) => {
-                    let (pm, bm) = ((p[i] + p[j]) * 0.5, (b[i] + b[j]) * 0.5);
-                    let mut first = (p, b);
-                    first.0[j] = pm;
-                    first.1[j] = bm;
-                    let mut second = (p, b);
-                    second.0[i] = pm;
-                    second.1[i] = bm;
-                    stack.push((second.0, second.1, depth + 1));
-                    stack.push((first.0, first.1, depth + 1));
+                _ => false,
+            })
+    };
+    let split_any = (0..mesh.triangles.len())
+        .into_par_iter()
+        .any(needs_any_split);
+    if !split_any {
+        return None;
+    }
+    // Fixed chunks of source triangles, tessellated in parallel and concatenated in order.
+    let tris: Vec<usize> = (0..mesh.triangles.len()).collect();
+    let chunks: Vec<(Vec<Vec3>, Vec<(u32, [Vec3; 3])>)> = tris
+        .par_chunks(4096)
+        .map(|chunk| {
+            let mut positions = Vec::with_capacity(chunk.len() * 3);
+            let mut source = Vec::with_capacity(chunk.len());
+            let mut stack = Vec::new();
+            for &t in chunk {
+                if !needs_any_split(t) {
+                    positions.extend_from_slice(&mesh.corners(t));
+                    source.push((t as u32, [Vec3::X, Vec3::Y, Vec3::Z]));
+                    continue;
+                }
+                stack.push((mesh.corners(t), [Vec3::X, Vec3::Y, Vec3::Z], 0u32));
+                while let Some((p, b, depth)) = stack.pop() {
+                    let edges = [(0, 1), (1, 2), (2, 0)];
+                    let split = edges
+                        .iter()
+                        .filter(|&&(i, j)| depth < MAX_SPLITS && needs_split(p[i], p[j]))
+                        .max_by(|&&(i, j), &&(k, l)| {
+                            p[i].distance_squared(p[j])
+                                .total_cmp(&p[k].distance_squared(p[l]))
+                        });
+                    match split {
+                        None => {
+                            positions.extend_from_slice(&p);
+                            source.push((t as u32, b));
+                        }
+                        Some(&(i, j)) => {
+                            let (pm, bm) = ((p[i] + p[j]) * 0.5, (b[i] + b[j]) * 0.5);
+                            let (mut first, mut second) = ((p, b), (p, b));
+                            (first.0[j], first.1[j]) = (pm, bm);
+                            (second.0[i], second.1[i]) = (pm, bm);
+                            stack.push((second.0, second.1, depth + 1));
+                            stack.push((first.0, first.1, depth + 1));
+                        }
+                    }
                 }
             }
-        }
+            (positions, source)
+        })
+        .collect();
+    let mut positions = Vec::new();
+    let mut source = Vec::new();
+    for (p, s) in chunks {
+        positions.extend(p);
+        source.extend(s);
     }
     let n = source.len();
     let sub = Mesh {
@@ -97,7 +144,7 @@ pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Tessellation {
         face_material: vec![0; n],
         materials: vec![Material::default()],
     };
-    Tessellation { mesh: sub, source }
+    Some(Tessellation { mesh: sub, source })
 }
 
 #[derive(Clone, Copy)]
@@ -170,7 +217,11 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     object: u32,
     color: &F,
 ) -> Result<Impostor, FrameError> {
-    let tessellation = camera.is_curved().then(|| tessellate(&camera, mesh));
+    let tessellation = if camera.is_curved() {
+        tessellate(&camera, mesh)
+    } else {
+        None
+    };
     let (raster_mesh, source) = match &tessellation {
         Some(t) => (&t.mesh, Some(t.source.as_slice())),
         None => (mesh, None),

@@ -1,0 +1,72 @@
+//! Impostor construction and ray walks (issue 3): a SPOC impostor of the bunny beside a pinhole
+//! impostor and a plain rasterization of the same mesh; walks of reflected rays per resolution.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec3;
+use std::path::PathBuf;
+use trompe::bench::raster_once;
+use trompe::camera::Spoc;
+use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup};
+use trompe::impostor::{ImpostorCamera, albedo_of, build};
+
+fn impostor(c: &mut Criterion) {
+    let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let bunny = trompe::geom::io::load(&assets.join("meshes/bunny.obj"))
+        .expect("shipped bunny")
+        .mesh;
+    let teapot = trompe::geom::io::load(&assets.join("meshes/teapot.obj"))
+        .expect("shipped teapot")
+        .mesh;
+    let b = bunny.bounds();
+    let eye = b.center() + Vec3::new(0.3, 0.2, 1.0).normalize() * b.radius() * 3.0;
+    let spoc = Spoc::around(eye, b.center(), b.radius(), 0.8, 512).expect("valid SPOC");
+    let color = albedo_of(&bunny);
+    let mut group = c.benchmark_group("impostor build, bunny 512²");
+    group.bench_function("SPOC impostor", |bch| {
+        bch.iter(|| build(ImpostorCamera::Spoc(spoc.clone()), &bunny, 0, &color).expect("valid"))
+    });
+    group.bench_function("peer: pinhole impostor (same maps)", |bch| {
+        bch.iter(|| {
+            build(
+                ImpostorCamera::Pinhole(spoc.pinhole().clone()),
+                &bunny,
+                0,
+                &color,
+            )
+            .expect("valid")
+        })
+    });
+    group.bench_function("peer: plain rasterization (depth + ids)", |bch| {
+        bch.iter(|| raster_once(spoc.pinhole(), &bunny))
+    });
+    group.finish();
+
+    let setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 512).expect("valid setup");
+    let rays = setup.rays();
+    let mut group = c.benchmark_group("SPOC walk, reflected rays");
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    for res in [128u32, 256, 512, 1024] {
+        let imp = build(
+            setup.camera(CheckCamera::Spoc(None), res).expect("camera"),
+            &setup.target,
+            0,
+            &albedo_of(&setup.target),
+        )
+        .expect("valid");
+        group.bench_function(format!("{res}²"), |bch| {
+            bch.iter(|| {
+                rays.iter()
+                    .filter(|r| imp.walk(r, f32::INFINITY).0.is_some())
+                    .count()
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(10);
+    targets = impostor
+}
+criterion_main!(benches);
