@@ -28,13 +28,16 @@ const MAX_DEVIATION_PX: f64 = 0.5;
 /// Recursion cap of the tessellation per source triangle.
 const MAX_SPLITS: u32 = 12;
 
+/// A sub-triangle's source triangle and the barycentrics of its corners in it.
+pub type SourceTriangle = (u32, [Vec3; 3]);
+
 /// A tessellated mesh and, for each of its triangles, the source triangle and the barycentrics
 /// of its three corners in it.
 pub struct Tessellation {
     /// The sub-triangles (unshared corners).
     pub mesh: Mesh,
     /// `(source triangle, corner barycentrics)` per sub-triangle.
-    pub source: Vec<(u32, [Vec3; 3])>,
+    pub source: Vec<SourceTriangle>,
 }
 
 /// Splits triangles until every edge's projected midpoint lies within 0.5 px of the midpoint of
@@ -86,7 +89,7 @@ pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation
     }
     // Fixed chunks of source triangles, tessellated in parallel and concatenated in order.
     let tris: Vec<usize> = (0..mesh.triangles.len()).collect();
-    let chunks: Vec<(Vec<Vec3>, Vec<(u32, [Vec3; 3])>)> = tris
+    let chunks: Vec<(Vec<Vec3>, Vec<SourceTriangle>)> = tris
         .par_chunks(4096)
         .map(|chunk| {
             let mut positions = Vec::with_capacity(chunk.len() * 3);
@@ -158,7 +161,7 @@ struct Texel {
 struct TexelShader<'a, F> {
     camera: &'a ImpostorCamera,
     mesh: &'a Mesh,
-    source: Option<&'a [(u32, [Vec3; 3])]>,
+    source: Option<&'a [SourceTriangle]>,
     color: &'a F,
 }
 
