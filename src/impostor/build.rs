@@ -273,3 +273,45 @@ pub fn albedo_of(mesh: &Mesh) -> impl Fn(&SurfaceSample) -> Vec3 + Sync + '_ {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Spoc;
+
+    #[test]
+    fn spoc_tessellation_splits_big_triangles_without_cracks() {
+        // A coarse sphere seen by a SPOC aimed at its centre images to a disc: every row of the
+        // image must be covered on one interval, with no pinholes between shared edges.
+        let sphere = crate::geom::icosphere(1);
+        let spoc = Spoc::around(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 0.5, 1.2, 512).unwrap();
+        let tess = tessellate(&spoc, &sphere).expect("big triangles must split");
+        assert!(
+            tess.source.len() > 2 * sphere.triangle_count(),
+            "{}",
+            tess.source.len()
+        );
+        let imp = build(
+            ImpostorCamera::Spoc(spoc),
+            &sphere,
+            0,
+            &|_: &SurfaceSample| Vec3::ONE,
+        )
+        .unwrap();
+        let mut rows_checked = 0;
+        for y in 0..512 {
+            let covered: Vec<u32> = (0..512).filter(|&x| imp.gd.get(x, y) > 0.0).collect();
+            if let (Some(&first), Some(&last)) = (covered.first(), covered.last()) {
+                assert_eq!(covered.len() as u32, last - first + 1, "row {y} has a hole");
+                rows_checked += 1;
+            }
+        }
+        assert!(rows_checked > 20);
+        // Every stored position lies on the sphere's triangles (radius between inscribed and 0.5).
+        for (p, &g) in imp.position.pixels().iter().zip(imp.gd.pixels()) {
+            if g > 0.0 {
+                assert!(p.length() <= 0.5 + 1e-5 && p.length() > 0.39, "{p}");
+            }
+        }
+    }
+}
