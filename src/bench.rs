@@ -186,7 +186,7 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
 /// of the rays' image paths, as in paper 1's Table 2).
 pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> Vec<Figure> {
     use crate::impostor::fidelity::{CheckCamera, ReflectorSetup};
-    use crate::impostor::{ImpostorCamera, albedo_of, build};
+    use crate::impostor::{ImpostorCamera, WalkMode, albedo_of, build};
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
     let b = mesh.bounds();
@@ -237,33 +237,48 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         let Ok(imp) = build(cam, &setup.target, 0, &albedo_of(&setup.target)) else {
             continue;
         };
+        let n = rays.len().max(1) as f64;
+        let mut linear_ns = 0.0;
+        for mode in [WalkMode::Linear, WalkMode::Hierarchical] {
+            let visits = rays
+                .iter()
+                .map(|r| imp.walk_mode(r, f32::INFINITY, mode).1.texel_visits as f64)
+                .sum::<f64>()
+                / n;
+            let t = time_median(min, || {
+                rays.par_iter().for_each(|r| {
+                    std::hint::black_box(imp.walk_mode(r, f32::INFINITY, mode));
+                });
+            });
+            let ns = t.as_secs_f64() * 1e9 / n * rayon::current_num_threads() as f64;
+            let hierarchical = mode == WalkMode::Hierarchical;
+            let label = if hierarchical {
+                "hierarchical"
+            } else {
+                "linear"
+            };
+            out.push(Figure {
+                name: format!("SPOC walk {res}², {label}: time per ray"),
+                value: ns,
+                unit: "ns",
+                versus: hierarchical.then(|| (ns / linear_ns, "× the linear walk".to_string())),
+            });
+            linear_ns = ns;
+            out.push(Figure {
+                name: format!("SPOC walk {res}², {label}: texel visits per ray"),
+                value: visits,
+                unit: "texels",
+                versus: None,
+            });
+        }
         let stats: Vec<crate::impostor::WalkStats> =
             rays.iter().map(|r| imp.walk(r, f32::INFINITY).1).collect();
-        let t = time_median(min, || {
-            rays.par_iter().for_each(|r| {
-                std::hint::black_box(imp.walk(r, f32::INFINITY));
-            });
-        });
-        let n = rays.len().max(1) as f64;
-        let visits = stats.iter().map(|s| s.texel_visits as f64).sum::<f64>() / n;
         let max_len = stats.iter().map(|s| s.projection_length).max().unwrap_or(0);
         let mean_len = stats
             .iter()
             .map(|s| s.projection_length as f64)
             .sum::<f64>()
             / n;
-        out.push(Figure {
-            name: format!("SPOC walk {res}²: time per ray"),
-            value: t.as_secs_f64() * 1e9 / n * rayon::current_num_threads() as f64,
-            unit: "ns",
-            versus: None,
-        });
-        out.push(Figure {
-            name: format!("SPOC walk {res}²: texel visits per ray"),
-            value: visits,
-            unit: "texels",
-            versus: None,
-        });
         out.push(Figure {
             name: format!("SPOC walk {res}²: ray image path, max / mean"),
             value: max_len as f64,

@@ -184,3 +184,37 @@ fn corrupted_impostor_files_are_errors() {
         "no channel named",
     );
 }
+
+#[test]
+fn hierarchical_and_linear_walks_give_identical_hits() {
+    use trompe::impostor::WalkMode;
+    use trompe::impostor::fidelity::sphere_rays;
+    let s = setup();
+    let b = s.target.bounds();
+    let mut rays = sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 11);
+    rays.extend(s.rays());
+    assert!(rays.len() >= 100_000);
+    for kind in [CheckCamera::Spoc(None), CheckCamera::Pinhole] {
+        let imp = build(
+            s.camera(kind, 256).unwrap(),
+            &s.target,
+            0,
+            &albedo_of(&s.target),
+        )
+        .unwrap();
+        let (mut linear_visits, mut hier_visits, mut hits) = (0u64, 0u64, 0usize);
+        for (i, r) in rays.iter().enumerate() {
+            let (a, sa) = imp.walk_mode(r, f32::INFINITY, WalkMode::Linear);
+            let (b, sb) = imp.walk_mode(r, f32::INFINITY, WalkMode::Hierarchical);
+            assert_eq!(a, b, "{kind:?}: ray {i} differs");
+            hits += a.is_some() as usize;
+            linear_visits += sa.texel_visits;
+            hier_visits += sb.texel_visits;
+        }
+        // Texel visits are a cost, measured by `trompe bench`, not asserted here.
+        eprintln!(
+            "{kind:?}: {hits} hits, texel visits linear {linear_visits} hierarchical {hier_visits}"
+        );
+        assert!(hits > 10_000, "{kind:?}: {hits}");
+    }
+}

@@ -120,6 +120,22 @@ impl Spoc {
         self.k
     }
 
+    /// A box holding the SPOC image of every point of the world segment `[a, b]`: the pinhole
+    /// images `q` of its points run along the segment `[q_a, q_b]` and their eye depths between
+    /// `z_a` and `z_b`, so each image point `p0 + (1 + κ(z))(q − p0)` lies in the trapezoid whose
+    /// corners scale `q_a`, `q_b` about the pole by the smallest and largest `1 + κ`.
+    pub fn segment_image_bounds(&self, a: DVec3, b: DVec3) -> Option<(DVec2, DVec2)> {
+        let (qa, qb) = (self.ppc.project(a)?, self.ppc.project(b)?);
+        let f = self.ppc.focal();
+        let (sa, sb) = (1.0 + self.kappa(f / qa.gd), 1.0 + self.kappa(f / qb.gd));
+        let (s0, s1) = (sa.min(sb), sa.max(sb));
+        let corners = [qa.uv, qb.uv].map(|q| [s0, s1].map(|s| self.pole + (q - self.pole) * s));
+        let all = corners.iter().flatten();
+        let min = all.clone().fold(DVec2::INFINITY, |m, p| m.min(*p));
+        let max = all.fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
+        Some((min, max))
+    }
+
     /// The depth ramp `κ(z)`.
     fn kappa(&self, z: f64) -> f64 {
         self.k * ((z - self.z_near) / (self.z_far - self.z_near)).max(0.0)

@@ -245,6 +245,7 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         face_normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.face_normal)),
         position: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.position)),
         object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
+        pyramid: super::MaxPyramid::new(&target.gd),
         gd: target.gd,
         bounds: Aabb {
             min: b.min - Vec3::splat(pad),

@@ -401,6 +401,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
     Ok(Impostor {
         camera,
         color,
+        pyramid: super::MaxPyramid::new(&gd),
         gd,
         normal: vec3(get("N.X")?, get("N.Y")?, get("N.Z")?)?,
         face_normal: vec3(get("Ng.X")?, get("Ng.Y")?, get("Ng.Z")?)?,

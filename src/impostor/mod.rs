@@ -14,10 +14,12 @@
 mod build;
 pub mod fidelity;
 pub mod file;
+mod pyramid;
 mod walk;
 
 pub use build::{SurfaceSample, Tessellation, albedo_of, build, tessellate};
-pub use walk::WalkStats;
+pub use pyramid::MaxPyramid;
+pub use walk::{WalkMode, WalkStats};
 
 use crate::camera::{ImagePoint, Orthographic, Pinhole, Projection, Spoc};
 use crate::frame::Image;
@@ -49,6 +51,20 @@ impl ImpostorCamera {
             ImpostorCamera::Pinhole(c) => c.position() - p,
             ImpostorCamera::Orthographic(c) => -c.parameters().3,
             ImpostorCamera::Spoc(c) => c.pinhole().position() - p,
+        }
+    }
+
+    /// A box holding the image of every point of the world segment `[a, b]` (`None` if an end
+    /// is outside the camera's domain). Pinhole and orthographic images of a segment are the
+    /// segment between the ends' images; the SPOC's lies in the trapezoid spanned by the pinhole
+    /// images of the ends scaled about the pole by the extreme `1 + κ(z)` of the segment.
+    pub fn segment_image_bounds(&self, a: DVec3, b: DVec3) -> Option<(DVec2, DVec2)> {
+        match self {
+            ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {
+                let (pa, pb) = (self.project(a)?, self.project(b)?);
+                Some((pa.uv.min(pb.uv), pa.uv.max(pb.uv)))
+            }
+            ImpostorCamera::Spoc(s) => s.segment_image_bounds(a, b),
         }
     }
 
@@ -114,6 +130,9 @@ pub struct Impostor {
     pub object: Image<u32>,
     /// World box of the replaced geometry: rays are clipped to it.
     pub bounds: Aabb,
+    /// Max-`gd` pyramid of `gd` (for the hierarchical walk); rebuild it with
+    /// [`MaxPyramid::new`] after editing `gd`.
+    pub pyramid: MaxPyramid,
 }
 
 impl Impostor {

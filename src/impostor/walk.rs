@@ -17,17 +17,27 @@ use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
 use crate::geom::Ray;
 use crate::trace::{Hit, RayQuery};
-use glam::{DVec3, Vec2};
+use glam::{DVec2, DVec3, Vec2};
 
 /// Thickness, in texel footprints, within which a crossing at a discontinuity is accepted.
 const THICKNESS_FOOTPRINTS: f64 = 2.0;
 /// Upper bound on sub-segments per ray (bounds the work on degenerate input).
 const MAX_STEPS: usize = 1 << 16;
 
+/// How a walk advances along the ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WalkMode {
+    /// Every sub-segment in turn (algorithms.md §2.3).
+    Linear,
+    /// Skips runs of samples whose image path provably stays over empty texels (max-`gd`
+    /// pyramid); returns exactly the hits of [`WalkMode::Linear`].
+    Hierarchical,
+}
+
 /// Work done by one ray walk.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WalkStats {
-    /// Texels whose depth was read.
+    /// Texels (and pyramid nodes) whose depth was read.
     pub texel_visits: u64,
     /// Length of the ray's image path, in pixels (rounded up).
     pub projection_length: u64,
@@ -46,13 +56,18 @@ struct Sample {
 }
 
 impl Impostor {
-    /// The first hit of `ray` with `0 < t < t_max`, and the work it took.
+    /// The first hit of `ray` with `0 < t < t_max`, and the work it took (hierarchical walk).
     pub fn walk(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, WalkStats) {
+        self.walk_mode(ray, t_max, WalkMode::Hierarchical)
+    }
+
+    /// [`Impostor::walk`] with a chosen mode.
+    pub fn walk_mode(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
         match &self.camera {
-            ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max),
-            ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max),
+            ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max, mode),
+            ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max, mode),
             // A curved image path is longer than its chord: sample twice as densely (§3.4).
-            ImpostorCamera::Spoc(c) => self.walk_with(c, 2.0, ray, t_max),
+            ImpostorCamera::Spoc(c) => self.walk_with(c, 2.0, ray, t_max, mode),
         }
     }
 
@@ -82,6 +97,7 @@ impl Impostor {
         density: f64,
         ray: &Ray,
         t_max: f32,
+        mode: WalkMode,
     ) -> (Option<Hit>, WalkStats) {
         let mut stats = WalkStats::default();
         let Some((t0, t1)) = self.bounds.intersect(ray, t_max) else {
@@ -98,9 +114,36 @@ impl Impostor {
         let Some(mut prev) = self.sample(camera, c, &mut stats) else {
             return (None, stats);
         };
-        for k in 1..=n {
-            let s = c + (e - c) * (k as f64 / n as f64);
-            let Some(cur) = self.sample(camera, s, &mut stats) else {
+        let at = |k: usize| c + (e - c) * (k as f64 / n as f64);
+        let mut k = 0;
+        // The texel where a skip last failed: no second attempt from it.
+        let mut failed_at: Option<Option<(u32, u32)>> = None;
+        while k < n {
+            // Skipping is attempted only from an empty texel: over covered texels the next
+            // samples are rarely all empty and the attempt would cost more than it saves.
+            if mode == WalkMode::Hierarchical && prev.stored == 0.0 && failed_at != Some(prev.texel)
+            {
+                let skip = self.empty_run(at, k, n, prev.p.uv, &mut stats);
+                if skip > 0 {
+                    // Samples k+1 ..= k+skip all lie over empty texels: none can end a crossing,
+                    // and the linear walk arrives at sample k+skip in the same state. That
+                    // sample is known to be empty, so its texel need not be read.
+                    k += skip;
+                    let Some(p) = camera.project(at(k)) else {
+                        return (None, stats);
+                    };
+                    prev = Sample {
+                        p,
+                        texel: self.texel(p.uv),
+                        stored: 0.0,
+                        delta: f64::INFINITY,
+                    };
+                    continue;
+                }
+                failed_at = Some(prev.texel);
+            }
+            k += 1;
+            let Some(cur) = self.sample(camera, at(k), &mut stats) else {
                 return (None, stats);
             };
             if prev.delta > 0.0 && cur.delta <= 0.0 {
@@ -111,6 +154,79 @@ impl Impostor {
             prev = cur;
         }
         (None, stats)
+    }
+
+    /// The longest run of samples after `k` whose image path provably stays over empty texels,
+    /// given that sample `k` (at image point `uv`) lies over an empty texel or outside the image.
+    ///
+    /// Climbs the max-`gd` pyramid from that texel to the largest empty node holding it (one
+    /// read per level), then searches — doubling, then halving — for the longest run of samples
+    /// whose conservative image box ([`ImpostorCamera::segment_image_bounds`]) stays inside the
+    /// node. Containment costs projections, not texel reads.
+    fn empty_run(
+        &self,
+        at: impl Fn(usize) -> DVec3,
+        k: usize,
+        n: usize,
+        uv: DVec2,
+        stats: &mut WalkStats,
+    ) -> usize {
+        let (w, h) = self.gd.size();
+        let (wf, hf) = (w as f64, h as f64);
+        // The empty region around sample k, as a test on an image box.
+        let inside: Box<dyn Fn(DVec2, DVec2) -> bool> = match self.texel(uv) {
+            None => {
+                // Outside the image everything is empty: stay on the same outer side.
+                if uv.x < 0.0 {
+                    Box::new(|_, max: DVec2| max.x < 0.0)
+                } else if uv.x >= wf {
+                    Box::new(move |min: DVec2, _| min.x >= wf)
+                } else if uv.y < 0.0 {
+                    Box::new(|_, max: DVec2| max.y < 0.0)
+                } else {
+                    Box::new(move |min: DVec2, _| min.y >= hf)
+                }
+            }
+            Some((x, y)) => {
+                let mut level = 0;
+                while level + 1 < self.pyramid.level_count() {
+                    stats.texel_visits += 1;
+                    if self
+                        .pyramid
+                        .node(level + 1, x >> (level + 1), y >> (level + 1))
+                        > 0.0
+                    {
+                        break;
+                    }
+                    level += 1;
+                }
+                let size = (1u32 << level) as f64;
+                let lo = DVec2::new(
+                    ((x >> level) << level) as f64,
+                    ((y >> level) << level) as f64,
+                );
+                let hi = lo + DVec2::splat(size);
+                Box::new(move |min: DVec2, max: DVec2| min.cmpge(lo).all() && max.cmplt(hi).all())
+            }
+        };
+        let fits = |from: usize, to: usize| {
+            self.camera
+                .segment_image_bounds(at(from), at(to))
+                .is_some_and(|(min, max)| inside(min, max))
+        };
+        let (mut run, mut step) = (0usize, 1usize);
+        // Double while the run fits, then halve back down to single samples.
+        while k + run + step <= n && fits(k + run, k + run + step) {
+            run += step;
+            step *= 2;
+        }
+        while step > 1 {
+            step /= 2;
+            if k + run + step <= n && fits(k + run, k + run + step) {
+                run += step;
+            }
+        }
+        run
     }
 
     /// Places the hit on the stored surface where the ray crosses it within one sub-segment,
