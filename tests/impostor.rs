@@ -218,3 +218,27 @@ fn hierarchical_and_linear_walks_give_identical_hits() {
         assert!(hits > 10_000, "{kind:?}: {hits}");
     }
 }
+
+#[test]
+fn a_billboard_shows_the_impostor_from_its_own_camera() {
+    use trompe::impostor::Billboard;
+    use trompe::trace::RayQuery;
+    let s = setup();
+    let cam = s.camera(CheckCamera::Pinhole, 64).unwrap();
+    let ImpostorCamera::Pinhole(pin) = &cam else {
+        unreachable!()
+    };
+    let pin = pin.clone();
+    let imp = build(cam, &s.target, 0, &albedo_of(&s.target)).unwrap();
+    let board = Billboard::from_impostor(&imp, 5).unwrap();
+    let mut agree = 0;
+    for y in 0..64u32 {
+        for x in 0..64u32 {
+            let ray = pin.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            let covered = imp.gd.get(x, y) > 0.0;
+            agree += (board.closest_hit(&ray, f32::INFINITY).is_some() == covered) as u32;
+        }
+    }
+    // Bilinear alpha can flip texels on the silhouette only.
+    assert!(agree as f64 >= 0.97 * 4096.0, "{agree}");
+}

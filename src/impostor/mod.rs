@@ -11,12 +11,14 @@
 //! texel holds the world position of the surface point it shows, so a hit's position is exact up
 //! to the texel's footprint; the impostor never consults the mesh after it is built.
 
+mod billboard;
 mod build;
 pub mod fidelity;
 pub mod file;
 mod pyramid;
 mod walk;
 
+pub use billboard::Billboard;
 pub use build::{SurfaceSample, Tessellation, albedo_of, build, tessellate};
 pub use pyramid::MaxPyramid;
 pub use walk::{WalkMode, WalkStats};
