@@ -108,7 +108,7 @@ impl RayQuery for Billboard {
             bary: Vec2::ZERO,
             object: self.object,
             triangle: 0,
-            radiance: Some(texel.truncate() / texel.w.max(1e-6).min(1.0)),
+            radiance: Some(texel.truncate() / texel.w.clamp(1e-6, 1.0)),
         })
     }
 }
