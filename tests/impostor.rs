@@ -242,3 +242,44 @@ fn a_billboard_shows_the_impostor_from_its_own_camera() {
     // Bilinear alpha can flip texels on the silhouette only.
     assert!(agree as f64 >= 0.97 * 4096.0, "{agree}");
 }
+
+#[test]
+fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
+    use trompe::impostor::WalkMode;
+    let s = setup();
+    let rays = s.rays();
+    let exact = Bvh::build(vec![s.target.clone()]);
+    let imp = build(
+        s.camera(CheckCamera::Pinhole, 256).unwrap(),
+        &s.target,
+        0,
+        &albedo_of(&s.target),
+    )
+    .unwrap();
+    let score = |mode: WalkMode| {
+        let mut good = 0usize;
+        let mut err = 0.0f64;
+        for r in &rays {
+            let e = trompe::trace::RayQuery::closest_hit(&exact, r, f32::INFINITY);
+            let i = imp.walk_mode(r, f32::INFINITY, mode).0;
+            match (e, i) {
+                (None, None) => good += 1,
+                (Some(e), Some(i)) => {
+                    let p = imp.camera.project(e.position.as_dvec3()).unwrap();
+                    let d = e.position.distance(i.position) as f64;
+                    err += d;
+                    good += (d <= 1.5 * imp.footprint(p.uv, p.gd)) as usize;
+                }
+                _ => {}
+            }
+        }
+        (good, err)
+    };
+    let (exact_good, exact_err) = score(WalkMode::Exact);
+    let (linear_good, linear_err) = score(WalkMode::Linear);
+    eprintln!(
+        "exact {exact_good} ({exact_err:.4}) linear {linear_good} ({linear_err:.4}) of {}",
+        rays.len()
+    );
+    assert!(exact_good >= linear_good, "{exact_good} < {linear_good}");
+}

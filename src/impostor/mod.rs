@@ -16,6 +16,7 @@ mod build;
 pub mod fidelity;
 pub mod file;
 mod pyramid;
+mod straight;
 mod walk;
 
 pub use billboard::Billboard;

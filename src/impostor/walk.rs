@@ -32,6 +32,9 @@ pub enum WalkMode {
     /// Skips runs of samples whose image path provably stays over empty texels (max-`gd`
     /// pyramid); returns exactly the hits of [`WalkMode::Linear`].
     Hierarchical,
+    /// Every texel the image path crosses, once, in order ([`super::straight`]); for
+    /// projective cameras (pinhole, orthographic). A SPOC impostor walks hierarchically instead.
+    Exact,
 }
 
 /// Work done by one ray walk.
@@ -44,21 +47,27 @@ pub struct WalkStats {
 }
 
 #[derive(Clone, Copy)]
-struct Sample {
-    p: ImagePoint,
+pub(super) struct Sample {
+    pub p: ImagePoint,
     /// The sample's texel, if inside the image.
-    texel: Option<(u32, u32)>,
+    pub texel: Option<(u32, u32)>,
     /// Stored `gd` at the sample's texel (0 when empty or outside).
-    stored: f32,
+    pub stored: f32,
     /// Signed distance from the sample to its texel's plane, positive on the camera's side
     /// (+∞ over empty texels): positive while the ray is in front of the stored surface.
-    delta: f64,
+    pub delta: f64,
 }
 
 impl Impostor {
-    /// The first hit of `ray` with `0 < t < t_max`, and the work it took (hierarchical walk).
+    /// The first hit of `ray` with `0 < t < t_max`, and the work it took: the exact straight
+    /// walk for projective cameras, the hierarchical walk for the SPOC.
     pub fn walk(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, WalkStats) {
-        self.walk_mode(ray, t_max, WalkMode::Hierarchical)
+        let mode = if self.camera.is_curved() {
+            WalkMode::Hierarchical
+        } else {
+            WalkMode::Exact
+        };
+        self.walk_mode(ray, t_max, mode)
     }
 
     /// [`Impostor::walk`] with a chosen mode.
@@ -108,6 +117,10 @@ impl Impostor {
         let (Some(pc), Some(pe)) = (camera.project(c), camera.project(e)) else {
             return (None, stats);
         };
+        if mode == WalkMode::Exact && !self.camera.is_curved() {
+            let hit = self.walk_straight(camera, ray, c, e, &mut stats);
+            return (hit, stats);
+        }
         let chord = (pe.uv - pc.uv).length();
         stats.projection_length = chord.ceil() as u64;
         let n = ((chord * density).ceil() as usize).clamp(1, MAX_STEPS);
@@ -231,7 +244,7 @@ impl Impostor {
 
     /// Places the hit on the stored surface where the ray crosses it within one sub-segment,
     /// and applies the discontinuity rules.
-    fn accept(&self, ray: &Ray, a: &Sample, b: &Sample) -> Option<Hit> {
+    pub(super) fn accept(&self, ray: &Ray, a: &Sample, b: &Sample) -> Option<Hit> {
         if a.stored <= 0.0 || b.stored <= 0.0 {
             return None;
         }
