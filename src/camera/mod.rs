@@ -10,10 +10,12 @@
 //! in the world point and non-negative exactly where `project` is valid. Projection arithmetic is
 //! `f64` (algorithms.md: "use f64 for all geometry").
 
+mod graph;
 mod orthographic;
 mod pinhole;
 mod spoc;
 
+pub use graph::{Frustum, GraphCamera, Plane, face_map};
 pub use orthographic::Orthographic;
 pub use pinhole::Pinhole;
 pub use spoc::{SPOC_STRENGTH_RANGE, Spoc};

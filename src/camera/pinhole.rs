@@ -98,6 +98,11 @@ impl Pinhole {
         (self.m.x_axis, self.m.y_axis, self.m.z_axis)
     }
 
+    /// `M⁻¹` (rows: the world covectors of `u·t`, `v·t` and `t`).
+    pub fn mcmillan_inverse(&self) -> DMat3 {
+        self.m_inv
+    }
+
     /// Near-plane distance.
     pub fn near(&self) -> f64 {
         self.near

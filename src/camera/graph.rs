@@ -1,0 +1,491 @@
+//! The graph camera (Popescu, Rosen and Adamo-Villani 2009; paper 1 §5; algorithms.md §4 — the
+//! operations and matrices there are a proposal honouring everything the papers state,
+//! implemented as written): a tree of planar-pinhole frusta obtained from one pinhole camera by
+//! **bending** and **splitting**. Rays are piecewise linear: a ray changes direction where it
+//! crosses the face a child shares with its parent, and stays continuous.
+//!
+//! Projection: find the frustum holding the point ([`GraphCamera::locate`]), then apply one
+//! 4 × 4 matrix `M_j = P_root · A_{j1} ⋯ A_j` that concatenates, along the path to the root, the
+//! affine maps `A_k(X) = X + ((n_k·X + e_k)/σ_k)(C_p − C_k)` sending each child apex to its
+//! parent's apex while fixing the shared face plane (§4.4). `gd = 1/w`.
+//!
+//! Invariants (tested): `A_k` fixes its face plane and sends `C_k` to `C_p`; a point on a shared
+//! face projects to the same `(u, v, gd)` through parent and child; `gd` decreases along a
+//! generalized ray; `unproject(project(X)) = X`; a point lies in at most one frustum (faces
+//! shared by a parent and a child belong to the parent).
+
+use super::{CameraError, ImagePoint, Pinhole, Projection};
+use glam::{DMat4, DVec2, DVec3, DVec4};
+
+/// An oriented plane `n·X + e = 0`; the inside is where `n·X + e ≥ 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// Normal (pointing inside).
+    pub n: DVec3,
+    /// Offset.
+    pub e: f64,
+}
+
+impl Plane {
+    /// The plane through `p` with normal `n` (inside along `n`).
+    pub fn through(p: DVec3, n: DVec3) -> Plane {
+        Plane { n, e: -n.dot(p) }
+    }
+    /// Signed distance (scaled by `|n|`).
+    pub fn eval(&self, x: DVec3) -> f64 {
+        self.n.dot(x) + self.e
+    }
+    /// The same plane, inside and outside swapped.
+    pub fn flipped(&self) -> Plane {
+        Plane {
+            n: -self.n,
+            e: -self.e,
+        }
+    }
+}
+
+/// One planar-pinhole frustum of a graph camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frustum {
+    /// Centre of projection `C_j`.
+    pub apex: DVec3,
+    /// The plane the frustum starts at (the near plane for the root, else the face shared with
+    /// the parent), inside toward the frustum.
+    pub entry: Plane,
+    /// The face shared with the parent (empty for the root), a convex polygon in `entry`.
+    pub entry_face: Vec<DVec3>,
+    /// Side planes through the apex, inside toward the frustum.
+    pub sides: Vec<Plane>,
+    /// Where the frustum ends (its children begin), inside toward the apex.
+    pub exit: Option<Plane>,
+    /// Parent frustum.
+    pub parent: Option<usize>,
+    /// Child frusta.
+    pub children: Vec<usize>,
+    /// World → homogeneous root image `(x, y, 1, w)`: `u = x/w`, `v = y/w`, `gd = 1/w`.
+    pub matrix: DMat4,
+    matrix_inv: DMat4,
+}
+
+impl Frustum {
+    /// Whether `x` lies in the frustum (boundaries included; `tol` absorbs rounding).
+    pub fn contains(&self, x: DVec3, tol: f64) -> bool {
+        self.entry.eval(x) >= -tol
+            && self.sides.iter().all(|s| s.eval(x) >= -tol)
+            && self.exit.is_none_or(|p| p.eval(x) >= -tol)
+    }
+}
+
+/// A graph camera: a tree of frusta rooted at a pinhole camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GraphCamera {
+    root: Pinhole,
+    frusta: Vec<Frustum>,
+}
+
+/// The affine collineation of §4.4: fixes the plane `p` (`n·X + e = 0`) and sends `from` to `to`.
+pub fn face_map(p: Plane, from: DVec3, to: DVec3) -> Result<DMat4, CameraError> {
+    let sigma = p.eval(from);
+    if sigma.abs() < 1e-12 {
+        return Err(CameraError::Degenerate(
+            "a frustum apex lies in its entry plane",
+        ));
+    }
+    let delta = to - from;
+    // A = | I + δ nᵀ/σ   (e/σ) δ |
+    //     | 0ᵀ            1      |
+    let col = |k: usize| {
+        let mut c = delta * (p.n[k] / sigma);
+        c[k] += 1.0;
+        c.extend(0.0)
+    };
+    Ok(DMat4::from_cols(
+        col(0),
+        col(1),
+        col(2),
+        (delta * (p.e / sigma)).extend(1.0),
+    ))
+}
+
+/// Clips the convex polygon `poly` to the inside of `plane`.
+fn clip(poly: &[DVec3], plane: &Plane) -> Vec<DVec3> {
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (da, db) = (plane.eval(a), plane.eval(b));
+        if da >= 0.0 {
+            out.push(a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(a + (b - a) * (da / (da - db)));
+        }
+    }
+    out
+}
+
+impl GraphCamera {
+    /// A graph camera with the single frustum of `root` (its near plane as the entry).
+    pub fn new(root: Pinhole) -> GraphCamera {
+        let (w, h) = root.resolution();
+        let c = root.position();
+        let corner = |u: f64, v: f64| root.unproject(DVec2::new(u, v), 1.0);
+        let quad = [
+            corner(0.0, 0.0),
+            corner(w as f64, 0.0),
+            corner(w as f64, h as f64),
+            corner(0.0, h as f64),
+        ];
+        let centre = root.unproject(DVec2::new(w as f64 / 2.0, h as f64 / 2.0), 1.0);
+        let sides = (0..4)
+            .map(|i| {
+                let n = (quad[i] - c).cross(quad[(i + 1) % 4] - c);
+                let p = Plane::through(c, n.normalize());
+                if p.eval(centre) < 0.0 { p.flipped() } else { p }
+            })
+            .collect();
+        let entry = Plane::through(c + root.forward() * root.near(), root.forward());
+        // P_root (§4.4), by rows: [m1, −m1·C], [m2, −m2·C], [0, 0, 0, 1], [m3, −m3·C], where
+        // m1, m2, m3 are the rows of M⁻¹; so x/w = u, y/w = v, w = t. (The constant third row
+        // keeps the matrix invertible, which unprojection uses.)
+        let m_inv = root.mcmillan_inverse();
+        let row = |k: usize| {
+            let m = m_inv.row(k);
+            DVec4::new(m.x, m.y, m.z, -m.dot(c))
+        };
+        let p_root = DMat4::from_cols(row(0), row(1), DVec4::W, row(2)).transpose();
+        GraphCamera {
+            frusta: vec![Frustum {
+                apex: c,
+                entry,
+                entry_face: Vec::new(),
+                sides,
+                exit: None,
+                parent: None,
+                children: Vec::new(),
+                matrix_inv: p_root.inverse(),
+                matrix: p_root,
+            }],
+            root,
+        }
+    }
+
+    /// The frusta (index 0 is the root).
+    pub fn frusta(&self) -> &[Frustum] {
+        &self.frusta
+    }
+
+    /// The cross-section of frustum `j`'s pyramid with plane `plane` (a convex polygon), within
+    /// `extent` of `centre` (a point of the plane).
+    fn cross_section(&self, j: usize, plane: Plane, centre: DVec3, extent: f64) -> Vec<DVec3> {
+        let n = plane.n.normalize();
+        let t = n.any_orthonormal_vector();
+        let b = n.cross(t);
+        let mut poly: Vec<DVec3> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| centre + (t * x + b * y) * extent)
+            .collect();
+        let f = &self.frusta[j];
+        for s in &f.sides {
+            poly = clip(&poly, s);
+        }
+        poly
+    }
+
+    /// Bends frustum `j` at plane `plane` (given by a point on it and a normal): `j` now ends at
+    /// its cross-section with the plane, and a child frustum with apex `apex` (on the same side
+    /// of the plane as `j`'s apex, §4.4) looks on through that face. `extent` bounds the size of
+    /// the face (half-width around `point`). Returns the child's index.
+    pub fn bend(
+        &mut self,
+        j: usize,
+        point: DVec3,
+        normal: DVec3,
+        apex: DVec3,
+        extent: f64,
+    ) -> Result<usize, CameraError> {
+        let face = self.cross_section(j, Plane::through(point, normal), point, extent);
+        self.add_child(j, point, normal, face, apex)
+    }
+
+    /// Splits frustum `j` at a plane into two children: the cross-section is cut by the plane
+    /// `cut` (through `j`'s apex) into a part on its inside, seen from `apex_in`, and a part on
+    /// its outside, seen from `apex_out`. Returns the children's indices.
+    #[allow(clippy::too_many_arguments)]
+    pub fn split(
+        &mut self,
+        j: usize,
+        point: DVec3,
+        normal: DVec3,
+        cut: Plane,
+        apex_in: DVec3,
+        apex_out: DVec3,
+        extent: f64,
+    ) -> Result<(usize, usize), CameraError> {
+        let face = self.cross_section(j, Plane::through(point, normal), point, extent);
+        let (a, b) = (clip(&face, &cut), clip(&face, &cut.flipped()));
+        let first = self.add_child(j, point, normal, a, apex_in)?;
+        let second = self.add_child(j, point, normal, b, apex_out)?;
+        Ok((first, second))
+    }
+
+    fn add_child(
+        &mut self,
+        j: usize,
+        point: DVec3,
+        normal: DVec3,
+        face: Vec<DVec3>,
+        apex: DVec3,
+    ) -> Result<usize, CameraError> {
+        if face.len() < 3 {
+            return Err(CameraError::Degenerate("the bend plane misses the frustum"));
+        }
+        let parent_apex = self.frusta[j].apex;
+        // The parent keeps the side of the plane its apex is on.
+        let mut exit = Plane::through(point, normal.normalize());
+        if exit.eval(parent_apex) < 0.0 {
+            exit = exit.flipped();
+        }
+        if exit.eval(apex) <= 0.0 {
+            return Err(CameraError::Degenerate(
+                "a child apex must lie on its parent apex's side of the bend plane",
+            ));
+        }
+        let entry = exit.flipped();
+        let centroid = face.iter().copied().sum::<DVec3>() / face.len() as f64;
+        let inside_point = centroid + entry.n * 1e-3;
+        let sides = (0..face.len())
+            .filter_map(|i| {
+                let n = (face[i] - apex).cross(face[(i + 1) % face.len()] - apex);
+                let n = n.try_normalize()?;
+                let p = Plane::through(apex, n);
+                Some(if p.eval(inside_point) < 0.0 {
+                    p.flipped()
+                } else {
+                    p
+                })
+            })
+            .collect();
+        // §4.4: A_k fixes the face plane (n pointing away from the child apex) and sends the
+        // child apex to the parent apex.
+        let a = face_map(exit, apex, parent_apex)?;
+        let matrix = self.frusta[j].matrix * a;
+        if matrix.determinant().abs() < 1e-300 {
+            return Err(CameraError::Degenerate("a graph-camera matrix is singular"));
+        }
+        self.frusta[j].exit = Some(exit);
+        let k = self.frusta.len();
+        self.frusta[j].children.push(k);
+        self.frusta.push(Frustum {
+            apex,
+            entry,
+            entry_face: face,
+            sides,
+            exit: None,
+            parent: Some(j),
+            children: Vec::new(),
+            matrix_inv: matrix.inverse(),
+            matrix,
+        });
+        Ok(k)
+    }
+
+    /// The frustum holding `x`: the first in creation order (parents before children), so a
+    /// point on a shared face belongs to the parent.
+    pub fn locate(&self, x: DVec3) -> Option<usize> {
+        self.frusta.iter().position(|f| f.contains(x, 1e-12))
+    }
+
+    /// Projects `x` with frustum `j`'s matrix (whether or not `x` lies in it).
+    pub fn project_in(&self, j: usize, x: DVec3) -> Option<ImagePoint> {
+        let h = self.frusta[j].matrix * x.extend(1.0);
+        if h.w <= 0.0 {
+            return None;
+        }
+        Some(ImagePoint {
+            uv: DVec2::new(h.x / h.w, h.y / h.w),
+            gd: 1.0 / h.w,
+            inv_w: 1.0 / h.w,
+        })
+    }
+}
+
+impl Projection for GraphCamera {
+    fn resolution(&self) -> (u32, u32) {
+        self.root.resolution()
+    }
+
+    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+        self.project_in(self.locate(p)?, p)
+    }
+
+    /// The point of the frustum whose inverse matrix lands inside it (rays are disjoint, so at
+    /// most one does, up to rounding on shared faces).
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+        let w = 1.0 / gd;
+        let h = DVec4::new(uv.x * w, uv.y * w, 1.0, w);
+        let candidate = |f: &Frustum| {
+            let x = f.matrix_inv * h;
+            x.truncate() / x.w
+        };
+        self.frusta
+            .iter()
+            .map(|f| (f, candidate(f)))
+            .find(|(f, x)| f.contains(*x, 1e-9 * (1.0 + x.length())))
+            .map_or_else(|| candidate(&self.frusta[0]), |(_, x)| x)
+    }
+
+    fn clip_distance(&self, p: DVec3) -> f64 {
+        self.root.clip_distance(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// A corridor camera: a root looking down −z, bent 90° toward −x at z = −3 (the apex
+    /// rotated about the vertical axis through the corner).
+    fn corridor() -> GraphCamera {
+        let root = Pinhole::look_at(
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, -1.0),
+            Vec3::Y,
+            60.0,
+            64,
+            64,
+        )
+        .unwrap()
+        .with_near(0.1);
+        let mut g = GraphCamera::new(root);
+        // Bend plane: the diagonal through the corner (0, ·, −3), normal along (1, 0, 1)/√2;
+        // new apex: the root apex rotated 90° about the vertical axis through (0, ·, −3).
+        let corner = DVec3::new(0.0, 1.0, -3.0);
+        let apex = corner + DVec3::new(3.0, 0.0, 0.0);
+        g.bend(0, corner, DVec3::new(1.0, 0.0, 1.0), apex, 50.0)
+            .unwrap();
+        g
+    }
+
+    fn random_point(i: u32) -> DVec3 {
+        let h = |k: u32| {
+            ((i.wrapping_mul(2_654_435_761) ^ k.wrapping_mul(40_503)) % 10_007) as f64 / 10_007.0
+        };
+        DVec3::new(-8.0 + 10.0 * h(1), -1.0 + 4.0 * h(2), -9.0 + 9.0 * h(3))
+    }
+
+    #[test]
+    fn face_map_fixes_its_plane_and_moves_the_apex() {
+        let p = Plane::through(
+            DVec3::new(0.0, 0.0, -3.0),
+            DVec3::new(0.3, 0.1, -1.0).normalize(),
+        );
+        let (from, to) = (DVec3::new(2.0, 0.5, 0.0), DVec3::new(0.0, 0.0, 0.5));
+        let a = face_map(p, from, to).unwrap();
+        assert!((a.transform_point3(from) - to).length() < 1e-12);
+        for i in 0..100 {
+            let q = random_point(i);
+            let on = q - p.n * p.eval(q) / p.n.length_squared();
+            assert!((a.transform_point3(on) - on).length() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn unproject_inverts_project_and_points_have_one_frustum() {
+        let g = corridor();
+        assert_eq!(g.frusta().len(), 2);
+        let mut projected = 0;
+        for i in 0..4000 {
+            let x = random_point(i);
+            let inside = g.frusta().iter().filter(|f| f.contains(x, 0.0)).count();
+            assert!(inside <= 1, "{x} in {inside} frusta");
+            if let Some(q) = g.project(x) {
+                projected += 1;
+                let back = g.unproject(q.uv, q.gd);
+                assert!(
+                    (back - x).length() < 1e-7 * (1.0 + x.length()),
+                    "{x} → {back}"
+                );
+            }
+        }
+        assert!(projected > 200, "{projected}");
+    }
+
+    #[test]
+    fn shared_face_projects_identically_from_both_frusta() {
+        let g = corridor();
+        let face = &g.frusta()[1].entry_face;
+        for i in 0..face.len() {
+            for s in [0.0, 0.3, 0.7] {
+                let x = face[i].lerp(face[(i + 1) % face.len()], s);
+                let centroid = face.iter().copied().sum::<DVec3>() / face.len() as f64;
+                let x = x.lerp(centroid, 0.2);
+                let (a, b) = (g.project_in(0, x).unwrap(), g.project_in(1, x).unwrap());
+                assert!(
+                    (a.uv - b.uv).length() < 1e-9 && (a.gd - b.gd).abs() < 1e-12,
+                    "{x}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn generalized_rays_are_continuous_with_decreasing_gd() {
+        // Follow the ray of one pixel: from the root apex to the face, then from the child
+        // apex through the crossing point. Every sample projects to the same pixel with
+        // decreasing gd.
+        let g = corridor();
+        let root = &g.frusta()[0];
+        let child = &g.frusta()[1];
+        let exit = root.exit.unwrap();
+        let uv = DVec2::new(30.5, 33.5);
+        let dir = g.root.ray(uv).dir.as_dvec3();
+        let t_face = -exit.eval(root.apex) / exit.n.dot(dir);
+        let q = root.apex + dir * t_face;
+        let mut last_gd = f64::INFINITY;
+        let mut samples = 0;
+        for k in 1..=40 {
+            let x = if k <= 20 {
+                root.apex + dir * (t_face * k as f64 / 20.0)
+            } else {
+                q + (q - child.apex).normalize() * (k - 20) as f64 * 0.2
+            };
+            let Some(p) = g.project(x) else { continue };
+            assert!((p.uv - uv).length() < 1e-7, "sample {k}: {} vs {uv}", p.uv);
+            assert!(p.gd < last_gd, "sample {k}: gd {} after {last_gd}", p.gd);
+            last_gd = p.gd;
+            samples += 1;
+        }
+        assert!(samples > 30, "{samples}");
+    }
+
+    #[test]
+    fn a_child_apex_across_the_bend_plane_is_refused() {
+        let root = Pinhole::look_at(Vec3::ZERO, -Vec3::Z, Vec3::Y, 60.0, 8, 8).unwrap();
+        let mut g = GraphCamera::new(root);
+        let err = g.bend(
+            0,
+            DVec3::new(0.0, 0.0, -3.0),
+            DVec3::Z,
+            DVec3::new(0.0, 0.0, -5.0),
+            10.0,
+        );
+        assert!(err.is_err());
+        // Splitting gives two children on either side of the cut.
+        let cut = Plane::through(DVec3::ZERO, DVec3::X);
+        let (a, b) = g
+            .split(
+                0,
+                DVec3::new(0.0, 0.0, -3.0),
+                DVec3::Z,
+                cut,
+                DVec3::new(0.5, 0.0, -0.5),
+                DVec3::new(-0.5, 0.0, -0.5),
+                10.0,
+            )
+            .unwrap();
+        assert_eq!((a, b), (1, 2));
+        assert!(g.frusta()[1].entry_face.iter().all(|p| p.x >= -1e-12));
+        assert!(g.frusta()[2].entry_face.iter().all(|p| p.x <= 1e-12));
+    }
+}
