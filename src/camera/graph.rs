@@ -309,6 +309,68 @@ impl GraphCamera {
     }
 }
 
+impl GraphCamera {
+    /// The parameter interval of the ray `o + t·d` inside frustum `j`, within `[t0, t1]`
+    /// (Cyrus–Beck against its planes).
+    pub fn clip_ray(&self, j: usize, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let f = &self.frusta[j];
+        let (mut lo, mut hi) = (t0, t1);
+        for p in std::iter::once(&f.entry)
+            .chain(&f.sides)
+            .chain(f.exit.as_ref())
+        {
+            let (num, den) = (p.eval(o), p.n.dot(d));
+            if den == 0.0 {
+                if num < 0.0 {
+                    return None;
+                }
+            } else {
+                let t = -num / den;
+                if den > 0.0 {
+                    lo = lo.max(t);
+                } else {
+                    hi = hi.min(t);
+                }
+            }
+        }
+        (lo < hi).then_some((lo, hi))
+    }
+
+    /// Frustum `j` alone as a projective camera (its matrix, no `locate`).
+    pub fn frustum(&self, j: usize) -> FrustumProjection<'_> {
+        FrustumProjection {
+            camera: self,
+            index: j,
+        }
+    }
+}
+
+/// One frustum of a graph camera as a [`Projection`]: its matrix applied to any point. Used to
+/// rasterize the triangles clipped to that frustum (§4.5) and to walk a ray's piece in it (§4.6).
+#[derive(Clone, Copy, Debug)]
+pub struct FrustumProjection<'a> {
+    camera: &'a GraphCamera,
+    index: usize,
+}
+
+impl Projection for FrustumProjection<'_> {
+    fn resolution(&self) -> (u32, u32) {
+        self.camera.root.resolution()
+    }
+    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+        self.camera.project_in(self.index, p)
+    }
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+        let w = 1.0 / gd;
+        let x = self.camera.frusta[self.index].matrix_inv * DVec4::new(uv.x * w, uv.y * w, 1.0, w);
+        x.truncate() / x.w
+    }
+    /// The homogeneous `w`, affine in `p` and positive in front of the frustum's apex.
+    fn clip_distance(&self, p: DVec3) -> f64 {
+        (self.camera.frusta[self.index].matrix * p.extend(1.0)).w - 1e-9
+    }
+}
+
 impl Projection for GraphCamera {
     fn resolution(&self) -> (u32, u32) {
         self.root.resolution()

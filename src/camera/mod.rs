@@ -15,7 +15,7 @@ mod orthographic;
 mod pinhole;
 mod spoc;
 
-pub use graph::{Frustum, GraphCamera, Plane, face_map};
+pub use graph::{Frustum, FrustumProjection, GraphCamera, Plane, face_map};
 pub use orthographic::Orthographic;
 pub use pinhole::Pinhole;
 pub use spoc::{SPOC_STRENGTH_RANGE, Spoc};

@@ -220,6 +220,9 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     object: u32,
     color: &F,
 ) -> Result<Impostor, FrameError> {
+    if let ImpostorCamera::Graph(g) = &camera {
+        return build_graph(g.clone(), mesh, object, color);
+    }
     let tessellation = if camera.is_curved() {
         tessellate(&camera, mesh)
     } else {
@@ -247,6 +250,132 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
         pyramid: super::MaxPyramid::new(&target.gd),
         gd: target.gd,
+        bounds: Aabb {
+            min: b.min - Vec3::splat(pad),
+            max: b.max + Vec3::splat(pad),
+        },
+        camera,
+    })
+}
+
+/// Clips every triangle of `mesh` to frustum `j` of `g` (Sutherland–Hodgman against its
+/// planes, in 3-D), fan-triangulating what is left (§4.5).
+fn clip_to_frustum(g: &crate::camera::GraphCamera, j: usize, mesh: &Mesh) -> Tessellation {
+    let f = &g.frusta()[j];
+    let planes: Vec<crate::camera::Plane> = std::iter::once(f.entry)
+        .chain(f.sides.iter().copied())
+        .chain(f.exit)
+        .collect();
+    let mut positions = Vec::new();
+    let mut source = Vec::new();
+    for t in 0..mesh.triangles.len() {
+        let p = mesh.corners(t);
+        let mut poly: Vec<(glam::DVec3, Vec3)> = vec![
+            (p[0].as_dvec3(), Vec3::X),
+            (p[1].as_dvec3(), Vec3::Y),
+            (p[2].as_dvec3(), Vec3::Z),
+        ];
+        for plane in &planes {
+            let mut out = Vec::with_capacity(poly.len() + 1);
+            for i in 0..poly.len() {
+                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                let (da, db) = (plane.eval(a.0), plane.eval(b.0));
+                if da >= 0.0 {
+                    out.push(a);
+                }
+                if (da >= 0.0) != (db >= 0.0) {
+                    // From the inside corner toward the outside one (same cut from both sides).
+                    let ((pi, bi), (po, bo), di, d_o) = if da >= 0.0 {
+                        (a, b, da, db)
+                    } else {
+                        (b, a, db, da)
+                    };
+                    let s = di / (di - d_o);
+                    out.push((pi + (po - pi) * s, bi + (bo - bi) * s as f32));
+                }
+            }
+            poly = out;
+            if poly.len() < 3 {
+                break;
+            }
+        }
+        if poly.len() < 3 {
+            continue;
+        }
+        for k in 1..poly.len() - 1 {
+            for c in [poly[0], poly[k], poly[k + 1]] {
+                positions.push(c.0.as_vec3());
+            }
+            source.push((t as u32, [poly[0].1, poly[k].1, poly[k + 1].1]));
+        }
+    }
+    let n = source.len();
+    Tessellation {
+        mesh: Mesh {
+            normals: vec![Vec3::Z; positions.len()],
+            triangles: (0..n as u32)
+                .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+                .collect(),
+            positions,
+            uvs: None,
+            face_material: vec![0; n],
+            materials: vec![Material::default()],
+        },
+        source,
+    }
+}
+
+/// Graph-camera construction (§4.5): every frustum rasterizes the triangles clipped to it with
+/// its own matrix into one image; the largest `gd` wins (frusta in order, so ties keep the
+/// earlier one).
+fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    g: crate::camera::GraphCamera,
+    mesh: &Mesh,
+    object: u32,
+    color: &F,
+) -> Result<Impostor, FrameError> {
+    let camera = ImpostorCamera::Graph(g);
+    let ImpostorCamera::Graph(g) = &camera else {
+        unreachable!("just built")
+    };
+    let (w, h) = g.resolution();
+    let mut gd = crate::frame::Image::new(w, h, 0.0f32)?;
+    let mut texels: crate::frame::Image<Option<Texel>> = crate::frame::Image::new(w, h, None)?;
+    for j in 0..g.frusta().len() {
+        let part = clip_to_frustum(g, j, mesh);
+        if part.source.is_empty() {
+            continue;
+        }
+        let shader = TexelShader {
+            camera: &camera,
+            mesh,
+            source: Some(&part.source),
+            color,
+        };
+        let (target, _) = rasterize(&g.frustum(j), &[&part.mesh], &shader, None)?;
+        for (i, (&g_new, t)) in target
+            .gd
+            .pixels()
+            .iter()
+            .zip(target.attributes.pixels())
+            .enumerate()
+        {
+            if g_new > gd.pixels()[i] {
+                gd.pixels_mut()[i] = g_new;
+                texels.pixels_mut()[i] = *t;
+            }
+        }
+    }
+    let b = mesh.bounds();
+    let pad = b.extent().max_element() * 1e-4;
+    Ok(Impostor {
+        color: texels.map(|t| t.map_or(Vec4::ZERO, |t| t.color.extend(1.0))),
+        normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.normal)),
+        face_normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.face_normal)),
+        position: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.position)),
+        object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
+        pyramid: super::MaxPyramid::new(&gd),
+        gd,
         bounds: Aabb {
             min: b.min - Vec3::splat(pad),
             max: b.max + Vec3::splat(pad),

@@ -122,8 +122,9 @@ fn pinhole_file(p: &Pinhole) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3], f64) {
 }
 
 impl CameraFile {
-    fn from_camera(camera: &ImpostorCamera) -> CameraFile {
-        match camera {
+    fn from_camera(camera: &ImpostorCamera) -> Option<CameraFile> {
+        Some(match camera {
+            ImpostorCamera::Graph(_) => return None,
             ImpostorCamera::Pinhole(p) => {
                 let (position, a, b, c, near) = pinhole_file(p);
                 CameraFile::Pinhole {
@@ -159,7 +160,7 @@ impl CameraFile {
                     depth,
                 }
             }
-        }
+        })
     }
 
     fn to_camera(&self, w: u32, h: u32) -> Result<ImpostorCamera, String> {
@@ -286,7 +287,12 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
             min: impostor.bounds.min.to_array(),
             max: impostor.bounds.max.to_array(),
         },
-        camera: CameraFile::from_camera(&impostor.camera),
+        camera: CameraFile::from_camera(&impostor.camera).ok_or_else(|| {
+            ImpostorFileError::Invalid {
+                path: json_path.to_path_buf(),
+                reason: "graph-camera impostors cannot be saved yet".into(),
+            }
+        })?,
     };
     let text = serde_json::to_string_pretty(&sidecar).map_err(|e| ImpostorFileError::Invalid {
         path: json_path.to_path_buf(),

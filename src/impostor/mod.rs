@@ -24,7 +24,7 @@ pub use build::{SurfaceSample, Tessellation, albedo_of, build, tessellate};
 pub use pyramid::MaxPyramid;
 pub use walk::{WalkMode, WalkStats};
 
-use crate::camera::{ImagePoint, Orthographic, Pinhole, Projection, Spoc};
+use crate::camera::{GraphCamera, ImagePoint, Orthographic, Pinhole, Projection, Spoc};
 use crate::frame::Image;
 use crate::geom::Aabb;
 use glam::{DVec2, DVec3, Vec3};
@@ -38,6 +38,8 @@ pub enum ImpostorCamera {
     Orthographic(Orthographic),
     /// Single-pole occlusion camera.
     Spoc(Spoc),
+    /// Graph camera: a tree of pinhole frusta.
+    Graph(GraphCamera),
 }
 
 impl ImpostorCamera {
@@ -54,6 +56,10 @@ impl ImpostorCamera {
             ImpostorCamera::Pinhole(c) => c.position() - p,
             ImpostorCamera::Orthographic(c) => -c.parameters().3,
             ImpostorCamera::Spoc(c) => c.pinhole().position() - p,
+            ImpostorCamera::Graph(g) => {
+                let j = g.locate(p).unwrap_or(0);
+                g.frusta()[j].apex - p
+            }
         }
     }
 
@@ -68,6 +74,8 @@ impl ImpostorCamera {
                 Some((pa.uv.min(pb.uv), pa.uv.max(pb.uv)))
             }
             ImpostorCamera::Spoc(s) => s.segment_image_bounds(a, b),
+            // A segment may cross frusta: no simple bound (the walk then never skips).
+            ImpostorCamera::Graph(_) => None,
         }
     }
 
@@ -77,6 +85,7 @@ impl ImpostorCamera {
             ImpostorCamera::Pinhole(_) => "pinhole",
             ImpostorCamera::Orthographic(_) => "orthographic",
             ImpostorCamera::Spoc(_) => "spoc",
+            ImpostorCamera::Graph(_) => "graph",
         }
     }
 }
@@ -87,6 +96,7 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Pinhole(c) => c.resolution(),
             ImpostorCamera::Orthographic(c) => c.resolution(),
             ImpostorCamera::Spoc(c) => c.resolution(),
+            ImpostorCamera::Graph(c) => c.resolution(),
         }
     }
     fn project(&self, p: DVec3) -> Option<ImagePoint> {
@@ -94,6 +104,7 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Pinhole(c) => c.project(p),
             ImpostorCamera::Orthographic(c) => c.project(p),
             ImpostorCamera::Spoc(c) => c.project(p),
+            ImpostorCamera::Graph(c) => c.project(p),
         }
     }
     fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
@@ -101,6 +112,7 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Pinhole(c) => c.unproject(uv, gd),
             ImpostorCamera::Orthographic(c) => c.unproject(uv, gd),
             ImpostorCamera::Spoc(c) => c.unproject(uv, gd),
+            ImpostorCamera::Graph(c) => c.unproject(uv, gd),
         }
     }
     fn clip_distance(&self, p: DVec3) -> f64 {
@@ -108,6 +120,7 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Pinhole(c) => c.clip_distance(p),
             ImpostorCamera::Orthographic(c) => c.clip_distance(p),
             ImpostorCamera::Spoc(c) => c.clip_distance(p),
+            ImpostorCamera::Graph(c) => c.clip_distance(p),
         }
     }
 }

@@ -65,6 +65,7 @@ impl Impostor {
         let mode = if self.camera.is_curved() {
             WalkMode::Hierarchical
         } else {
+            // Pinhole, orthographic, and the graph camera (algorithm 2).
             WalkMode::Exact
         };
         self.walk_mode(ray, t_max, mode)
@@ -77,7 +78,45 @@ impl Impostor {
             ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max, mode),
             // A curved image path is longer than its chord: sample twice as densely (§3.4).
             ImpostorCamera::Spoc(c) => self.walk_with(c, 2.0, ray, t_max, mode),
+            ImpostorCamera::Graph(g) => match mode {
+                WalkMode::Exact => self.walk_graph_pieces(g, ray, t_max),
+                // Algorithm 1 of §4.6: uniform samples, `locate` + the frustum's matrix each;
+                // the image path bends, so sample densely.
+                _ => self.walk_with(g, 4.0, ray, t_max, WalkMode::Linear),
+            },
         }
+    }
+
+    /// Algorithm 2 of §4.6: clip the ray to every frustum, order the pieces along the ray, and
+    /// walk each piece exactly with its frustum's matrix (a straight image segment).
+    fn walk_graph_pieces(
+        &self,
+        g: &crate::camera::GraphCamera,
+        ray: &Ray,
+        t_max: f32,
+    ) -> (Option<Hit>, WalkStats) {
+        let mut stats = WalkStats::default();
+        let Some((t0, t1)) = self.bounds.intersect(ray, t_max) else {
+            return (None, stats);
+        };
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        let mut pieces: Vec<(f64, f64, usize)> = (0..g.frusta().len())
+            .filter_map(|j| {
+                g.clip_ray(j, o, d, t0 as f64, t1 as f64)
+                    .map(|(a, b)| (a, b, j))
+            })
+            .collect();
+        pieces.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+        for (a, b, j) in pieces {
+            let mut piece = WalkStats::default();
+            let hit = self.walk_straight(&g.frustum(j), ray, o + d * a, o + d * b, &mut piece);
+            stats.texel_visits += piece.texel_visits;
+            stats.projection_length += piece.projection_length;
+            if hit.is_some() {
+                return (hit, stats);
+            }
+        }
+        (None, stats)
     }
 
     fn sample<P: Projection>(&self, camera: &P, s: DVec3, stats: &mut WalkStats) -> Option<Sample> {

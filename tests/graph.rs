@@ -1,0 +1,156 @@
+//! Graph-camera impostors (paper 1 §5; algorithms.md §4): an L-shaped corridor seen around its
+//! corner.
+
+use glam::{DVec3, Mat4, Vec3};
+use std::sync::Arc;
+use trompe::camera::GraphCamera;
+use trompe::geom::{Mesh, Ray, SplitMix64, cube};
+use trompe::impostor::{ImpostorCamera, WalkMode, albedo_of, build};
+use trompe::trace::{Bvh, RayQuery};
+use trompe::{Pinhole, Projection};
+
+fn boxed(min: Vec3, max: Vec3) -> Mesh {
+    let c = cube();
+    c.transformed(&(Mat4::from_translation((min + max) * 0.5) * Mat4::from_scale(max - min)))
+}
+
+/// Walls of a corridor along −z (x ∈ [−1, 1], z ∈ [0, −4]) that turns toward −x
+/// (z ∈ [−4, −2]), and a cube at its far end.
+fn corridor() -> (Mesh, Mesh) {
+    let mut walls = boxed(Vec3::new(-1.2, 0.0, -2.0), Vec3::new(-1.0, 2.0, 0.0));
+    for (min, max) in [
+        (Vec3::new(1.0, 0.0, -4.2), Vec3::new(1.2, 2.0, 0.0)),
+        (Vec3::new(-7.0, 0.0, -4.2), Vec3::new(1.2, 2.0, -4.0)),
+        (Vec3::new(-7.0, 0.0, -2.0), Vec3::new(-1.0, 2.0, -1.8)),
+        (Vec3::new(-7.0, -0.1, -4.2), Vec3::new(1.2, 0.0, 0.0)),
+    ] {
+        walls.append(&boxed(min, max));
+    }
+    let target = boxed(Vec3::new(-5.5, 0.0, -3.5), Vec3::new(-4.5, 1.0, -2.5));
+    (walls, target)
+}
+
+fn camera() -> (GraphCamera, Pinhole) {
+    let root = Pinhole::look_at(
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(0.0, 1.0, -1.0),
+        Vec3::Y,
+        70.0,
+        256,
+        256,
+    )
+    .unwrap()
+    .with_near(0.05);
+    let mut g = GraphCamera::new(root.clone());
+    // Bend at the corner: the diagonal plane through (0, ·, −3), the apex turned 90° about it.
+    let corner = DVec3::new(0.0, 1.0, -3.0);
+    g.bend(
+        0,
+        corner,
+        DVec3::new(1.0, 0.0, 1.0),
+        corner + DVec3::new(4.0, 0.0, 0.0),
+        100.0,
+    )
+    .unwrap();
+    (g, root)
+}
+
+fn scene() -> Mesh {
+    let (mut m, t) = corridor();
+    m.append(&t);
+    m
+}
+
+#[test]
+fn the_graph_impostor_sees_around_the_corner_and_is_self_consistent() {
+    let (g, root) = camera();
+    let mesh = scene();
+    let (_, target) = corridor();
+    let tb = target.bounds();
+    let graph = build(
+        ImpostorCamera::Graph(g.clone()),
+        &mesh,
+        0,
+        &albedo_of(&mesh),
+    )
+    .unwrap();
+    let pinhole = build(ImpostorCamera::Pinhole(root), &mesh, 0, &albedo_of(&mesh)).unwrap();
+    let sees_target = |imp: &trompe::impostor::Impostor| {
+        imp.position
+            .pixels()
+            .iter()
+            .zip(imp.gd.pixels())
+            .filter(|(p, g)| {
+                **g > 0.0 && p.cmpge(tb.min - 1e-4).all() && p.cmple(tb.max + 1e-4).all()
+            })
+            .count()
+    };
+    assert_eq!(sees_target(&pinhole), 0, "the cube is around the corner");
+    assert!(sees_target(&graph) > 200, "{}", sees_target(&graph));
+    // Every stored point projects back into its own texel with its own gd.
+    let mut checked = 0;
+    for y in 0..256u32 {
+        for x in 0..256u32 {
+            let gd = graph.gd.get(x, y);
+            if gd <= 0.0 {
+                continue;
+            }
+            let p = graph.position.get(x, y).as_dvec3();
+            let q = g
+                .project(p)
+                .unwrap_or_else(|| panic!("texel ({x}, {y}) stores an unprojectable point"));
+            let centre = glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            assert!(
+                (q.uv - centre).abs().max_element() <= 0.51,
+                "({x}, {y}): {}",
+                q.uv
+            );
+            assert!(
+                (q.gd - gd as f64).abs() <= 1e-3 * gd as f64,
+                "({x}, {y}): {} vs {gd}",
+                q.gd
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 30_000, "{checked}");
+}
+
+#[test]
+fn graph_walks_agree_with_the_bvh_and_with_each_other() {
+    let (g, _) = camera();
+    let mesh = scene();
+    let (_, target) = corridor();
+    let imp = build(ImpostorCamera::Graph(g), &mesh, 0, &albedo_of(&mesh)).unwrap();
+    let exact = Bvh::build(vec![Arc::new(mesh)]);
+    // Rays from near the bent frustum's apex region toward the cube around the corner.
+    let tb = target.bounds();
+    let mut rng = SplitMix64::new(5);
+    let (mut agree2, mut agree12, mut hits, n) = (0, 0, 0, 4000);
+    for _ in 0..n {
+        let o = Vec3::new(
+            -0.5 + 0.5 * rng.next_f32(),
+            0.8 + 0.4 * rng.next_f32(),
+            -3.4 + 0.8 * rng.next_f32(),
+        );
+        let aim = tb.min + tb.extent() * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let ray = Ray::new(o, (aim - o).normalize());
+        let e = exact.closest_hit(&ray, f32::INFINITY);
+        let a2 = imp.walk_mode(&ray, f32::INFINITY, WalkMode::Exact).0;
+        let a1 = imp.walk_mode(&ray, f32::INFINITY, WalkMode::Linear).0;
+        hits += e.is_some() as usize;
+        let close = |a: Option<trompe::trace::Hit>, b: Option<trompe::trace::Hit>| match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => a.position.distance(b.position) < 0.05,
+            _ => false,
+        };
+        agree2 += close(e, a2) as usize;
+        agree12 += close(a1, a2) as usize;
+    }
+    eprintln!(
+        "rays {n}, exact hits {hits}, algorithm 2 agrees with the BVH on {agree2}, with algorithm 1 on {agree12}"
+    );
+    assert!(hits > n * 9 / 10);
+    assert!(agree2 as f64 >= 0.95 * n as f64, "{agree2}");
+    assert!(agree12 as f64 >= 0.95 * n as f64, "{agree12}");
+}
