@@ -9,6 +9,7 @@
 //! file; unknown keys are errors.
 
 mod file;
+pub mod maze;
 
 pub use file::SceneFile;
 

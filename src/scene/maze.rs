@@ -1,0 +1,318 @@
+//! Grid mazes (paper 1 §5, Fig. 4 and 9): a floor-plan file, its geometry, and the graph camera
+//! that follows its corridors from the entrance.
+//!
+//! File format (`.maze`, UTF-8 text): one character per cell, one line per row, rows from north
+//! (−z) to south (+z), columns from west (−x) to east (+x); cell `(col, row)` is the unit square
+//! `[col, col+1] × [row, row+1]` in `x × z`. `#` is a wall (a unit cube, 1 m high), `.` is floor,
+//! `S` is the entrance: a floor cell on the border of the maze, where the camera starts, looking
+//! into the maze. Lines starting with `;` are comments; trailing spaces count as floor.
+//!
+//! Invariants: a parsed maze is rectangular (short lines are padded with floor), has exactly one
+//! entrance with exactly one floor neighbour, and is at most 256 × 256 cells.
+
+use crate::camera::{CameraError, GraphCamera, Pinhole};
+use crate::geom::{Mesh, cube, plane};
+use glam::{DVec3, Mat4, Vec3};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Largest maze side, in cells.
+pub const MAX_MAZE_SIDE: usize = 256;
+/// Eye height of the maze camera, metres.
+pub const EYE_HEIGHT: f64 = 0.5;
+/// Most bends the corridor-following camera makes.
+pub const MAX_BENDS: usize = 16;
+
+/// Errors from reading a maze.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum MazeError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The floor plan is not valid.
+    #[error("{path}: {element}: {reason}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// Where (`line 3`, `entrance` …).
+        element: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The camera could not be built.
+    #[error("{path}: camera: {source}")]
+    Camera {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: CameraError,
+    },
+}
+
+/// A grid maze.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Maze {
+    /// `walls[row][col]`.
+    pub walls: Vec<Vec<bool>>,
+    /// `(col, row)` of the entrance.
+    pub entrance: (usize, usize),
+}
+
+const DIRS: [(i64, i64); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
+
+impl Maze {
+    /// Parses a floor plan (`path` names it in errors).
+    pub fn parse(text: &str, path: &Path) -> Result<Maze, MazeError> {
+        let invalid = |element: String, reason: &str| MazeError::Invalid {
+            path: path.to_path_buf(),
+            element,
+            reason: reason.to_string(),
+        };
+        let mut walls = Vec::new();
+        let mut entrance = None;
+        for (i, line) in text.lines().enumerate() {
+            if line.starts_with(';') {
+                continue;
+            }
+            let row = walls.len();
+            let mut cells = Vec::new();
+            for (col, ch) in line.chars().enumerate() {
+                match ch {
+                    '#' => cells.push(true),
+                    '.' | ' ' => cells.push(false),
+                    'S' => {
+                        if entrance.replace((col, row)).is_some() {
+                            return Err(invalid(
+                                format!("line {}", i + 1),
+                                "a second entrance 'S'",
+                            ));
+                        }
+                        cells.push(false);
+                    }
+                    other => {
+                        return Err(invalid(
+                            format!("line {}, column {}", i + 1, col + 1),
+                            &format!("unknown cell {other:?} (expected '#', '.' or 'S')"),
+                        ));
+                    }
+                }
+                if cells.len() > MAX_MAZE_SIDE {
+                    return Err(invalid(format!("line {}", i + 1), "more than 256 cells"));
+                }
+            }
+            walls.push(cells);
+            if walls.len() > MAX_MAZE_SIDE {
+                return Err(invalid(format!("line {}", i + 1), "more than 256 rows"));
+            }
+        }
+        let width = walls.iter().map(Vec::len).max().unwrap_or(0);
+        if width == 0 {
+            return Err(invalid("file".into(), "no cells"));
+        }
+        for r in &mut walls {
+            r.resize(width, false);
+        }
+        let entrance = entrance.ok_or_else(|| invalid("entrance".into(), "no 'S' cell"))?;
+        let maze = Maze { walls, entrance };
+        let (c, r) = entrance;
+        if !(c == 0 || r == 0 || c + 1 == maze.width() || r + 1 == maze.height()) {
+            return Err(invalid("entrance".into(), "'S' must be on the border"));
+        }
+        if maze.open_directions(entrance).len() != 1 {
+            return Err(invalid(
+                "entrance".into(),
+                "'S' must have exactly one floor neighbour",
+            ));
+        }
+        Ok(maze)
+    }
+
+    /// Reads a `.maze` file.
+    pub fn load(path: &Path) -> Result<Maze, MazeError> {
+        let text = std::fs::read_to_string(path).map_err(|source| MazeError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Columns.
+    pub fn width(&self) -> usize {
+        self.walls[0].len()
+    }
+    /// Rows.
+    pub fn height(&self) -> usize {
+        self.walls.len()
+    }
+
+    fn floor(&self, col: i64, row: i64) -> bool {
+        col >= 0
+            && row >= 0
+            && (col as usize) < self.width()
+            && (row as usize) < self.height()
+            && !self.walls[row as usize][col as usize]
+    }
+
+    fn open_directions(&self, (c, r): (usize, usize)) -> Vec<usize> {
+        (0..4)
+            .filter(|&d| self.floor(c as i64 + DIRS[d].0, r as i64 + DIRS[d].1))
+            .collect()
+    }
+
+    /// The maze's geometry: a unit cube per wall cell and a floor.
+    pub fn mesh(&self) -> Mesh {
+        let (w, h) = (self.width() as f32, self.height() as f32);
+        let mut m = plane(1).transformed(
+            &(Mat4::from_translation(Vec3::new(w / 2.0, 0.0, h / 2.0))
+                * Mat4::from_scale(Vec3::new(w, 1.0, h))),
+        );
+        m.materials[0].base_color = Vec3::new(0.55, 0.5, 0.45);
+        let box_ = cube();
+        let mut walls = Mesh::default();
+        for (row, cells) in self.walls.iter().enumerate() {
+            for (col, &wall) in cells.iter().enumerate() {
+                if wall {
+                    let at =
+                        Mat4::from_translation(Vec3::new(col as f32 + 0.5, 0.5, row as f32 + 0.5));
+                    let mut b = box_.transformed(&at);
+                    b.materials[0].base_color = Vec3::new(0.3, 0.45, 0.7);
+                    if walls.positions.is_empty() {
+                        walls = b;
+                    } else {
+                        let first = walls.materials.len();
+                        walls.append(&b);
+                        // One material for every wall.
+                        walls.materials.truncate(first);
+                        let n = walls.face_material.len();
+                        for f in &mut walls.face_material[n - b.face_material.len()..] {
+                            *f = 0;
+                        }
+                    }
+                }
+            }
+        }
+        m.append(&walls);
+        m
+    }
+
+    /// The graph camera that follows the corridors from the entrance (a breadth-first walk of
+    /// the maze graph, as in the paper's Fig. 9): the root looks along the first corridor from
+    /// behind the entrance; at every turn the frustum bends at the corner's diagonal plane, its
+    /// apex turned about the corner; at a junction the walk follows the corridor straight on if
+    /// it continues, else the first turn. `size × size` pixels.
+    pub fn graph_camera(&self, size: u32, path: &Path) -> Result<GraphCamera, MazeError> {
+        let cam_err = |source| MazeError::Camera {
+            path: path.to_path_buf(),
+            source,
+        };
+        let (c0, r0) = self.entrance;
+        let d0 = self.open_directions(self.entrance)[0];
+        let centre = |c: i64, r: i64| DVec3::new(c as f64 + 0.5, EYE_HEIGHT, r as f64 + 0.5);
+        let dir = |d: usize| DVec3::new(DIRS[d].0 as f64, 0.0, DIRS[d].1 as f64);
+        // The root: 2.5 cells behind the entrance, its view a little wider than the corridor.
+        let back = 2.5;
+        let eye = centre(c0 as i64, r0 as i64) - dir(d0) * back;
+        let fov = 2.0 * (0.55f64 / (back - 0.5)).atan().to_degrees();
+        let root = Pinhole::look_at(
+            eye.as_vec3(),
+            (eye + dir(d0)).as_vec3(),
+            Vec3::Y,
+            fov,
+            size,
+            size,
+        )
+        .map_err(cam_err)?
+        .with_near(0.05);
+        let mut g = GraphCamera::new(root);
+        let (mut frustum, mut apex) = (0usize, eye);
+        let (mut c, mut r, mut d) = (c0 as i64, r0 as i64, d0);
+        let mut visited = vec![vec![false; self.width()]; self.height()];
+        // Faces reach 1.5 m around each corner: enough for a 1 m corridor, walls hide the rest.
+        let extent = 1.5;
+        for _ in 0..MAX_BENDS {
+            // Walk straight while possible.
+            loop {
+                visited[r as usize][c as usize] = true;
+                let (nc, nr) = (c + DIRS[d].0, r + DIRS[d].1);
+                if !self.floor(nc, nr) || visited[nr as usize][nc as usize] {
+                    break;
+                }
+                (c, r) = (nc, nr);
+            }
+            // A turn: left or right, into an unvisited corridor.
+            let turn = [(d + 1) % 4, (d + 3) % 4].into_iter().find(|&t| {
+                let (nc, nr) = (c + DIRS[t].0, r + DIRS[t].1);
+                self.floor(nc, nr) && !visited[nr as usize][nc as usize]
+            });
+            let Some(t) = turn else { break };
+            // Bend plane: the corner cell's diagonal, normal −(d + t) (the incoming side is in
+            // front); the new apex is the old one turned about the vertical axis through the
+            // corner, so the child looks down the new corridor.
+            let corner = centre(c, r);
+            let normal = -(dir(d) + dir(t));
+            let rel = apex - corner;
+            let along = rel.dot(dir(d));
+            let new_apex = corner + dir(t) * along + DVec3::new(0.0, rel.y, 0.0);
+            frustum = g
+                .bend(frustum, corner, normal, new_apex, extent)
+                .map_err(cam_err)?;
+            apex = new_apex;
+            d = t;
+        }
+        Ok(g)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Projection;
+
+    const MAZE: &str =
+        "; a test maze\n#######\nS.....#\n#####.#\n#.....#\n#.#####\n#.....#\n#######\n";
+
+    #[test]
+    fn parses_and_follows_the_corridors() {
+        let m = Maze::parse(MAZE, Path::new("t.maze")).unwrap();
+        assert_eq!((m.width(), m.height(), m.entrance), (7, 7, (0, 1)));
+        let g = m.graph_camera(64, Path::new("t.maze")).unwrap();
+        // Three turns: east→south, south→west, west→south, south→east.
+        assert!(g.frusta().len() >= 4, "{}", g.frusta().len());
+        // The end of the last corridor projects through the camera.
+        let far = DVec3::new(5.5, 0.5, 5.5);
+        assert!(
+            g.project(far).is_some(),
+            "the camera reaches the last corridor"
+        );
+        let mesh = m.mesh();
+        assert!(mesh.triangle_count() > 12 * 20);
+    }
+
+    #[test]
+    fn malformed_mazes_are_errors() {
+        for (text, expect) in [
+            ("#####\n#...#\n#####\n", "no 'S'"),
+            ("#S#\n#x#\n###\n", "unknown cell"),
+            ("###\n#S.\n###\n", "border"),
+            (".S.\n#.#\n###\n", "exactly one floor neighbour"),
+            ("S.S\n", "second entrance"),
+            ("", "no cells"),
+        ] {
+            let e = Maze::parse(text, Path::new("bad.maze"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("bad.maze") && e.contains(expect),
+                "{text:?}: {e}"
+            );
+        }
+        let long = format!("S{}\n", ".".repeat(300));
+        assert!(Maze::parse(&long, Path::new("long.maze")).is_err());
+    }
+}
