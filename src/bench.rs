@@ -18,7 +18,8 @@ use std::time::{Duration, Instant};
 /// A camera framing `mesh` from the front-right, `size × size` pixels.
 pub fn framing_camera(mesh: &Mesh, size: u32) -> Pinhole {
     let b = mesh.bounds();
-    let r = b.radius();
+    // A flat or point-like mesh (from `trompe bench --mesh`) still gets a camera.
+    let r = b.radius().max(1e-3);
     let eye = b.center() + Vec3::new(0.5, 0.35, 1.0).normalize() * r * 2.6;
     Pinhole::look_at(eye, b.center(), Vec3::Y, 45.0, size, size)
         .expect("a valid framing")
@@ -190,9 +191,10 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
     let b = mesh.bounds();
-    let eye = b.center() + Vec3::new(0.3, 0.2, 1.0).normalize() * b.radius() * 3.0;
+    let radius = b.radius().max(1e-3);
+    let eye = b.center() + Vec3::new(0.3, 0.2, 1.0).normalize() * radius * 3.0;
     let size = 512;
-    let spoc = crate::camera::Spoc::around(eye, b.center(), b.radius(), 0.8, size)
+    let spoc = crate::camera::Spoc::around(eye, b.center(), radius, 0.8, size)
         .expect("eye outside the sphere");
     let plain = spoc.pinhole().clone();
     let color = albedo_of(mesh);

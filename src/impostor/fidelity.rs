@@ -221,6 +221,14 @@ impl ReflectorSetup {
         distance: f32,
         view_size: u32,
     ) -> Result<Self, crate::camera::CameraError> {
+        for m in [target, reflector] {
+            let e = m.bounds().extent().max_element();
+            if !(e.is_finite() && e > 0.0) {
+                return Err(crate::camera::CameraError::Degenerate(
+                    "a mesh with no extent cannot be placed",
+                ));
+            }
+        }
         let target = Arc::new(fit(target, 1.0, Vec3::ZERO));
         let reflector = Arc::new(fit(reflector, 0.8, Vec3::new(distance, 0.0, 0.0)));
         let rc = reflector.bounds().center();
