@@ -245,6 +245,27 @@ impl Frame {
     }
 }
 
+/// One row of every buffer of a [`Frame`]: colour, depth, normal, object id.
+pub type FrameRow<'a> = (&'a mut [Rgba], &'a mut [f32], &'a mut [Vec3], &'a mut [u32]);
+
+impl Frame {
+    /// The rows of every buffer, in parallel, with their index: each row is owned by one worker.
+    pub fn par_rows_mut(
+        &mut self,
+    ) -> impl rayon::iter::IndexedParallelIterator<Item = (usize, FrameRow<'_>)> {
+        use rayon::prelude::*;
+        let w = self.color.width() as usize;
+        self.color
+            .pixels_mut()
+            .par_chunks_mut(w)
+            .zip(self.depth.pixels_mut().par_chunks_mut(w))
+            .zip(self.normal.pixels_mut().par_chunks_mut(w))
+            .zip(self.object_id.pixels_mut().par_chunks_mut(w))
+            .map(|(((c, d), n), i)| (c, d, n, i))
+            .enumerate()
+    }
+}
+
 /// sRGB transfer function: linear `[0, 1]` → encoded `[0, 1]`.
 pub fn linear_to_srgb(x: f32) -> f32 {
     let x = x.clamp(0.0, 1.0);

@@ -31,6 +31,24 @@ const MAX_SPLITS: u32 = 12;
 /// A sub-triangle's source triangle and the barycentrics of its corners in it.
 pub type SourceTriangle = (u32, [Vec3; 3]);
 
+impl Tessellation {
+    /// Sub-triangles from unshared corners (three positions each) and their sources.
+    fn new(positions: Vec<Vec3>, source: Vec<SourceTriangle>) -> Tessellation {
+        let n = source.len();
+        let mesh = Mesh {
+            normals: vec![Vec3::Z; positions.len()],
+            triangles: (0..n as u32)
+                .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+                .collect(),
+            positions,
+            uvs: None,
+            face_material: vec![0; n],
+            materials: vec![Material::default()],
+        };
+        Tessellation { mesh, source }
+    }
+}
+
 /// A tessellated mesh and, for each of its triangles, the source triangle and the barycentrics
 /// of its three corners in it.
 pub struct Tessellation {
@@ -136,18 +154,7 @@ pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation
         positions.extend(p);
         source.extend(s);
     }
-    let n = source.len();
-    let sub = Mesh {
-        normals: vec![Vec3::Z; positions.len()],
-        triangles: (0..n as u32)
-            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
-            .collect(),
-        positions,
-        uvs: None,
-        face_material: vec![0; n],
-        materials: vec![Material::default()],
-    };
-    Some(Tessellation { mesh: sub, source })
+    Some(Tessellation::new(positions, source))
 }
 
 #[derive(Clone, Copy)]
@@ -239,23 +246,39 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         color,
     };
     let (target, _) = rasterize(&camera, &[raster_mesh], &shader, None)?;
-    let texels = &target.attributes;
+    Ok(assemble(
+        camera,
+        target.gd,
+        &target.attributes,
+        mesh,
+        object,
+    ))
+}
+
+/// The impostor from its camera, `gd` and per-texel samples (`None` where empty).
+fn assemble(
+    camera: ImpostorCamera,
+    gd: crate::frame::Image<f32>,
+    texels: &crate::frame::Image<Option<Texel>>,
+    mesh: &Mesh,
+    object: u32,
+) -> Impostor {
     let b = mesh.bounds();
     let pad = b.extent().max_element() * 1e-4;
-    Ok(Impostor {
+    Impostor {
         color: texels.map(|t| t.map_or(Vec4::ZERO, |t| t.color.extend(1.0))),
         normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.normal)),
         face_normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.face_normal)),
         position: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.position)),
         object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
-        pyramid: super::MaxPyramid::new(&target.gd),
-        gd: target.gd,
+        pyramid: super::MaxPyramid::new(&gd),
+        gd,
         bounds: Aabb {
             min: b.min - Vec3::splat(pad),
             max: b.max + Vec3::splat(pad),
         },
         camera,
-    })
+    }
 }
 
 /// Clips every triangle of `mesh` to frustum `j` of `g` (Sutherland–Hodgman against its
@@ -309,20 +332,7 @@ fn clip_to_frustum(g: &crate::camera::GraphCamera, j: usize, mesh: &Mesh) -> Tes
             source.push((t as u32, [poly[0].1, poly[k].1, poly[k + 1].1]));
         }
     }
-    let n = source.len();
-    Tessellation {
-        mesh: Mesh {
-            normals: vec![Vec3::Z; positions.len()],
-            triangles: (0..n as u32)
-                .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
-                .collect(),
-            positions,
-            uvs: None,
-            face_material: vec![0; n],
-            materials: vec![Material::default()],
-        },
-        source,
-    }
+    Tessellation::new(positions, source)
 }
 
 /// Graph-camera construction (§4.5): every frustum rasterizes the triangles clipped to it with
@@ -366,22 +376,7 @@ fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
             }
         }
     }
-    let b = mesh.bounds();
-    let pad = b.extent().max_element() * 1e-4;
-    Ok(Impostor {
-        color: texels.map(|t| t.map_or(Vec4::ZERO, |t| t.color.extend(1.0))),
-        normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.normal)),
-        face_normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.face_normal)),
-        position: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.position)),
-        object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
-        pyramid: super::MaxPyramid::new(&gd),
-        gd,
-        bounds: Aabb {
-            min: b.min - Vec3::splat(pad),
-            max: b.max + Vec3::splat(pad),
-        },
-        camera,
-    })
+    Ok(assemble(camera, gd, &texels, mesh, object))
 }
 
 /// A colour function that returns the mesh's albedo (material colour × texture), unlit.

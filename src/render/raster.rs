@@ -24,31 +24,25 @@ pub fn render_raster(
     let mut frame = Frame::new(w, h)?;
     let fragments = target.attributes.pixels();
     timings.time("shade", || {
-        let rows = frame
-            .color
-            .pixels_mut()
-            .par_chunks_mut(w as usize)
-            .zip(frame.depth.pixels_mut().par_chunks_mut(w as usize))
-            .zip(frame.normal.pixels_mut().par_chunks_mut(w as usize))
-            .zip(frame.object_id.pixels_mut().par_chunks_mut(w as usize))
-            .enumerate();
-        rows.for_each(|(y, (((color, depth), normal), id))| {
-            for x in 0..w as usize {
-                let uv = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-                let ray = view.camera.ray(uv);
-                match fragments[y * w as usize + x] {
-                    None => color[x] = lighting.environment.radiance(ray.dir).extend(1.0),
-                    Some(f) => {
-                        let s = shade_fragment(view, lighting, &f, ray.dir);
-                        color[x] = s.color.extend(1.0);
-                        depth[x] = view.camera.distance(uv, f.gd as f64) as f32;
-                        normal[x] = s.normal;
-                        id[x] = f.item.object;
+        frame
+            .par_rows_mut()
+            .for_each(|(y, (color, depth, normal, id))| {
+                for x in 0..w as usize {
+                    let uv = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    let ray = view.camera.ray(uv);
+                    match fragments[y * w as usize + x] {
+                        None => color[x] = lighting.environment.radiance(ray.dir).extend(1.0),
+                        Some(f) => {
+                            let s = shade_fragment(view, lighting, &f, ray.dir);
+                            color[x] = s.color.extend(1.0);
+                            depth[x] = view.camera.distance(uv, f.gd as f64) as f32;
+                            normal[x] = s.normal;
+                            id[x] = f.item.object;
+                        }
                     }
                 }
-            }
-            progress.advance(1);
-        });
+                progress.advance(1);
+            });
     });
     Ok(frame)
 }

@@ -80,14 +80,8 @@ pub fn render_trace<Q: RayQuery>(
     let (w, h) = crate::camera::Projection::resolution(camera);
     let mut frame = Frame::new(w, h)?;
     frame
-        .color
-        .pixels_mut()
-        .par_chunks_mut(w as usize)
-        .zip(frame.depth.pixels_mut().par_chunks_mut(w as usize))
-        .zip(frame.normal.pixels_mut().par_chunks_mut(w as usize))
-        .zip(frame.object_id.pixels_mut().par_chunks_mut(w as usize))
-        .enumerate()
-        .for_each(|(y, (((color, depth), normal), id))| {
+        .par_rows_mut()
+        .for_each(|(y, (color, depth, normal, id))| {
             for x in 0..w as usize {
                 let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
                 match tracer.scene.closest_hit(&ray, f32::INFINITY) {
