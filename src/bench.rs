@@ -8,7 +8,6 @@
 use crate::camera::Pinhole;
 use crate::geom::{Mesh, Ray};
 use crate::raster::{ItemId, NoAttributes, rasterize};
-use crate::render::shading::reflect;
 use crate::trace::{BruteForce, Bvh, RayQuery};
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
@@ -71,17 +70,7 @@ pub fn reflected_rays(bvh: &Bvh, primary: &[Ray], epsilon: f32) -> Vec<Ray> {
         .par_iter()
         .filter_map(|r| {
             let h = bvh.closest_hit(r, f32::INFINITY)?;
-            let n = if h.normal.dot(r.dir) > 0.0 {
-                -h.normal
-            } else {
-                h.normal
-            };
-            let ng = if h.geometric_normal.dot(r.dir) > 0.0 {
-                -h.geometric_normal
-            } else {
-                h.geometric_normal
-            };
-            Some(Ray::new(h.position + ng * epsilon, reflect(r.dir, n)))
+            Some(crate::reflect::mirror_ray(r, &h, epsilon))
         })
         .collect()
 }

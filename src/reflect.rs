@@ -11,6 +11,13 @@ use crate::trace::{Bvh, Hit, RayQuery};
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 
+/// The mirror ray of `ray` at `hit`: reflected about the shading normal turned toward the
+/// viewer ([`crate::render::shading::facing`]), starting `epsilon` off the surface.
+pub fn mirror_ray(ray: &Ray, hit: &Hit, epsilon: f32) -> Ray {
+    let (n, ng, _) = crate::render::shading::facing(ray.dir, hit.normal, hit.geometric_normal);
+    Ray::new(hit.position + ng * epsilon, reflect(ray.dir, n).normalize())
+}
+
 /// What a mirror frame needs besides the secondary-ray answerer.
 pub struct MirrorScene<'a> {
     /// The viewer.
@@ -47,20 +54,7 @@ pub fn mirror_frame<Q: RayQuery>(
                     None => scene.environment.radiance(ray.dir),
                     Some(hit) if hit.object == scene.mirror => {
                         mrow[x] = true;
-                        let n = if hit.normal.dot(ray.dir) > 0.0 {
-                            -hit.normal
-                        } else {
-                            hit.normal
-                        };
-                        let ng = if hit.geometric_normal.dot(ray.dir) > 0.0 {
-                            -hit.geometric_normal
-                        } else {
-                            hit.geometric_normal
-                        };
-                        let r = Ray::new(
-                            hit.position + ng * scene.epsilon,
-                            reflect(ray.dir, n).normalize(),
-                        );
+                        let r = mirror_ray(&ray, &hit, scene.epsilon);
                         match secondary.closest_hit(&r, f32::INFINITY) {
                             Some(h2) => h2.radiance.unwrap_or_else(|| (scene.shade)(&h2)),
                             None => scene.environment.radiance(r.dir),

@@ -120,20 +120,7 @@ pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
         .filter_map(|i| {
             let r = view.ray(DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5));
             let hit = bvh.closest_hit(&r, f32::INFINITY)?;
-            let n = if hit.normal.dot(r.dir) > 0.0 {
-                -hit.normal
-            } else {
-                hit.normal
-            };
-            let ng = if hit.geometric_normal.dot(r.dir) > 0.0 {
-                -hit.geometric_normal
-            } else {
-                hit.geometric_normal
-            };
-            Some(Ray::new(
-                hit.position + ng * eps,
-                (r.dir - 2.0 * r.dir.dot(n) * n).normalize(),
-            ))
+            Some(crate::reflect::mirror_ray(&r, &hit, eps))
         })
         .collect()
 }
