@@ -422,6 +422,16 @@ fn draw_line(
     }
 }
 
+/// The closed outline, seen from above (`x`, `z`), of the convex hull of `points`.
+fn floor_hull(points: &[glam::DVec3]) -> Vec<glam::DVec3> {
+    let flat: Vec<glam::DVec2> = points.iter().map(|q| glam::DVec2::new(q.x, q.z)).collect();
+    let hull = crate::geom::convex_hull(&flat);
+    hull.iter()
+        .chain(hull.first())
+        .map(|&i| glam::DVec3::new(points[i].x, 0.0, points[i].z))
+        .collect()
+}
+
 /// Section "Graph camera" (issue 3; paper 1 Fig. 4 and 9): the maze's graph-camera impostor,
 /// and a top view with the frusta drawn.
 fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<(), ReportError> {
@@ -494,33 +504,37 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
     let red = crate::frame::Rgba::new(1.0, 0.05, 0.05, 1.0);
     let yellow = crate::frame::Rgba::new(1.0, 0.9, 0.1, 1.0);
     let at = |p: glam::DVec3| top.project(glam::DVec3::new(p.x, 4.0, p.z)).map(|q| q.uv);
+    // Each frustum's outline (red; the root yellow): its entry face and the faces where its
+    // children begin, seen from above; then a few generalized rays (white, Fig. 9).
     for (k, f) in g.frusta().iter().enumerate() {
-        // Each frustum: from its apex to the corners of the face where its children begin (or,
-        // for the last one, 4 m past its entry face).
-        let ends: Vec<glam::DVec3> = if f.children.is_empty() {
-            f.entry_face
-                .iter()
-                .map(|v| *v + (*v - f.apex).normalize() * 4.0)
-                .collect()
-        } else {
-            f.children
-                .iter()
-                .flat_map(|&c| g.frusta()[c].entry_face.clone())
-                .collect()
-        };
-        if let Some(a) = at(f.apex) {
-            for e in &ends {
-                if let Some(b) = at(*e) {
-                    draw_line(&mut view, a, b, if k == 0 { yellow } else { red });
-                }
+        let colour = if k == 0 { yellow } else { red };
+        let mut outline: Vec<glam::DVec3> = f.entry_face.clone();
+        if f.entry_face.is_empty() {
+            outline.push(f.apex);
+        }
+        for &c in &f.children {
+            outline.extend_from_slice(&g.frusta()[c].entry_face);
+        }
+        if f.children.is_empty() {
+            outline.extend(
+                f.entry_face
+                    .iter()
+                    .map(|v| *v + (*v - f.apex).normalize() * 3.0),
+            );
+        }
+        for hull_edge in floor_hull(&outline).windows(2) {
+            if let (Some(a), Some(b)) = (at(hull_edge[0]), at(hull_edge[1])) {
+                draw_line(&mut view, a, b, colour);
             }
         }
-        for i in 0..f.entry_face.len() {
-            if let (Some(a), Some(b)) = (
-                at(f.entry_face[i]),
-                at(f.entry_face[(i + 1) % f.entry_face.len()]),
-            ) {
-                draw_line(&mut view, a, b, red);
+    }
+    let white = crate::frame::Rgba::ONE;
+    let (gw, gh) = g.resolution();
+    for i in 0..9 {
+        let uv = glam::DVec2::new((i as f64 + 0.5) / 9.0 * gw as f64, gh as f64 * 0.55);
+        for seg in g.ray_path(uv, 3.0).windows(2) {
+            if let (Some(a), Some(b)) = (at(seg[0]), at(seg[1])) {
+                draw_line(&mut view, a, b, white);
             }
         }
     }

@@ -154,3 +154,47 @@ fn graph_walks_agree_with_the_bvh_and_with_each_other() {
     assert!(agree2 as f64 >= 0.95 * n as f64, "{agree2}");
     assert!(agree12 as f64 >= 0.95 * n as f64, "{agree12}");
 }
+
+#[test]
+fn graph_impostors_save_and_load_exactly() {
+    use trompe::impostor::file;
+    let (g, _) = camera();
+    let mesh = scene();
+    let imp = build(ImpostorCamera::Graph(g), &mesh, 2, &albedo_of(&mesh)).unwrap();
+    let dir = std::env::temp_dir().join(format!("trompe-graph-file-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("corridor.json");
+    file::save(&imp, &path).unwrap();
+    let back = file::load(&path).unwrap();
+    let (ImpostorCamera::Graph(a), ImpostorCamera::Graph(b)) = (&back.camera, &imp.camera) else {
+        panic!("the camera comes back as a graph camera");
+    };
+    assert_eq!(a.frusta().len(), b.frusta().len());
+    for (fa, fb) in a.frusta().iter().zip(b.frusta()) {
+        assert!(fa.matrix.abs_diff_eq(fb.matrix, 1e-9));
+    }
+    assert!(back.gd == imp.gd && back.color == imp.color && back.position == imp.position);
+    // The reloaded impostor answers rays as the original does, with both algorithms.
+    let mut rng = SplitMix64::new(5);
+    for _ in 0..500 {
+        let mut range = |lo: f32, hi: f32| lo + (hi - lo) * rng.next_f32();
+        let o = Vec3::new(range(-0.8, 0.8), range(0.2, 1.8), range(-1.0, 0.5));
+        let d = Vec3::new(range(-1.0, 1.0), range(-0.5, 0.5), range(-1.0, 0.2));
+        let r = Ray::new(o, d.normalize());
+        for mode in [WalkMode::Exact, WalkMode::Linear] {
+            assert_eq!(
+                back.walk_mode(&r, f32::INFINITY, mode).0,
+                imp.walk_mode(&r, f32::INFINITY, mode).0
+            );
+        }
+    }
+    // A frustum whose parent comes after it is refused with the file's name.
+    let json = std::fs::read_to_string(&path).unwrap();
+    let bad = json.replacen("\"parent\": 0", "\"parent\": 7", 1);
+    assert_ne!(bad, json);
+    let bad_path = dir.join("bad.json");
+    std::fs::write(&bad_path, bad).unwrap();
+    let e = file::load(&bad_path).unwrap_err().to_string();
+    assert!(e.contains("bad.json") && e.contains("parent"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -68,6 +68,36 @@ pub struct Frustum {
 }
 
 impl Frustum {
+    /// The child of `parent` seen from `apex` through `face` (which lies in the plane
+    /// `exit`, the parent's exit), with its concatenated matrix.
+    fn child(parent: usize, exit: Plane, face: Vec<DVec3>, apex: DVec3, matrix: DMat4) -> Frustum {
+        let entry = exit.flipped();
+        let centroid = face.iter().copied().sum::<DVec3>() / face.len() as f64;
+        let inside_point = centroid + entry.n * 1e-3;
+        let sides = (0..face.len())
+            .filter_map(|i| {
+                let n = (face[i] - apex).cross(face[(i + 1) % face.len()] - apex);
+                let p = Plane::through(apex, n.try_normalize()?);
+                Some(if p.eval(inside_point) < 0.0 {
+                    p.flipped()
+                } else {
+                    p
+                })
+            })
+            .collect();
+        Frustum {
+            apex,
+            entry,
+            entry_face: face,
+            sides,
+            exit: None,
+            parent: Some(parent),
+            children: Vec::new(),
+            matrix_inv: matrix.inverse(),
+            matrix,
+        }
+    }
+
     /// Whether `x` lies in the frustum (boundaries included; `tol` absorbs rounding).
     pub fn contains(&self, x: DVec3, tol: f64) -> bool {
         self.entry.eval(x) >= -tol
@@ -123,6 +153,61 @@ fn clip(poly: &[DVec3], plane: &Plane) -> Vec<DVec3> {
     out
 }
 
+/// The area of the planar convex polygon `poly` with unit normal `n`.
+fn polygon_area(poly: &[DVec3], n: DVec3) -> f64 {
+    let mut sum = DVec3::ZERO;
+    for i in 0..poly.len() {
+        sum += poly[i].cross(poly[(i + 1) % poly.len()]);
+    }
+    0.5 * sum.dot(n).abs()
+}
+
+/// The convex hull of coplanar points (unit normal `n`).
+fn convex_hull_in_plane(points: &[DVec3], n: DVec3) -> Vec<DVec3> {
+    let t = n.any_orthonormal_vector();
+    let b = n.cross(t);
+    let flat: Vec<DVec2> = points
+        .iter()
+        .map(|p| DVec2::new(p.dot(t), p.dot(b)))
+        .collect();
+    crate::geom::convex_hull(&flat)
+        .into_iter()
+        .map(|i| points[i])
+        .collect()
+}
+
+/// The unit normal of a planar polygon (Newell's method), if it has an area.
+fn newell_normal(poly: &[DVec3]) -> Option<DVec3> {
+    (0..poly.len())
+        .map(|i| poly[i].cross(poly[(i + 1) % poly.len()]))
+        .sum::<DVec3>()
+        .try_normalize()
+}
+
+/// Whether two coplanar convex polygons share a stretch of an edge (collinear edges whose
+/// overlap is longer than `tol`).
+fn share_an_edge(a: &[DVec3], b: &[DVec3], tol: f64) -> bool {
+    let edges = |p: &[DVec3]| {
+        (0..p.len())
+            .map(|i| (p[i], p[(i + 1) % p.len()]))
+            .collect::<Vec<_>>()
+    };
+    edges(a).iter().any(|&(a0, a1)| {
+        let Some(dir) = (a1 - a0).try_normalize() else {
+            return false;
+        };
+        let off_line = |p: DVec3| (p - a0).reject_from_normalized(dir).length();
+        edges(b).iter().any(|&(b0, b1)| {
+            if off_line(b0) > tol || off_line(b1) > tol {
+                return false;
+            }
+            let (s0, s1) = ((b0 - a0).dot(dir), (b1 - a0).dot(dir));
+            let (lo, hi) = (s0.min(s1).max(0.0), s0.max(s1).min((a1 - a0).length()));
+            hi - lo > tol
+        })
+    })
+}
+
 impl GraphCamera {
     /// A graph camera with the single frustum of `root` (its near plane as the entry).
     pub fn new(root: Pinhole) -> GraphCamera {
@@ -174,8 +259,43 @@ impl GraphCamera {
         &self.frusta
     }
 
-    /// The cross-section of frustum `j`'s pyramid with plane `plane` (a convex polygon), within
-    /// `extent` of `centre` (a point of the plane).
+    /// The root pinhole camera (its resolution is the image's).
+    pub fn root(&self) -> &Pinhole {
+        &self.root
+    }
+
+    /// The generalized ray of image point `uv` as a polyline (§4.1): from the root apex to the
+    /// exit plane, then from each crossing on, away from the apex of the child whose face it
+    /// crosses, and `beyond` past the last face. It ends early where it leaves the imaged
+    /// region (a crossing outside every child's face).
+    pub fn ray_path(&self, uv: DVec2, beyond: f64) -> Vec<DVec3> {
+        let (mut j, mut o) = (0, self.frusta[0].apex);
+        let mut d = self.root.ray(uv).dir.as_dvec3();
+        let mut path = vec![o];
+        while path.len() <= self.frusta.len() {
+            let f = &self.frusta[j];
+            let t = f.exit.map_or(f64::INFINITY, |p| -p.eval(o) / p.n.dot(d));
+            if !(t.is_finite() && t > 0.0) {
+                path.push(o + d.normalize() * beyond);
+                break;
+            }
+            let q = o + d * t;
+            path.push(q);
+            let tol = 1e-9 * (1.0 + q.length());
+            let Some(&c) = f.children.iter().find(|&&c| {
+                let child = &self.frusta[c];
+                child.sides.iter().all(|s| s.eval(q) >= -tol)
+            }) else {
+                break;
+            };
+            (j, o, d) = (c, q, q - self.frusta[c].apex);
+        }
+        path
+    }
+
+    /// The cross-section of frustum `j` with plane `plane` (a convex polygon): the plane's
+    /// square of half-width `extent` around `centre` (a point of the plane), clipped to the
+    /// frustum's side planes and its entry plane, so a child's face lies inside its parent.
     fn cross_section(&self, j: usize, plane: Plane, centre: DVec3, extent: f64) -> Vec<DVec3> {
         let n = plane.n.normalize();
         let t = n.any_orthonormal_vector();
@@ -185,7 +305,7 @@ impl GraphCamera {
             .map(|&(x, y)| centre + (t * x + b * y) * extent)
             .collect();
         let f = &self.frusta[j];
-        for s in &f.sides {
+        for s in f.sides.iter().chain(std::iter::once(&f.entry)) {
             poly = clip(&poly, s);
         }
         poly
@@ -203,8 +323,9 @@ impl GraphCamera {
         apex: DVec3,
         extent: f64,
     ) -> Result<usize, CameraError> {
-        let face = self.cross_section(j, Plane::through(point, normal), point, extent);
-        self.add_child(j, point, normal, face, apex)
+        let face = self.cross_section(self.leaf(j)?, Plane::through(point, normal), point, extent);
+        self.add_children(j, point, normal, vec![(face, apex)])
+            .map(|k| k[0])
     }
 
     /// Splits frustum `j` at a plane into two children: the cross-section is cut by the plane
@@ -221,72 +342,203 @@ impl GraphCamera {
         apex_out: DVec3,
         extent: f64,
     ) -> Result<(usize, usize), CameraError> {
-        let face = self.cross_section(j, Plane::through(point, normal), point, extent);
-        let (a, b) = (clip(&face, &cut), clip(&face, &cut.flipped()));
-        let first = self.add_child(j, point, normal, a, apex_in)?;
-        let second = self.add_child(j, point, normal, b, apex_out)?;
-        Ok((first, second))
+        let k = self.split_into(j, point, normal, &[cut], &[apex_in, apex_out], extent)?;
+        Ok((k[0], k[1]))
     }
 
-    fn add_child(
+    /// Splits frustum `j` at a plane into `cuts.len() + 1` children, one per apex: piece `i`
+    /// of the cross-section lies outside `cuts[i − 1]` and inside `cuts[i]` (cuts through
+    /// `j`'s apex, so the pieces tile the face). A piece that is empty is an error. An apex
+    /// equal to `j`'s own gives a child that only partitions the image (its `A` is the
+    /// identity). Returns the children's indices, in the order of `apexes`.
+    pub fn split_into(
         &mut self,
         j: usize,
         point: DVec3,
         normal: DVec3,
-        face: Vec<DVec3>,
-        apex: DVec3,
-    ) -> Result<usize, CameraError> {
-        if face.len() < 3 {
-            return Err(CameraError::Degenerate("the bend plane misses the frustum"));
+        cuts: &[Plane],
+        apexes: &[DVec3],
+        extent: f64,
+    ) -> Result<Vec<usize>, CameraError> {
+        if apexes.len() != cuts.len() + 1 {
+            return Err(CameraError::Degenerate(
+                "a split needs one apex more than it has cuts",
+            ));
         }
+        let face = self.cross_section(self.leaf(j)?, Plane::through(point, normal), point, extent);
+        let pieces = apexes
+            .iter()
+            .enumerate()
+            .map(|(i, &apex)| {
+                let mut piece = face.clone();
+                if i > 0 {
+                    piece = clip(&piece, &cuts[i - 1].flipped());
+                }
+                if i < cuts.len() {
+                    piece = clip(&piece, &cuts[i]);
+                }
+                (piece, apex)
+            })
+            .collect();
+        self.add_children(j, point, normal, pieces)
+    }
+
+    /// Merges frusta `j1` and `j2` (§4.3): their cross-sections with one plane must be
+    /// adjacent (share an edge) and form a convex polygon together; the merged child, with
+    /// apex `apex`, looks on through their union. As algorithms.md proposes, it is kept as two
+    /// frusta `pyramid(apex, face₁)` (parent `j1`) and `pyramid(apex, face₂)` (parent `j2`),
+    /// so every point keeps one path to the root; operations after a merge apply to each half.
+    /// The image is continuous across each face; across the seam between the halves it is
+    /// continuous where `j1` and `j2` themselves project their shared boundary alike (as for
+    /// the two pieces of a split with one apex). Returns the two halves.
+    pub fn merge(
+        &mut self,
+        j1: usize,
+        j2: usize,
+        point: DVec3,
+        normal: DVec3,
+        apex: DVec3,
+        extent: f64,
+    ) -> Result<[usize; 2], CameraError> {
+        if j1 == j2 {
+            return Err(CameraError::Degenerate(
+                "a frustum cannot merge with itself",
+            ));
+        }
+        let plane = Plane::through(point, normal);
+        let f1 = self.cross_section(self.leaf(j1)?, plane, point, extent);
+        let f2 = self.cross_section(self.leaf(j2)?, plane, point, extent);
+        if f1.len() < 3 || f2.len() < 3 {
+            return Err(CameraError::Degenerate("the merge plane misses a frustum"));
+        }
+        let scale = f1
+            .iter()
+            .chain(&f2)
+            .map(|p| (*p - point).length())
+            .fold(1.0, f64::max);
+        if !share_an_edge(&f1, &f2, 1e-9 * scale) {
+            return Err(CameraError::Degenerate(
+                "merged faces must be adjacent (share an edge)",
+            ));
+        }
+        let n = plane.n.normalize();
+        let union_area = polygon_area(&convex_hull_in_plane(&[&f1[..], &f2[..]].concat(), n), n);
+        let (a1, a2) = (polygon_area(&f1, n), polygon_area(&f2, n));
+        if (union_area - a1 - a2).abs() > 1e-6 * union_area.max(1e-300) {
+            return Err(CameraError::Degenerate(
+                "merged faces must form a convex polygon",
+            ));
+        }
+        let first = self.add_children(j1, point, normal, vec![(f1, apex)])?[0];
+        let second = self.add_children(j2, point, normal, vec![(f2, apex)])?[0];
+        Ok([first, second])
+    }
+
+    /// Rebuilds a graph camera from its root and, for every other frustum in creation order,
+    /// `(parent, apex, entry face)` — what [`GraphCamera::parts`] gives back; the matrices are
+    /// recomputed. Every parent precedes its children, and the faces of one parent's children
+    /// lie in one plane; anything else is an error.
+    pub fn from_parts(
+        root: Pinhole,
+        parts: &[(usize, DVec3, Vec<DVec3>)],
+    ) -> Result<GraphCamera, CameraError> {
+        let mut g = GraphCamera::new(root);
+        for (i, (parent, apex, face)) in parts.iter().enumerate() {
+            let own = i + 1;
+            if *parent >= own {
+                return Err(CameraError::Degenerate(
+                    "a graph-camera frustum must follow its parent",
+                ));
+            }
+            if face.len() < 3 || !apex.is_finite() || face.iter().any(|p| !p.is_finite()) {
+                return Err(CameraError::Degenerate(
+                    "a graph-camera face needs three finite corners and a finite apex",
+                ));
+            }
+            let normal = newell_normal(face)
+                .ok_or(CameraError::Degenerate("a graph-camera face has no area"))?;
+            let plane = Plane::through(face[0], normal);
+            let scale = face.iter().map(|p| p.length()).fold(1.0, f64::max);
+            if face.iter().any(|p| plane.eval(*p).abs() > 1e-9 * scale) {
+                return Err(CameraError::Degenerate("a graph-camera face is not planar"));
+            }
+            if let Some(exit) = g.frusta[*parent].exit {
+                let along = exit.n.dot(normal).abs();
+                if (along - 1.0).abs() > 1e-9
+                    || face.iter().any(|p| exit.eval(*p).abs() > 1e-9 * scale)
+                {
+                    return Err(CameraError::Degenerate(
+                        "the faces of one frustum's children must share a plane",
+                    ));
+                }
+            }
+            g.add_children(*parent, face[0], normal, vec![(face.clone(), *apex)])?;
+        }
+        Ok(g)
+    }
+
+    /// `(parent, apex, entry face)` of every frustum but the root, in creation order.
+    pub fn parts(&self) -> Vec<(usize, DVec3, Vec<DVec3>)> {
+        self.frusta[1..]
+            .iter()
+            .map(|f| (f.parent.unwrap_or(0), f.apex, f.entry_face.clone()))
+            .collect()
+    }
+
+    /// `j` itself, when it has no children yet (a frustum ends at one plane).
+    fn leaf(&self, j: usize) -> Result<usize, CameraError> {
+        match self.frusta.get(j) {
+            None => Err(CameraError::Degenerate("no such frustum")),
+            Some(f) if f.exit.is_some() => Err(CameraError::Degenerate(
+                "the frustum already ends at a face (bend, split or merge it once)",
+            )),
+            Some(_) => Ok(j),
+        }
+    }
+
+    /// Adds one child of `j` per `(face, apex)`; all faces lie in the plane through `point`
+    /// with normal `normal`, which becomes `j`'s exit.
+    fn add_children(
+        &mut self,
+        j: usize,
+        point: DVec3,
+        normal: DVec3,
+        pieces: Vec<(Vec<DVec3>, DVec3)>,
+    ) -> Result<Vec<usize>, CameraError> {
         let parent_apex = self.frusta[j].apex;
         // The parent keeps the side of the plane its apex is on.
         let mut exit = Plane::through(point, normal.normalize());
         if exit.eval(parent_apex) < 0.0 {
             exit = exit.flipped();
         }
-        if exit.eval(apex) <= 0.0 {
-            return Err(CameraError::Degenerate(
-                "a child apex must lie on its parent apex's side of the bend plane",
-            ));
+        let mut children = Vec::with_capacity(pieces.len());
+        for (face, apex) in &pieces {
+            if face.len() < 3 {
+                return Err(CameraError::Degenerate("the bend plane misses the frustum"));
+            }
+            if exit.eval(*apex) <= 0.0 {
+                return Err(CameraError::Degenerate(
+                    "a child apex must lie on its parent apex's side of the bend plane",
+                ));
+            }
+            // §4.4: A_k fixes the face plane (n pointing away from the child apex) and sends
+            // the child apex to the parent apex.
+            let matrix = self.frusta[j].matrix * face_map(exit, *apex, parent_apex)?;
+            if matrix.determinant().abs() < 1e-300 {
+                return Err(CameraError::Degenerate("a graph-camera matrix is singular"));
+            }
+            children.push(Frustum::child(j, exit, face.clone(), *apex, matrix));
         }
-        let entry = exit.flipped();
-        let centroid = face.iter().copied().sum::<DVec3>() / face.len() as f64;
-        let inside_point = centroid + entry.n * 1e-3;
-        let sides = (0..face.len())
-            .filter_map(|i| {
-                let n = (face[i] - apex).cross(face[(i + 1) % face.len()] - apex);
-                let n = n.try_normalize()?;
-                let p = Plane::through(apex, n);
-                Some(if p.eval(inside_point) < 0.0 {
-                    p.flipped()
-                } else {
-                    p
-                })
-            })
-            .collect();
-        // §4.4: A_k fixes the face plane (n pointing away from the child apex) and sends the
-        // child apex to the parent apex.
-        let a = face_map(exit, apex, parent_apex)?;
-        let matrix = self.frusta[j].matrix * a;
-        if matrix.determinant().abs() < 1e-300 {
-            return Err(CameraError::Degenerate("a graph-camera matrix is singular"));
-        }
+        // Validated: commit.
         self.frusta[j].exit = Some(exit);
-        let k = self.frusta.len();
-        self.frusta[j].children.push(k);
-        self.frusta.push(Frustum {
-            apex,
-            entry,
-            entry_face: face,
-            sides,
-            exit: None,
-            parent: Some(j),
-            children: Vec::new(),
-            matrix_inv: matrix.inverse(),
-            matrix,
-        });
-        Ok(k)
+        let mut indices = Vec::with_capacity(children.len());
+        for child in children {
+            let k = self.frusta.len();
+            self.frusta[j].children.push(k);
+            self.frusta.push(child);
+            indices.push(k);
+        }
+        Ok(indices)
     }
 
     /// The frustum holding `x`: the first in creation order (parents before children), so a
@@ -437,6 +689,53 @@ mod tests {
     }
 
     #[test]
+    fn every_generalized_ray_projects_to_its_pixel_with_decreasing_gd() {
+        let (g, _) = split_and_merged();
+        let (w, h) = g.resolution();
+        for (py, px) in (0..h)
+            .step_by(3)
+            .flat_map(|y| (0..w).step_by(3).map(move |x| (y, x)))
+        {
+            let uv = DVec2::new(px as f64 + 0.5, py as f64 + 0.5);
+            let path = g.ray_path(uv, 4.0);
+            assert!(path.len() >= 3, "{uv}: {path:?}");
+            let mut last_gd = f64::INFINITY;
+            for seg in path.windows(2).skip(1) {
+                for k in 0..=10 {
+                    let x = seg[0].lerp(seg[1], k as f64 / 10.0);
+                    let p = g.project(x).unwrap();
+                    assert!((p.uv - uv).length() < 1e-6, "{uv}: {x} → {}", p.uv);
+                    assert!(p.gd <= last_gd * (1.0 + 1e-12), "{uv}: gd rises at {x}");
+                    last_gd = p.gd;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn parts_rebuild_the_same_camera() {
+        let (g, _) = split_and_merged();
+        let again = GraphCamera::from_parts(g.root().clone(), &g.parts()).unwrap();
+        assert_eq!(again.frusta().len(), g.frusta().len());
+        for (a, b) in again.frusta().iter().zip(g.frusta()) {
+            assert!(
+                a.matrix.abs_diff_eq(b.matrix, 1e-9),
+                "{} vs {}",
+                a.matrix,
+                b.matrix
+            );
+            assert_eq!(a.parent, b.parent);
+        }
+        // A child before its parent, or a warped face, is refused.
+        let mut bad = g.parts();
+        bad[0].0 = 3;
+        assert!(GraphCamera::from_parts(g.root().clone(), &bad).is_err());
+        let mut bad = g.parts();
+        bad[2].2[0].z += 0.5;
+        assert!(GraphCamera::from_parts(g.root().clone(), &bad).is_err());
+    }
+
+    #[test]
     fn face_map_fixes_its_plane_and_moves_the_apex() {
         let p = Plane::through(
             DVec3::new(0.0, 0.0, -3.0),
@@ -549,5 +848,117 @@ mod tests {
         assert_eq!((a, b), (1, 2));
         assert!(g.frusta()[1].entry_face.iter().all(|p| p.x >= -1e-12));
         assert!(g.frusta()[2].entry_face.iter().all(|p| p.x <= 1e-12));
+    }
+
+    /// A root split in two at z = −3 (both halves keep the root apex), the halves merged again
+    /// at z = −5 with an apex moved sideways.
+    fn split_and_merged() -> (GraphCamera, [usize; 2]) {
+        let root = Pinhole::look_at(Vec3::ZERO, -Vec3::Z, Vec3::Y, 60.0, 32, 32)
+            .unwrap()
+            .with_near(0.1);
+        let mut g = GraphCamera::new(root);
+        let cut = Plane::through(DVec3::ZERO, DVec3::X);
+        let (a, b) = g
+            .split(
+                0,
+                DVec3::new(0.0, 0.0, -3.0),
+                DVec3::Z,
+                cut,
+                DVec3::ZERO,
+                DVec3::ZERO,
+                10.0,
+            )
+            .unwrap();
+        let m = g
+            .merge(
+                a,
+                b,
+                DVec3::new(0.0, 0.0, -5.0),
+                DVec3::Z,
+                DVec3::new(1.0, 0.2, -1.0),
+                10.0,
+            )
+            .unwrap();
+        (g, m)
+    }
+
+    #[test]
+    fn merged_halves_are_continuous_across_their_faces_and_their_seam() {
+        let (g, [m1, m2]) = split_and_merged();
+        assert_eq!(g.frusta().len(), 5);
+        for &m in &[m1, m2] {
+            let f = &g.frusta()[m];
+            let parent = f.parent.unwrap();
+            let centroid = f.entry_face.iter().copied().sum::<DVec3>() / f.entry_face.len() as f64;
+            for &v in &f.entry_face {
+                let x = v.lerp(centroid, 0.3);
+                let (a, b) = (
+                    g.project_in(parent, x).unwrap(),
+                    g.project_in(m, x).unwrap(),
+                );
+                assert!((a.uv - b.uv).length() < 1e-9 && (a.gd - b.gd).abs() < 1e-12);
+            }
+        }
+        // The seam: the plane x = 0 beyond the merge face, seen from the merged apex.
+        let seam = Plane::through(DVec3::ZERO, DVec3::X);
+        let apex = g.frusta()[m1].apex;
+        for k in 0..50 {
+            let on_face = DVec3::new(0.0, -1.0 + 0.04 * k as f64, -5.0);
+            let x = on_face + (on_face - apex) * (0.2 + 0.1 * k as f64);
+            let x = x - seam.n * seam.eval(x);
+            let (a, b) = (g.project_in(m1, x).unwrap(), g.project_in(m2, x).unwrap());
+            assert!(
+                (a.uv - b.uv).length() < 1e-9 && (a.gd - b.gd).abs() < 1e-12,
+                "{x}"
+            );
+        }
+        // Every point still has one frustum and unprojects back.
+        for i in 0..4000 {
+            let x = DVec3::new(-6.0, -3.0, -12.0)
+                + (random_point(i) - DVec3::new(-8.0, -1.0, -9.0)) * DVec3::new(1.2, 1.5, 1.3);
+            let inside = g.frusta().iter().filter(|f| f.contains(x, 0.0)).count();
+            assert!(inside <= 1, "{x} in {inside} frusta");
+            if let Some(q) = g.project(x) {
+                let back = g.unproject(q.uv, q.gd);
+                assert!(
+                    (back - x).length() < 1e-7 * (1.0 + x.length()),
+                    "{x} → {back}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn merge_needs_adjacent_faces_and_a_leaf_ends_once() {
+        let root = Pinhole::look_at(Vec3::ZERO, -Vec3::Z, Vec3::Y, 60.0, 32, 32).unwrap();
+        let mut g = GraphCamera::new(root);
+        let cuts = [
+            Plane::through(DVec3::ZERO, DVec3::new(1.0, 0.0, 0.2)),
+            Plane::through(DVec3::ZERO, DVec3::new(1.0, 0.0, -0.2)),
+        ];
+        let k = g
+            .split_into(
+                0,
+                DVec3::new(0.0, 0.0, -3.0),
+                DVec3::Z,
+                &cuts,
+                &[DVec3::ZERO; 3],
+                10.0,
+            )
+            .unwrap();
+        assert_eq!(k, vec![1, 2, 3]);
+        let far = (
+            DVec3::new(0.0, 0.0, -5.0),
+            DVec3::Z,
+            DVec3::new(0.0, 0.0, -1.0),
+        );
+        // Pieces 0 and 2 are not adjacent.
+        assert!(g.merge(k[0], k[2], far.0, far.1, far.2, 10.0).is_err());
+        assert!(g.merge(k[0], k[1], far.0, far.1, far.2, 10.0).is_ok());
+        // The root already ends at the split plane.
+        assert!(
+            g.bend(0, DVec3::new(0.0, 0.0, -4.0), DVec3::Z, DVec3::ZERO, 10.0)
+                .is_err()
+        );
     }
 }

@@ -7,11 +7,13 @@
 //! Invariants of a [`Mesh`]: every index is in range, every position and normal is finite, every
 //! normal has unit length, and no triangle is degenerate (zero area).
 
+mod hull;
 pub mod io;
 mod mesh;
 mod primitives;
 mod sampling;
 
+pub use hull::convex_hull;
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
 pub use primitives::{cube, icosphere, plane};
 pub use sampling::{SplitMix64, sample_surface};

@@ -10,7 +10,10 @@
 //!               "near": 0.5, "pole": [u, v], "z_near": 1.0, "z_far": 2.0, "k": 0.8 } }
 //! ```
 //! Cameras: `pinhole` (`position`, McMillan `a`, `b`, `c`, `near`), `spoc` (the pinhole fields plus
-//! `pole`, `z_near`, `z_far`, `k`), `orthographic` (`corner`, `a`, `b`, `dir`, `depth`).
+//! `pole`, `z_near`, `z_far`, `k`), `orthographic` (`corner`, `a`, `b`, `dir`, `depth`), `graph`
+//! (the root's pinhole fields plus `frusta`: for every frustum but the root, in creation order,
+//! `{ "parent": i, "apex": [..], "face": [[..], ..] }` — its entry face; the matrices are
+//! recomputed on load, algorithms.md §4.4).
 //!
 //! `NAME.exr` channels (32-bit float): `R G B A` colour, `gd`, `N.X N.Y N.Z` shading normal,
 //! `Ng.X Ng.Y Ng.Z` face normal (toward the camera), `P.X P.Y P.Z` world position, `id` = object
@@ -20,7 +23,7 @@
 //! 1 MiB; a corrupted file is an error naming the file and what is wrong.
 
 use super::{Impostor, ImpostorCamera};
-use crate::camera::{Orthographic, Pinhole, Spoc};
+use crate::camera::{GraphCamera, Orthographic, Pinhole, Spoc};
 use crate::frame::io::{read_exr_channels, write_exr_channels};
 use crate::frame::{FrameError, Image};
 use crate::geom::Aabb;
@@ -108,6 +111,23 @@ enum CameraFile {
         dir: [f64; 3],
         depth: f64,
     },
+    Graph {
+        position: [f64; 3],
+        a: [f64; 3],
+        b: [f64; 3],
+        c: [f64; 3],
+        near: f64,
+        frusta: Vec<FrustumFile>,
+    },
+}
+
+/// One non-root frustum of a graph camera.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FrustumFile {
+    parent: usize,
+    apex: [f64; 3],
+    face: Vec<[f64; 3]>,
 }
 
 fn pinhole_file(p: &Pinhole) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3], f64) {
@@ -122,9 +142,28 @@ fn pinhole_file(p: &Pinhole) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3], f64) {
 }
 
 impl CameraFile {
-    fn from_camera(camera: &ImpostorCamera) -> Option<CameraFile> {
-        Some(match camera {
-            ImpostorCamera::Graph(_) => return None,
+    fn from_camera(camera: &ImpostorCamera) -> CameraFile {
+        match camera {
+            ImpostorCamera::Graph(g) => {
+                let (position, a, b, c, near) = pinhole_file(g.root());
+                let frusta = g
+                    .parts()
+                    .into_iter()
+                    .map(|(parent, apex, face)| FrustumFile {
+                        parent,
+                        apex: apex.to_array(),
+                        face: face.iter().map(|p| p.to_array()).collect(),
+                    })
+                    .collect();
+                CameraFile::Graph {
+                    position,
+                    a,
+                    b,
+                    c,
+                    near,
+                    frusta,
+                }
+            }
             ImpostorCamera::Pinhole(p) => {
                 let (position, a, b, c, near) = pinhole_file(p);
                 CameraFile::Pinhole {
@@ -160,7 +199,7 @@ impl CameraFile {
                     depth,
                 }
             }
-        })
+        }
     }
 
     fn to_camera(&self, w: u32, h: u32) -> Result<ImpostorCamera, String> {
@@ -214,6 +253,23 @@ impl CameraFile {
                 Orthographic::from_parameters(v(corner), v(a), v(b), v(dir), depth, w, h)
                     .map_err(|e| e.to_string())?,
             ),
+            CameraFile::Graph {
+                position,
+                a,
+                b,
+                c,
+                near,
+                ref frusta,
+            } => {
+                let parts: Vec<_> = frusta
+                    .iter()
+                    .map(|f| (f.parent, v(f.apex), f.face.iter().map(|p| v(*p)).collect()))
+                    .collect();
+                ImpostorCamera::Graph(
+                    GraphCamera::from_parts(pinhole(position, a, b, c, near)?, &parts)
+                        .map_err(|e| e.to_string())?,
+                )
+            }
         })
     }
 }
@@ -287,12 +343,7 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
             min: impostor.bounds.min.to_array(),
             max: impostor.bounds.max.to_array(),
         },
-        camera: CameraFile::from_camera(&impostor.camera).ok_or_else(|| {
-            ImpostorFileError::Invalid {
-                path: json_path.to_path_buf(),
-                reason: "graph-camera impostors cannot be saved yet".into(),
-            }
-        })?,
+        camera: CameraFile::from_camera(&impostor.camera),
     };
     let text = serde_json::to_string_pretty(&sidecar).map_err(|e| ImpostorFileError::Invalid {
         path: json_path.to_path_buf(),

@@ -10,9 +10,10 @@
 //! Invariants: a parsed maze is rectangular (short lines are padded with floor), has exactly one
 //! entrance with exactly one floor neighbour, and is at most 256 × 256 cells.
 
-use crate::camera::{CameraError, GraphCamera, Pinhole};
+use crate::camera::{CameraError, GraphCamera, Pinhole, Plane};
 use crate::geom::{Mesh, cube, plane};
 use glam::{DVec3, Mat4, Vec3};
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -20,8 +21,8 @@ use thiserror::Error;
 pub const MAX_MAZE_SIDE: usize = 256;
 /// Eye height of the maze camera, metres.
 pub const EYE_HEIGHT: f64 = 0.5;
-/// Most bends the corridor-following camera makes.
-pub const MAX_BENDS: usize = 16;
+/// Most frusta in a maze's graph camera (the paper's has 15).
+pub const MAX_FRUSTA: usize = 32;
 
 /// Errors from reading a maze.
 #[derive(Debug, Error)]
@@ -201,11 +202,19 @@ impl Maze {
         m
     }
 
-    /// The graph camera that follows the corridors from the entrance (a breadth-first walk of
-    /// the maze graph, as in the paper's Fig. 9): the root looks along the first corridor from
-    /// behind the entrance; at every turn the frustum bends at the corner's diagonal plane, its
-    /// apex turned about the corner; at a junction the walk follows the corridor straight on if
-    /// it continues, else the first turn. `size × size` pixels.
+    /// The graph camera that follows the corridors from the entrance by a breadth-first walk
+    /// of the maze graph, as in the paper's Fig. 9. The root looks along the first corridor
+    /// from behind the entrance. A branch walks straight until its corridor turns or meets a
+    /// side corridor; then
+    /// - at a turn, its frustum **bends** at the corner cell's diagonal plane, the apex turned
+    ///   about the corner so the child looks down the new corridor;
+    /// - at a junction, its frustum **splits** at the junction's entry plane into one vertical
+    ///   slice per open corridor (left to right, equal widths of the corridor); each slice
+    ///   bends into its corridor or continues straight on, seen from an apex about one cell
+    ///   behind its face, so that the narrow slice fans out over the whole corridor.
+    ///
+    /// Cells are claimed when a branch reaches them, so loops are walked once. At most
+    /// [`MAX_FRUSTA`] frusta; `size × size` pixels.
     pub fn graph_camera(&self, size: u32, path: &Path) -> Result<GraphCamera, MazeError> {
         let cam_err = |source| MazeError::Camera {
             path: path.to_path_buf(),
@@ -213,15 +222,13 @@ impl Maze {
         };
         let (c0, r0) = self.entrance;
         let d0 = self.open_directions(self.entrance)[0];
-        let centre = |c: i64, r: i64| DVec3::new(c as f64 + 0.5, EYE_HEIGHT, r as f64 + 0.5);
-        let dir = |d: usize| DVec3::new(DIRS[d].0 as f64, 0.0, DIRS[d].1 as f64);
         // The root: 2.5 cells behind the entrance, its view a little wider than the corridor.
         let back = 2.5;
-        let eye = centre(c0 as i64, r0 as i64) - dir(d0) * back;
+        let eye = cell_centre(c0 as i64, r0 as i64) - step(d0) * back;
         let fov = 2.0 * (0.55f64 / (back - 0.5)).atan().to_degrees();
         let root = Pinhole::look_at(
             eye.as_vec3(),
-            (eye + dir(d0)).as_vec3(),
+            (eye + step(d0)).as_vec3(),
             Vec3::Y,
             fov,
             size,
@@ -230,43 +237,154 @@ impl Maze {
         .map_err(cam_err)?
         .with_near(0.05);
         let mut g = GraphCamera::new(root);
-        let (mut frustum, mut apex) = (0usize, eye);
-        let (mut c, mut r, mut d) = (c0 as i64, r0 as i64, d0);
-        let mut visited = vec![vec![false; self.width()]; self.height()];
-        // Faces reach 1.5 m around each corner: enough for a 1 m corridor, walls hide the rest.
-        let extent = 1.5;
-        for _ in 0..MAX_BENDS {
-            // Walk straight while possible.
+        let mut claimed = vec![vec![false; self.width()]; self.height()];
+        claimed[r0][c0] = true;
+        let mut queue = VecDeque::from([Branch {
+            frustum: 0,
+            apex: eye,
+            cell: (c0 as i64, r0 as i64),
+            dir: d0,
+        }]);
+        let open = |claimed: &Vec<Vec<bool>>, (c, r): (i64, i64), d: usize| {
+            let (nc, nr) = (c + DIRS[d].0, r + DIRS[d].1);
+            self.floor(nc, nr) && !claimed[nr as usize][nc as usize]
+        };
+        while let Some(mut b) = queue.pop_front() {
+            let d = b.dir;
+            // [left, straight, right] relative to the walking direction.
+            let around = [(d + 3) % 4, d, (d + 1) % 4];
+            // Walk straight while the corridor neither turns nor branches.
             loop {
-                visited[r as usize][c as usize] = true;
-                let (nc, nr) = (c + DIRS[d].0, r + DIRS[d].1);
-                if !self.floor(nc, nr) || visited[nr as usize][nc as usize] {
+                let sides = [around[0], around[2]]
+                    .iter()
+                    .any(|&t| open(&claimed, b.cell, t));
+                if sides || !open(&claimed, b.cell, d) {
                     break;
                 }
-                (c, r) = (nc, nr);
+                b.cell = (b.cell.0 + DIRS[d].0, b.cell.1 + DIRS[d].1);
+                claimed[b.cell.1 as usize][b.cell.0 as usize] = true;
             }
-            // A turn: left or right, into an unvisited corridor.
-            let turn = [(d + 1) % 4, (d + 3) % 4].into_iter().find(|&t| {
-                let (nc, nr) = (c + DIRS[t].0, r + DIRS[t].1);
-                self.floor(nc, nr) && !visited[nr as usize][nc as usize]
-            });
-            let Some(t) = turn else { break };
-            // Bend plane: the corner cell's diagonal, normal −(d + t) (the incoming side is in
-            // front); the new apex is the old one turned about the vertical axis through the
-            // corner, so the child looks down the new corridor.
-            let corner = centre(c, r);
-            let normal = -(dir(d) + dir(t));
-            let rel = apex - corner;
-            let along = rel.dot(dir(d));
-            let new_apex = corner + dir(t) * along + DVec3::new(0.0, rel.y, 0.0);
-            frustum = g
-                .bend(frustum, corner, normal, new_apex, extent)
+            let exits: Vec<usize> = around
+                .into_iter()
+                .filter(|&t| open(&claimed, b.cell, t))
+                .collect();
+            if exits.is_empty() || g.frusta().len() + exits.len() > MAX_FRUSTA {
+                continue;
+            }
+            let next = |t: usize| (b.cell.0 + DIRS[t].0, b.cell.1 + DIRS[t].1);
+            for &t in &exits {
+                let (nc, nr) = next(t);
+                claimed[nr as usize][nc as usize] = true;
+            }
+            let corner = cell_centre(b.cell.0, b.cell.1);
+            if let [t] = exits[..] {
+                // A turn: the apex turned about the corner keeps its distance to it.
+                let rel = b.apex - corner;
+                let apex = corner + step(t) * rel.dot(step(d)) + DVec3::new(0.0, rel.y, 0.0);
+                let k = g
+                    .bend(b.frustum, corner, turn_normal(d, t), apex, FACE_EXTENT)
+                    .map_err(cam_err)?;
+                queue.push_back(Branch {
+                    frustum: k,
+                    apex,
+                    cell: next(t),
+                    dir: t,
+                });
+                continue;
+            }
+            // A junction: slices of the corridor, cut by vertical planes through the apex.
+            let right = step((d + 1) % 4);
+            let entry = corner - step(d) * 0.5;
+            let n = exits.len();
+            let cuts: Vec<Plane> = (1..n)
+                .map(|i| {
+                    let at = entry + right * (i as f64 / n as f64 - 0.5);
+                    let cut = Plane::through(b.apex, (at - b.apex).cross(DVec3::Y).normalize());
+                    // Inside: the left of the cut.
+                    if cut.eval(at - right) < 0.0 {
+                        cut.flipped()
+                    } else {
+                        cut
+                    }
+                })
+                .collect();
+            let eye = DVec3::new(0.0, EYE_HEIGHT - corner.y, 0.0);
+            // A straight-on slice is re-aimed from one cell behind its face, so that its
+            // narrow slice fans out over the whole corridor; a turning slice keeps the apex
+            // until it bends.
+            let apexes: Vec<DVec3> = exits
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| {
+                    let centre = entry + right * ((i as f64 + 0.5) / n as f64 - 0.5);
+                    if t == d {
+                        centre - step(d) + eye
+                    } else {
+                        b.apex
+                    }
+                })
+                .collect();
+            let slices = g
+                .split_into(b.frustum, entry, step(d), &cuts, &apexes, FACE_EXTENT)
                 .map_err(cam_err)?;
-            apex = new_apex;
-            d = t;
+            for ((&t, &slice), &apex) in exits.iter().zip(&slices).zip(&apexes) {
+                let branch = if t == d {
+                    Branch {
+                        frustum: slice,
+                        apex,
+                        cell: next(t),
+                        dir: t,
+                    }
+                } else {
+                    // The slice sees the back half of the new corridor (the side of −d); its
+                    // apex sits one cell back, at that side's wall, to fan over all of it.
+                    let apex = corner - step(t) - step(d) * 0.5 + eye;
+                    let k = g
+                        .bend(slice, corner, turn_normal(d, t), apex, FACE_EXTENT)
+                        .map_err(cam_err)?;
+                    Branch {
+                        frustum: k,
+                        apex,
+                        cell: next(t),
+                        dir: t,
+                    }
+                };
+                queue.push_back(branch);
+            }
         }
         Ok(g)
     }
+}
+
+/// One corridor the breadth-first walk still has to follow.
+struct Branch {
+    /// The frustum looking down it.
+    frustum: usize,
+    /// That frustum's apex.
+    apex: DVec3,
+    /// The cell the walk is in.
+    cell: (i64, i64),
+    /// The walking direction (an index into `DIRS`).
+    dir: usize,
+}
+
+/// Faces reach 1.5 m around each corner: enough for a 1 m corridor, walls hide the rest.
+const FACE_EXTENT: f64 = 1.5;
+
+/// The centre of cell `(c, r)` at eye height.
+fn cell_centre(c: i64, r: i64) -> DVec3 {
+    DVec3::new(c as f64 + 0.5, EYE_HEIGHT, r as f64 + 0.5)
+}
+
+/// One cell's step in direction `d`.
+fn step(d: usize) -> DVec3 {
+    DVec3::new(DIRS[d].0 as f64, 0.0, DIRS[d].1 as f64)
+}
+
+/// The normal of the corner diagonal where direction `d` turns into `t` (pointing back toward
+/// the incoming corridor).
+fn turn_normal(d: usize, t: usize) -> DVec3 {
+    -(step(d) + step(t))
 }
 
 #[cfg(test)]
