@@ -88,9 +88,35 @@ pub enum Command {
 /// `trompe impostor …`.
 #[derive(Subcommand, Debug)]
 pub enum ImpostorCommand {
+    /// Build an impostor of a mesh (or a maze, with --camera graph) and save it: a JSON
+    /// sidecar, the EXR of its maps beside it, and a PNG preview of its colour.
+    Bake {
+        /// The object (.obj, .ply, .gltf, .glb), in its own coordinates; or a floor plan
+        /// (.maze) for --camera graph.
+        input: PathBuf,
+        /// Impostor camera.
+        #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
+        camera: CameraArg,
+        /// Impostor resolution (square).
+        #[arg(long, default_value_t = 512)]
+        resolution: u32,
+        /// Direction from the object's centre toward the camera, "x,y,z".
+        #[arg(long, default_value = "0,0.3,1", value_parser = parse_vec3)]
+        from: glam::Vec3,
+        /// Camera distance from the object's centre, in bounding-sphere radii.
+        #[arg(long, default_value_t = 3.0)]
+        distance: f32,
+        /// SPOC strength k (default: the rule k = 2Δ/z_O with Δ one bounding radius).
+        #[arg(long)]
+        k: Option<f64>,
+        /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Fire rays at an object and compare every impostor answer with the exact BVH.
     Check {
-        /// The object (.obj, .ply, .gltf, .glb); it is scaled to largest extent 1.
+        /// The object (.obj, .ply, .gltf, .glb), scaled to largest extent 1; or a floor plan
+        /// (.maze) for --camera graph, with the reflector standing in its first corridor.
         mesh: PathBuf,
         /// Impostor camera.
         #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
@@ -124,8 +150,43 @@ pub enum ImpostorCommand {
 pub enum CameraArg {
     /// Planar pinhole depth image.
     Pinhole,
+    /// Parallel projection.
+    Orthographic,
     /// Single-pole occlusion camera.
     Spoc,
+    /// Graph camera following a maze's corridors (input: a .maze floor plan).
+    Graph,
+}
+
+impl CameraArg {
+    fn view(self, k: Option<f64>) -> Option<trompe::impostor::ViewCamera> {
+        use trompe::impostor::ViewCamera;
+        match self {
+            CameraArg::Pinhole => Some(ViewCamera::Pinhole),
+            CameraArg::Orthographic => Some(ViewCamera::Orthographic),
+            CameraArg::Spoc => Some(ViewCamera::Spoc(k)),
+            CameraArg::Graph => None,
+        }
+    }
+}
+
+/// Parses "x,y,z".
+fn parse_vec3(text: &str) -> Result<glam::Vec3, String> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{text:?}: {e}"))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("{text:?}: expected three finite numbers \"x,y,z\"")),
+    }
+}
+
+/// Whether `path` names a maze floor plan.
+fn is_maze(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("maze"))
 }
 
 /// `--method`.
@@ -335,27 +396,44 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             sphere_rays,
             output,
         }) => {
-            use trompe::impostor::fidelity::{self, CheckCamera, ReflectorSetup};
+            use trompe::impostor::fidelity::{self, ReflectorSetup};
+            use trompe::scene::maze::Maze;
             if let Some(o) = &output {
                 check_output(o, &[&mesh])?;
             }
-            let target = trompe::geom::io::load(&mesh)?.mesh;
             let reflector_path = reflector.unwrap_or_else(|| {
                 trompe::report::DemoInputs::locate()
                     .assets
                     .join("meshes/bunny.obj")
             });
             let refl = trompe::geom::io::load(&reflector_path)?.mesh;
-            let setup = ReflectorSetup::new(&target, &refl, distance, view)
-                .context("placing the reflector")?;
-            let kind = match camera {
-                CameraArg::Pinhole => CheckCamera::Pinhole,
-                CameraArg::Spoc => CheckCamera::Spoc(k),
-            };
             let mut timings = Timings::default();
-            let cam = setup
-                .camera(kind, resolution)
-                .context("building the impostor camera")?;
+            let (setup, cam) = match (camera.view(k), is_maze(&mesh)) {
+                (None, true) => {
+                    let maze = Maze::load(&mesh)?;
+                    let setup = ReflectorSetup::in_maze(&maze, &refl, view)
+                        .context("placing the reflector")?;
+                    let g = maze.graph_camera(resolution, &mesh)?;
+                    println!("graph camera: {} frusta", g.frusta().len());
+                    (setup, trompe::impostor::ImpostorCamera::Graph(g))
+                }
+                (Some(kind), false) => {
+                    let target = trompe::geom::io::load(&mesh)?.mesh;
+                    let setup = ReflectorSetup::new(&target, &refl, distance, view)
+                        .context("placing the reflector")?;
+                    let cam = setup
+                        .camera(kind, resolution)
+                        .context("building the impostor camera")?;
+                    (setup, cam)
+                }
+                (None, false) => bail!(
+                    "{}: --camera graph is built from a maze floor plan (.maze)",
+                    mesh.display()
+                ),
+                (Some(_), true) => {
+                    bail!("{}: a maze floor plan needs --camera graph", mesh.display())
+                }
+            };
             if let trompe::impostor::ImpostorCamera::Spoc(s) = &cam {
                 println!("SPOC strength k = {:.3}", s.strength());
             }
@@ -407,10 +485,98 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 "walk      {:.1} texel visits per ray",
                 r.texel_visits_per_ray
             );
+            if matches!(imp.camera, trompe::impostor::ImpostorCamera::Graph(_)) {
+                // The default walk is §4.6's algorithm 2; algorithm 1 beside it.
+                let r1 = timings.time("check (algorithm 1)", || {
+                    fidelity::check_with(&imp, &exact, &rays, trompe::impostor::WalkMode::Linear)
+                });
+                println!(
+                    "algorithm 1 (uniform 3-D steps): agreement {:.3} %, on hits {:.3} %, {:.1} texel visits per ray",
+                    r1.agreement() * 100.0,
+                    r1.hit_agreement() * 100.0,
+                    r1.texel_visits_per_ray
+                );
+            }
             if let Some(o) = &output {
                 trompe::impostor::file::save(&imp, o).context("saving the impostor")?;
                 eprintln!("wrote {}", o.display());
             }
+            if cli.verbose {
+                print_timings(&timings);
+            }
+        }
+        Command::Impostor(ImpostorCommand::Bake {
+            input,
+            camera,
+            resolution,
+            from,
+            distance,
+            k,
+            output,
+        }) => {
+            let preview = output.with_extension("png");
+            for o in [&output, &output.with_extension("exr"), &preview] {
+                check_output(o, &[&input])?;
+            }
+            if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("creating {}", dir.display()))?;
+            }
+            let mut timings = Timings::default();
+            let (mesh, cam) = match (camera.view(k), is_maze(&input)) {
+                (None, true) => {
+                    let maze = trompe::scene::maze::Maze::load(&input)?;
+                    let g = maze.graph_camera(resolution, &input)?;
+                    (maze.mesh(), trompe::impostor::ImpostorCamera::Graph(g))
+                }
+                (Some(kind), false) => {
+                    let mesh = trompe::geom::io::load(&input)?.mesh;
+                    let b = mesh.bounds();
+                    let (center, radius) = (b.center(), b.radius());
+                    let dir = from.try_normalize().context("--from must not be zero")?;
+                    if !(distance.is_finite() && distance > 1.0) {
+                        bail!("--distance {distance}: must be more than 1 radius");
+                    }
+                    let cam = trompe::impostor::ImpostorCamera::around(
+                        kind,
+                        center + dir * radius * distance,
+                        center,
+                        radius,
+                        radius as f64,
+                        resolution,
+                    )
+                    .with_context(|| format!("{}: placing the camera", input.display()))?;
+                    (mesh, cam)
+                }
+                (None, false) => bail!(
+                    "{}: --camera graph is built from a maze floor plan (.maze)",
+                    input.display()
+                ),
+                (Some(_), true) => bail!(
+                    "{}: a maze floor plan needs --camera graph",
+                    input.display()
+                ),
+            };
+            let imp = timings
+                .time("build impostor", || {
+                    trompe::impostor::build(cam, &mesh, 0, &trompe::impostor::albedo_of(&mesh))
+                })
+                .context("building the impostor")?;
+            timings
+                .time("save", || trompe::impostor::file::save(&imp, &output))
+                .context("saving the impostor")?;
+            io::write_png(&preview, &imp.color)?;
+            println!(
+                "{} impostor {resolution}², {:.1} % of texels covered",
+                imp.camera.kind(),
+                imp.coverage() * 100.0
+            );
+            println!(
+                "wrote {}, {} and {}",
+                output.display(),
+                output.with_extension("exr").display(),
+                preview.display()
+            );
             if cli.verbose {
                 print_timings(&timings);
             }

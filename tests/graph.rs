@@ -198,3 +198,39 @@ fn graph_impostors_save_and_load_exactly() {
     assert!(e.contains("bad.json") && e.contains("parent"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The paper's Fig. 5 setting on the shipped maze: a mirror bunny in the first corridor, its
+/// reflected rays answered by the maze's graph-camera impostor (algorithm 2) and by the BVH.
+#[test]
+fn the_maze_impostor_agrees_with_the_bvh_on_reflected_rays() {
+    use trompe::impostor::fidelity::{ReflectorSetup, check, check_with};
+    use trompe::scene::maze::Maze;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("scenes/maze.maze");
+    let maze = Maze::load(&path).unwrap();
+    let bunny = trompe::geom::io::load(&root.join("assets/meshes/bunny.obj"))
+        .unwrap()
+        .mesh;
+    let setup = ReflectorSetup::in_maze(&maze, &bunny, 256).unwrap();
+    let g = maze.graph_camera(512, &path).unwrap();
+    assert!(
+        g.frusta().iter().any(|f| f.children.len() >= 2),
+        "the walk splits at a junction"
+    );
+    let imp = build(
+        ImpostorCamera::Graph(g),
+        &setup.target,
+        0,
+        &albedo_of(&setup.target),
+    )
+    .unwrap();
+    let exact = Bvh::build(vec![setup.target.clone()]);
+    let rays = setup.rays();
+    assert!(rays.len() > 1000, "{}", rays.len());
+    let r = check(&imp, &exact, &rays);
+    assert!(r.exact_hits > rays.len() / 2, "{} hits", r.exact_hits);
+    assert!(r.agreement() >= 0.99, "algorithm 2: {:.4}", r.agreement());
+    // Algorithm 1 samples the bent image path uniformly in 3-D.
+    let r1 = check_with(&imp, &exact, &rays, WalkMode::Linear);
+    assert!(r1.agreement() >= 0.99, "algorithm 1: {:.4}", r1.agreement());
+}

@@ -274,9 +274,13 @@ impl GraphCamera {
         let mut path = vec![o];
         while path.len() <= self.frusta.len() {
             let f = &self.frusta[j];
-            let t = f.exit.map_or(f64::INFINITY, |p| -p.eval(o) / p.n.dot(d));
-            if !(t.is_finite() && t > 0.0) {
+            let Some(exit) = f.exit else {
                 path.push(o + d.normalize() * beyond);
+                break;
+            };
+            let t = -exit.eval(o) / exit.n.dot(d);
+            if !(t.is_finite() && t >= 0.0) {
+                // The ray enters this frustum already past its exit: no part of it is imaged.
                 break;
             }
             let q = o + d * t;
@@ -483,6 +487,24 @@ impl GraphCamera {
             .iter()
             .map(|f| (f.parent.unwrap_or(0), f.apex, f.entry_face.clone()))
             .collect()
+    }
+
+    /// Ends frustum `j` at a far plane (through `point`, normal `normal`) with no child: what
+    /// lies beyond is not imaged. For a corridor that ends at a wall, so its pyramid does not
+    /// reach on into space another frustum images.
+    pub fn end(&mut self, j: usize, point: DVec3, normal: DVec3) -> Result<(), CameraError> {
+        let j = self.leaf(j)?;
+        let mut far = Plane::through(
+            point,
+            normal
+                .try_normalize()
+                .ok_or(CameraError::Degenerate("a far plane needs a normal"))?,
+        );
+        if far.eval(self.frusta[j].apex) < 0.0 {
+            far = far.flipped();
+        }
+        self.frusta[j].exit = Some(far);
+        Ok(())
     }
 
     /// `j` itself, when it has no children yet (a frustum ends at one plane).

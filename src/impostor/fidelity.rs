@@ -53,8 +53,28 @@ impl FidelityReport {
     }
 }
 
-/// Compares the impostor's answer to every ray with the exact answer of `exact`.
+/// Compares the impostor's answer to every ray (its default walk, [`Impostor::walk`]) with the
+/// exact answer of `exact`.
 pub fn check(impostor: &Impostor, exact: &Bvh, rays: &[Ray]) -> FidelityReport {
+    check_by(impostor, exact, rays, |r| impostor.walk(r, f32::INFINITY))
+}
+
+/// [`check`] with a chosen walk.
+pub fn check_with(
+    impostor: &Impostor,
+    exact: &Bvh,
+    rays: &[Ray],
+    mode: super::WalkMode,
+) -> FidelityReport {
+    check_by(impostor, exact, rays, |r| {
+        impostor.walk_mode(r, f32::INFINITY, mode)
+    })
+}
+
+fn check_by<W>(impostor: &Impostor, exact: &Bvh, rays: &[Ray], walk: W) -> FidelityReport
+where
+    W: Fn(&Ray) -> (Option<crate::trace::Hit>, super::WalkStats) + Sync,
+{
     #[derive(Default, Clone, Copy)]
     struct One {
         exact: bool,
@@ -68,7 +88,7 @@ pub fn check(impostor: &Impostor, exact: &Bvh, rays: &[Ray]) -> FidelityReport {
         .par_iter()
         .map(|r| {
             let e = exact.closest_hit(r, f32::INFINITY);
-            let (i, stats) = impostor.walk(r, f32::INFINITY);
+            let (i, stats) = walk(r);
             let mut one = One {
                 exact: e.is_some(),
                 imp: i.is_some(),
@@ -168,14 +188,8 @@ pub fn surface_captured(impostor: &Impostor, mesh: &Mesh, samples: usize, seed: 
     captured as f64 / points.len().max(1) as f64
 }
 
-/// Which camera to build a checked impostor through.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum CheckCamera {
-    /// Planar pinhole at the reflector, framing the target's bounding sphere.
-    Pinhole,
-    /// SPOC at the reflector; strength from [`crate::camera::Spoc::strength_for_region`] unless given.
-    Spoc(Option<f64>),
-}
+/// Which camera to build a checked impostor through (see [`super::ImpostorCamera::around`]).
+pub use super::ViewCamera as CheckCamera;
 
 /// The paper's setting (Fig. 1, 6–7): a target object, a reflector beside it, and a viewer who
 /// sees the target in the reflector. Everything in world space.
@@ -234,6 +248,42 @@ impl ReflectorSetup {
         })
     }
 
+    /// Paper 1's Fig. 5 setting: the reflector (largest extent 0.5) stands on the floor of the
+    /// maze's first corridor, two cells in, and the viewer looks at it from the maze camera's
+    /// root. The target is the maze itself, in its own coordinates.
+    pub fn in_maze(
+        maze: &crate::scene::maze::Maze,
+        reflector: &Mesh,
+        view_size: u32,
+    ) -> Result<Self, crate::camera::CameraError> {
+        let e = reflector.bounds().extent().max_element();
+        if !(e.is_finite() && e > 0.0) {
+            return Err(crate::camera::CameraError::Degenerate(
+                "a mesh with no extent cannot be placed",
+            ));
+        }
+        let (eye, dir) = maze.entrance_view();
+        let at = eye + dir * (crate::scene::maze::ROOT_BACK + 2.0);
+        let reflector = Arc::new(fit(
+            reflector,
+            0.5,
+            Vec3::new(at.x as f32, 0.0, at.z as f32),
+        ));
+        let view = Pinhole::look_at(
+            eye.as_vec3(),
+            reflector.bounds().center(),
+            Vec3::Y,
+            25.0,
+            view_size,
+            view_size,
+        )?;
+        Ok(Self {
+            target: Arc::new(maze.mesh()),
+            reflector,
+            view,
+        })
+    }
+
     /// The reflected rays of the viewer's pixels that see the reflector, kept when they enter
     /// the target's bounding box (the only rays an impostor is ever asked about).
     pub fn rays(&self) -> Vec<Ray> {
@@ -244,40 +294,15 @@ impl ReflectorSetup {
             .collect()
     }
 
-    /// An impostor camera at the reflector's centre looking at the target, `size²` texels.
+    /// An impostor camera at the reflector's centre looking at the target, `size²` texels;
+    /// the SPOC strength follows from the reflector's radius (the region of the rays).
     pub fn camera(
         &self,
         kind: CheckCamera,
         size: u32,
     ) -> Result<super::ImpostorCamera, crate::camera::CameraError> {
         let (eye, tb) = (self.reflector.bounds().center(), self.target.bounds());
-        let (center, radius) = (tb.center(), tb.radius());
-        match kind {
-            CheckCamera::Pinhole => {
-                let d = eye.distance(center) as f64;
-                let half =
-                    (radius as f64 / (d * d - (radius as f64).powi(2)).max(1e-12).sqrt()) * 1.05;
-                let cam = Pinhole::look_at(
-                    eye,
-                    center,
-                    Vec3::Y,
-                    2.0 * half.atan().to_degrees(),
-                    size,
-                    size,
-                )?;
-                Ok(super::ImpostorCamera::Pinhole(
-                    cam.with_near((d - radius as f64) * 0.5),
-                ))
-            }
-            CheckCamera::Spoc(k) => {
-                let delta = self.reflector.bounds().radius() as f64;
-                let k = k.unwrap_or_else(|| {
-                    crate::camera::Spoc::strength_for_region(delta, eye.distance(center) as f64)
-                });
-                Ok(super::ImpostorCamera::Spoc(crate::camera::Spoc::around(
-                    eye, center, radius, k, size,
-                )?))
-            }
-        }
+        let region = self.reflector.bounds().radius() as f64;
+        super::ImpostorCamera::around(kind, eye, tb.center(), tb.radius(), region, size)
     }
 }

@@ -42,7 +42,67 @@ pub enum ImpostorCamera {
     Graph(GraphCamera),
 }
 
+/// A camera placed to look at one object: what [`ImpostorCamera::around`] builds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ViewCamera {
+    /// Planar pinhole framing the object's bounding sphere.
+    Pinhole,
+    /// Parallel projection framing the bounding sphere.
+    Orthographic,
+    /// SPOC; its strength from [`Spoc::strength_for_region`] unless given.
+    Spoc(Option<f64>),
+}
+
 impl ImpostorCamera {
+    /// A camera at `eye` looking at the sphere (`center`, `radius`), `size²` texels. `region`
+    /// is the radius of the region the secondary rays come from (the SPOC strength rule
+    /// k ≈ 2Δ/z_O, algorithms.md §3.2).
+    pub fn around(
+        kind: ViewCamera,
+        eye: Vec3,
+        center: Vec3,
+        radius: f32,
+        region: f64,
+        size: u32,
+    ) -> Result<ImpostorCamera, crate::camera::CameraError> {
+        let d = eye.distance(center) as f64;
+        let r = radius as f64;
+        if !(r > 0.0 && d > r * 1.0001) {
+            return Err(crate::camera::CameraError::Degenerate(
+                "the eye must lie outside the object's bounding sphere",
+            ));
+        }
+        let up = if (center - eye).normalize().y.abs() > 0.99 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        Ok(match kind {
+            ViewCamera::Pinhole => {
+                let half = (r / (d * d - r * r).max(1e-12).sqrt()) * 1.05;
+                let cam =
+                    Pinhole::look_at(eye, center, up, 2.0 * half.atan().to_degrees(), size, size)?;
+                ImpostorCamera::Pinhole(cam.with_near((d - r) * 0.5))
+            }
+            ViewCamera::Orthographic => {
+                // The image plane at the eye, deep enough to hold the whole sphere.
+                ImpostorCamera::Orthographic(Orthographic::look_at(
+                    eye,
+                    center,
+                    up,
+                    r * 1.05,
+                    d + r * 1.05,
+                    size,
+                    size,
+                )?)
+            }
+            ViewCamera::Spoc(k) => {
+                let k = k.unwrap_or_else(|| Spoc::strength_for_region(region, d));
+                ImpostorCamera::Spoc(Spoc::around(eye, center, radius, k, size)?)
+            }
+        })
+    }
+
     /// True when straight world segments project to curves, so triangles must be tessellated
     /// and ray walks must sample the curve.
     pub fn is_curved(&self) -> bool {
@@ -169,12 +229,23 @@ impl Impostor {
         (x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64).then_some((x as u32, y as u32))
     }
 
-    /// World size of one texel at image point `uv` and depth `gd` (its footprint).
+    /// World size of one texel at image point `uv` and depth `gd` (its footprint). For a
+    /// graph camera, measured with the matrix of the frustum holding the point, so a texel
+    /// next to a face between frusta does not span both.
     pub fn footprint(&self, uv: DVec2, gd: f64) -> f64 {
-        let p = self.camera.unproject(uv, gd);
-        let px = self.camera.unproject(uv + DVec2::X, gd);
-        let py = self.camera.unproject(uv + DVec2::Y, gd);
-        (px - p).length().max((py - p).length())
+        fn size<P: Projection>(camera: &P, uv: DVec2, gd: f64) -> f64 {
+            let p = camera.unproject(uv, gd);
+            let px = camera.unproject(uv + DVec2::X, gd);
+            let py = camera.unproject(uv + DVec2::Y, gd);
+            (px - p).length().max((py - p).length())
+        }
+        match &self.camera {
+            ImpostorCamera::Graph(g) => {
+                let j = g.locate(g.unproject(uv, gd)).unwrap_or(0);
+                size(&g.frustum(j), uv, gd)
+            }
+            camera => size(camera, uv, gd),
+        }
     }
 
     /// Fraction of texels that are covered.

@@ -202,6 +202,17 @@ impl Maze {
         m
     }
 
+    /// Where the maze camera stands — [`ROOT_BACK`] cells behind the entrance, at eye height —
+    /// and the unit direction it looks in, into the first corridor.
+    pub fn entrance_view(&self) -> (DVec3, DVec3) {
+        let (c0, r0) = self.entrance;
+        let d0 = self.open_directions(self.entrance)[0];
+        (
+            cell_centre(c0 as i64, r0 as i64) - step(d0) * ROOT_BACK,
+            step(d0),
+        )
+    }
+
     /// The graph camera that follows the corridors from the entrance by a breadth-first walk
     /// of the maze graph, as in the paper's Fig. 9. The root looks along the first corridor
     /// from behind the entrance. A branch walks straight until its corridor turns or meets a
@@ -222,10 +233,9 @@ impl Maze {
         };
         let (c0, r0) = self.entrance;
         let d0 = self.open_directions(self.entrance)[0];
-        // The root: 2.5 cells behind the entrance, its view a little wider than the corridor.
-        let back = 2.5;
-        let eye = cell_centre(c0 as i64, r0 as i64) - step(d0) * back;
-        let fov = 2.0 * (0.55f64 / (back - 0.5)).atan().to_degrees();
+        // The root: behind the entrance, its view a little wider than the corridor.
+        let (eye, _) = self.entrance_view();
+        let fov = 2.0 * (0.55f64 / (ROOT_BACK - 0.5)).atan().to_degrees();
         let root = Pinhole::look_at(
             eye.as_vec3(),
             (eye + step(d0)).as_vec3(),
@@ -269,6 +279,9 @@ impl Maze {
                 .filter(|&t| open(&claimed, b.cell, t))
                 .collect();
             if exits.is_empty() || g.frusta().len() + exits.len() > MAX_FRUSTA {
+                // The corridor ends here: so does its frustum, at the cell's far side.
+                let far = cell_centre(b.cell.0, b.cell.1) + step(d) * 0.5;
+                g.end(b.frustum, far, step(d)).map_err(cam_err)?;
                 continue;
             }
             let next = |t: usize| (b.cell.0 + DIRS[t].0, b.cell.1 + DIRS[t].1);
@@ -368,6 +381,9 @@ struct Branch {
     dir: usize,
 }
 
+/// How far behind the entrance the root camera stands, in cells.
+pub const ROOT_BACK: f64 = 2.5;
+
 /// Faces reach 1.5 m around each corner: enough for a 1 m corridor, walls hide the rest.
 const FACE_EXTENT: f64 = 1.5;
 
@@ -410,6 +426,52 @@ mod tests {
         );
         let mesh = m.mesh();
         assert!(mesh.triangle_count() > 12 * 20);
+    }
+
+    #[test]
+    fn junctions_split_and_generalized_rays_stay_on_their_pixel() {
+        let text = "#######\n#.....#\n#.#.#.#\nS.....#\n#.#.#.#\n#.....#\n#######\n";
+        let m = Maze::parse(text, Path::new("grid.maze")).unwrap();
+        let g = m.graph_camera(48, Path::new("grid.maze")).unwrap();
+        let splits = g.frusta().iter().filter(|f| f.children.len() >= 2).count();
+        assert!(splits >= 1, "{} frusta, no split", g.frusta().len());
+        assert!(g.frusta().len() <= MAX_FRUSTA);
+        for py in (0..48).step_by(4) {
+            for px in (0..48).step_by(4) {
+                let uv = glam::DVec2::new(px as f64 + 0.5, py as f64 + 0.5);
+                let mut last = f64::INFINITY;
+                for seg in g.ray_path(uv, 2.0).windows(2).skip(1) {
+                    // Each segment from its start (the last one ends on a far plane or a
+                    // corridor another branch claimed: excluded).
+                    for k in 0..8 {
+                        let x = seg[0].lerp(seg[1], k as f64 / 8.0);
+                        // Frusta may overlap above the walls and inside them, where nothing
+                        // is to be seen; the corridors' open space belongs to one frustum.
+                        let open = x.y > 0.0
+                            && x.y < 1.0
+                            && m.floor(x.x.floor() as i64, x.z.floor() as i64);
+                        if !open {
+                            continue;
+                        }
+                        let p = g.project(x).unwrap();
+                        // 1e-4 px: composed matrices of deep frusta round at ~1e-6 px.
+                        assert!(
+                            (p.uv - uv).length() < 1e-4,
+                            "{uv}: {x} → {} in {:?}; path {:?}; frusta {:?}",
+                            p.uv,
+                            g.locate(x),
+                            g.ray_path(uv, 2.0),
+                            g.frusta()
+                                .iter()
+                                .map(|f| (f.parent, f.apex, f.children.clone()))
+                                .collect::<Vec<_>>()
+                        );
+                        assert!(p.gd <= last * (1.0 + 1e-9), "{uv}: gd rises at {x}");
+                        last = p.gd;
+                    }
+                }
+            }
+        }
     }
 
     #[test]
