@@ -141,3 +141,86 @@ fn demo_writes_a_report() {
     assert!(html.contains("diffuse-raster.png") && html.contains("FLIP"));
     assert!(d.join("reflections-trace.png").is_file());
 }
+
+#[test]
+fn impostors_bake_to_files_that_load_back() {
+    let d = scratch("cli_bake");
+    let json = d.join("nested/teapot.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/meshes/teapot.obj",
+        "--camera",
+        "spoc",
+        "--resolution",
+        "64",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for ext in ["json", "exr", "png"] {
+        assert!(json.with_extension(ext).is_file(), "{ext}");
+    }
+    let back = trompe::impostor::file::load(&json).unwrap();
+    assert_eq!(back.camera.kind(), "spoc");
+    assert!(back.coverage() > 0.01);
+    // The maze's graph camera.
+    let maze = d.join("maze.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "scenes/maze.maze",
+        "--camera",
+        "graph",
+        "--resolution",
+        "96",
+        "-o",
+        maze.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let back = trompe::impostor::file::load(&maze).unwrap();
+    assert_eq!(back.camera.kind(), "graph");
+    // Wrong pairings and bad floor plans are clear errors.
+    let out = d.join("x.json");
+    let out = out.to_str().unwrap();
+    fails_cleanly(
+        &trompe(&["impostor", "bake", "scenes/maze.maze", "-o", out]),
+        "needs --camera graph",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            "assets/meshes/teapot.obj",
+            "--camera",
+            "graph",
+            "-o",
+            out,
+        ]),
+        "maze floor plan",
+    );
+    let bad = d.join("bad.maze");
+    std::fs::write(&bad, "#####\n#.x.#\n#####\n").unwrap();
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            bad.to_str().unwrap(),
+            "--camera",
+            "graph",
+        ]),
+        "unknown cell",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            "assets/meshes/teapot.obj",
+            "--from",
+            "1,2",
+            "-o",
+            out,
+        ]),
+        "three finite numbers",
+    );
+}
