@@ -8,6 +8,7 @@ use trompe::bench::raster_once;
 use trompe::camera::Spoc;
 use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup};
 use trompe::impostor::{ImpostorCamera, albedo_of, build};
+use trompe::raster::NoAttributes;
 
 fn impostor(c: &mut Criterion) {
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets");
@@ -32,6 +33,30 @@ fn impostor(c: &mut Criterion) {
                 &bunny,
                 0,
                 &color,
+            )
+            .expect("valid")
+        })
+    });
+    let mut builder = trompe::impostor::ImpostorBuilder::new();
+    let mut again = build(ImpostorCamera::Spoc(spoc.clone()), &bunny, 0, &color).expect("valid");
+    group.bench_function("SPOC impostor rebuilt, memory reused", |bch| {
+        bch.iter(|| {
+            builder
+                .rebuild(&mut again, &bunny, 0, &color)
+                .expect("valid")
+        })
+    });
+    let mut target = trompe::raster::rasterize(spoc.pinhole(), &[&bunny], &NoAttributes, ())
+        .expect("valid")
+        .0;
+    group.bench_function("peer: plain rasterization into a reused target", |bch| {
+        bch.iter(|| {
+            trompe::raster::rasterize_into(
+                spoc.pinhole(),
+                &[&bunny],
+                &NoAttributes,
+                (),
+                &mut target,
             )
             .expect("valid")
         })

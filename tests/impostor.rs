@@ -283,3 +283,30 @@ fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
     );
     assert!(exact_good >= linear_good, "{exact_good} < {linear_good}");
 }
+
+#[test]
+fn a_rebuilt_impostor_equals_a_fresh_build() {
+    use trompe::impostor::ImpostorBuilder;
+    let s = setup();
+    let cam = s.camera(CheckCamera::Spoc(Some(0.8)), 128).unwrap();
+    let color = albedo_of(&s.target);
+    let mut builder = ImpostorBuilder::new();
+    let mut imp = builder.build(cam.clone(), &s.target, 1, &color).unwrap();
+    // The object moves (a smaller teapot, shifted): what it covered before must be cleared.
+    let moved = s.target.transformed(
+        &(glam::Mat4::from_translation(glam::Vec3::new(0.1, 0.05, 0.0))
+            * glam::Mat4::from_scale(glam::Vec3::splat(0.6))),
+    );
+    builder.rebuild(&mut imp, &moved, 1, &albedo_of(&moved)).unwrap();
+    let fresh = build(cam, &moved, 1, &albedo_of(&moved)).unwrap();
+    assert!(imp.gd == fresh.gd && imp.color == fresh.color && imp.position == fresh.position);
+    assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);
+    assert!(imp.object == fresh.object && imp.bounds == fresh.bounds);
+    for r in s.rays().iter().take(300) {
+        let mode = trompe::impostor::WalkMode::Hierarchical;
+        assert_eq!(
+            imp.walk_mode(r, f32::INFINITY, mode).0,
+            fresh.walk_mode(r, f32::INFINITY, mode).0
+        );
+    }
+}

@@ -5,7 +5,7 @@ use super::{Impostor, ImpostorCamera};
 use crate::camera::Projection;
 use crate::frame::FrameError;
 use crate::geom::{Aabb, Material, Mesh};
-use crate::raster::{Fragment, FragmentShader, rasterize};
+use crate::raster::{Fragment, FragmentShader, rasterize, rasterize_into};
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -157,127 +157,215 @@ pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation
     Some(Tessellation::new(positions, source))
 }
 
-#[derive(Clone, Copy)]
-struct Texel {
-    color: Vec3,
-    normal: Vec3,
-    face_normal: Vec3,
-    position: Vec3,
+/// The first pass of construction writes, per fragment that passes the depth test, only its
+/// barycentrics (the item buffer holds its triangle): a visibility buffer. Surface attributes
+/// are resolved afterwards, once per covered texel ([`resolve`]); writing them per fragment
+/// into a wide attribute image cost more than the rasterization itself.
+struct Barycentrics;
+
+impl FragmentShader for Barycentrics {
+    type Output = Vec3;
+    fn shade(&self, f: &Fragment) -> Vec3 {
+        f.bary
+    }
 }
 
-struct TexelShader<'a, F> {
-    camera: &'a ImpostorCamera,
-    mesh: &'a Mesh,
-    source: Option<&'a [SourceTriangle]>,
-    color: &'a F,
-}
+/// A visible point of the source mesh: triangle and barycentrics.
+type Visible = (u32, Vec3);
 
-impl<F: Fn(&SurfaceSample) -> Vec3 + Sync> FragmentShader for TexelShader<'_, F> {
-    type Output = Option<Texel>;
-    fn shade(&self, f: &Fragment) -> Option<Texel> {
-        let (t, b) = match self.source {
-            Some(src) => {
-                let (t, corners) = src[f.item.triangle as usize];
-                (
-                    t,
-                    corners[0] * f.bary.x + corners[1] * f.bary.y + corners[2] * f.bary.z,
-                )
-            }
-            None => (f.item.triangle, f.bary),
-        };
-        let m = self.mesh;
-        let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
-        let position = m.positions[i0] * b.x + m.positions[i1] * b.y + m.positions[i2] * b.z;
-        let n = (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z)
-            .normalize_or(m.face_normal(t as usize));
-        let uv = m
-            .uvs
-            .as_ref()
-            .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
-        let sample = SurfaceSample {
-            position,
-            normal: n,
-            uv,
-            triangle: t,
-        };
-        Some(Texel {
-            color: (self.color)(&sample),
-            normal: n,
-            face_normal: {
-                let n = m.face_normal(t as usize);
-                if n.as_dvec3()
-                    .dot(self.camera.toward_camera(position.as_dvec3()))
-                    < 0.0
-                {
-                    -n
+/// Fills the impostor's maps from the visible points `visible(i)` of texels `i` (row-major),
+/// in parallel over rows. Texels with no visible point are cleared where the object map says
+/// they were written before (invariant: the maps are empty wherever `object` is
+/// [`NO_OBJECT`]).
+fn resolve<F, V>(impostor: &mut Impostor, mesh: &Mesh, object: u32, color: &F, visible: V)
+where
+    F: Fn(&SurfaceSample) -> Vec3 + Sync,
+    V: Fn(usize) -> Option<Visible> + Sync,
+{
+    let Impostor {
+        camera,
+        color: colors,
+        normal,
+        face_normal,
+        position,
+        object: objects,
+        ..
+    } = impostor;
+    let row = colors.size().0 as usize;
+    let camera = &*camera;
+    colors
+        .pixels_mut()
+        .par_chunks_mut(row)
+        .zip(normal.pixels_mut().par_chunks_mut(row))
+        .zip(face_normal.pixels_mut().par_chunks_mut(row))
+        .zip(position.pixels_mut().par_chunks_mut(row))
+        .zip(objects.pixels_mut().par_chunks_mut(row))
+        .enumerate()
+        .for_each(|(y, ((((c, nr), fnr), pos), obj))| {
+            for x in 0..row {
+                let Some((t, b)) = visible(y * row + x) else {
+                    // Only texels written last time need clearing: most of an impostor's
+                    // image is empty, and skipping it halves the pass.
+                    if obj[x] != NO_OBJECT {
+                        (c[x], nr[x], fnr[x], pos[x], obj[x]) =
+                            (Vec4::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, NO_OBJECT);
+                    }
+                    continue;
+                };
+                let s = surface_sample(mesh, t, b);
+                c[x] = color(&s).extend(1.0);
+                nr[x] = s.normal;
+                // The face normal, turned toward the camera.
+                let face = mesh.face_normal(t as usize);
+                let toward = camera.toward_camera(s.position.as_dvec3());
+                fnr[x] = if face.as_dvec3().dot(toward) < 0.0 {
+                    -face
                 } else {
-                    n
-                }
-            },
-            position,
-        })
+                    face
+                };
+                pos[x] = s.position;
+                obj[x] = object;
+            }
+        });
+    let b = mesh.bounds();
+    let pad = b.extent().max_element() * 1e-4;
+    impostor.bounds = Aabb {
+        min: b.min - Vec3::splat(pad),
+        max: b.max + Vec3::splat(pad),
+    };
+    impostor.pyramid.rebuild(&impostor.gd);
+}
+
+/// An impostor with every map empty, sized for its camera.
+fn empty_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
+    use crate::frame::Image;
+    let (w, h) = camera.resolution();
+    let gd = Image::new(w, h, 0.0f32)?;
+    Ok(Impostor {
+        color: Image::new(w, h, Vec4::ZERO)?,
+        normal: Image::new(w, h, Vec3::ZERO)?,
+        face_normal: Image::new(w, h, Vec3::ZERO)?,
+        position: Image::new(w, h, Vec3::ZERO)?,
+        object: Image::new(w, h, NO_OBJECT)?,
+        pyramid: super::MaxPyramid::new(&gd),
+        gd,
+        bounds: Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ZERO,
+        },
+        camera,
+    })
+}
+
+/// The surface point with barycentrics `b` in triangle `t` of `m`.
+fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> SurfaceSample {
+    let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
+    let position = m.positions[i0] * b.x + m.positions[i1] * b.y + m.positions[i2] * b.z;
+    let normal = (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z)
+        .normalize_or(m.face_normal(t as usize));
+    let uv = m
+        .uvs
+        .as_ref()
+        .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
+    SurfaceSample {
+        position,
+        normal,
+        uv,
+        triangle: t,
+    }
+}
+
+/// The source triangle and barycentrics of a fragment of sub-triangle `t` (or of `t` itself
+/// when the mesh was not tessellated).
+fn to_source(source: Option<&[SourceTriangle]>, t: u32, bary: Vec3) -> Visible {
+    match source {
+        Some(src) => {
+            let (s, c) = src[t as usize];
+            (s, c[0] * bary.x + c[1] * bary.y + c[2] * bary.z)
+        }
+        None => (t, bary),
     }
 }
 
 /// Builds an impostor of `mesh` (object id `object`) through `camera`, colouring each texel with
-/// `color` (e.g. the scene's shading of that surface point).
+/// `color` (e.g. the scene's shading of that surface point). To build again and again (a
+/// dynamic scene), keep an [`ImpostorBuilder`] and call [`ImpostorBuilder::rebuild`].
 pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     camera: ImpostorCamera,
     mesh: &Mesh,
     object: u32,
     color: &F,
 ) -> Result<Impostor, FrameError> {
-    if let ImpostorCamera::Graph(g) = &camera {
-        return build_graph(g.clone(), mesh, object, color);
-    }
-    let tessellation = if camera.is_curved() {
-        tessellate(&camera, mesh)
-    } else {
-        None
-    };
-    let (raster_mesh, source) = match &tessellation {
-        Some(t) => (&t.mesh, Some(t.source.as_slice())),
-        None => (mesh, None),
-    };
-    let shader = TexelShader {
-        camera: &camera,
-        mesh,
-        source,
-        color,
-    };
-    let (target, _) = rasterize(&camera, &[raster_mesh], &shader, None)?;
-    Ok(assemble(
-        camera,
-        target.gd,
-        &target.attributes,
-        mesh,
-        object,
-    ))
+    ImpostorBuilder::default().build(camera, mesh, object, color)
 }
 
-/// The impostor from its camera, `gd` and per-texel samples (`None` where empty).
-fn assemble(
-    camera: ImpostorCamera,
-    gd: crate::frame::Image<f32>,
-    texels: &crate::frame::Image<Option<Texel>>,
-    mesh: &Mesh,
-    object: u32,
-) -> Impostor {
-    let b = mesh.bounds();
-    let pad = b.extent().max_element() * 1e-4;
-    Impostor {
-        color: texels.map(|t| t.map_or(Vec4::ZERO, |t| t.color.extend(1.0))),
-        normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.normal)),
-        face_normal: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.face_normal)),
-        position: texels.map(|t| t.map_or(Vec3::ZERO, |t| t.position)),
-        object: texels.map(|t| if t.is_some() { object } else { NO_OBJECT }),
-        pyramid: super::MaxPyramid::new(&gd),
-        gd,
-        bounds: Aabb {
-            min: b.min - Vec3::splat(pad),
-            max: b.max + Vec3::splat(pad),
-        },
-        camera,
+/// Builds impostors while keeping its working memory — the visibility buffer here, the
+/// impostor's own maps in [`ImpostorBuilder::rebuild`] — so a rebuild every frame (paper 1 §6
+/// rebuilds its impostors for dynamic scenes) allocates nothing.
+#[derive(Default)]
+pub struct ImpostorBuilder {
+    visibility: Option<crate::raster::RasterTarget<Vec3>>,
+}
+
+impl ImpostorBuilder {
+    /// A builder with no memory yet.
+    pub fn new() -> ImpostorBuilder {
+        ImpostorBuilder::default()
+    }
+
+    /// Builds a new impostor (see [`build`]).
+    pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        camera: ImpostorCamera,
+        mesh: &Mesh,
+        object: u32,
+        color: &F,
+    ) -> Result<Impostor, FrameError> {
+        if let ImpostorCamera::Graph(g) = &camera {
+            return build_graph(g.clone(), mesh, object, color);
+        }
+        let mut impostor = empty_impostor(camera)?;
+        self.rebuild(&mut impostor, mesh, object, color)?;
+        Ok(impostor)
+    }
+
+    /// Builds `impostor` again through its own camera, from `mesh` as it is now, reusing its
+    /// maps. The result equals a fresh [`build`].
+    pub fn rebuild<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        impostor: &mut Impostor,
+        mesh: &Mesh,
+        object: u32,
+        color: &F,
+    ) -> Result<(), FrameError> {
+        if let ImpostorCamera::Graph(g) = &impostor.camera {
+            *impostor = build_graph(g.clone(), mesh, object, color)?;
+            return Ok(());
+        }
+        let camera = &impostor.camera;
+        let tessellation = if camera.is_curved() {
+            tessellate(camera, mesh)
+        } else {
+            None
+        };
+        let (raster_mesh, source) = match &tessellation {
+            Some(t) => (&t.mesh, Some(t.source.as_slice())),
+            None => (mesh, None),
+        };
+        let target = match &mut self.visibility {
+            Some(t) => t,
+            slot => slot.insert(rasterize(camera, &[], &Barycentrics, Vec3::ZERO)?.0),
+        };
+        rasterize_into(camera, &[raster_mesh], &Barycentrics, Vec3::ZERO, target)?;
+        // The new depth becomes the impostor's; its old one is the next pass's scratch.
+        std::mem::swap(&mut impostor.gd, &mut target.gd);
+        let (item, bary) = (&target.item, &target.attributes);
+        let visible = |i: usize| {
+            (item.pixels()[i] != crate::raster::ItemId::NONE)
+                .then(|| to_source(source, item.pixels()[i].triangle, bary.pixels()[i]))
+        };
+        resolve(impostor, mesh, object, color, visible);
+        Ok(())
     }
 }
 
@@ -350,33 +438,29 @@ fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     };
     let (w, h) = g.resolution();
     let mut gd = crate::frame::Image::new(w, h, 0.0f32)?;
-    let mut texels: crate::frame::Image<Option<Texel>> = crate::frame::Image::new(w, h, None)?;
+    let mut visible: Vec<Option<Visible>> = vec![None; w as usize * h as usize];
     for j in 0..g.frusta().len() {
         let part = clip_to_frustum(g, j, mesh);
         if part.source.is_empty() {
             continue;
         }
-        let shader = TexelShader {
-            camera: &camera,
-            mesh,
-            source: Some(&part.source),
-            color,
-        };
-        let (target, _) = rasterize(&g.frustum(j), &[&part.mesh], &shader, None)?;
-        for (i, (&g_new, t)) in target
-            .gd
-            .pixels()
-            .iter()
-            .zip(target.attributes.pixels())
-            .enumerate()
-        {
+        let (target, _) = rasterize(&g.frustum(j), &[&part.mesh], &Barycentrics, Vec3::ZERO)?;
+        let (new_gd, item, bary) = (&target.gd, &target.item, &target.attributes);
+        for (i, &g_new) in new_gd.pixels().iter().enumerate() {
             if g_new > gd.pixels()[i] {
                 gd.pixels_mut()[i] = g_new;
-                texels.pixels_mut()[i] = *t;
+                visible[i] = Some(to_source(
+                    Some(&part.source),
+                    item.pixels()[i].triangle,
+                    bary.pixels()[i],
+                ));
             }
         }
     }
-    Ok(assemble(camera, gd, &texels, mesh, object))
+    let mut impostor = empty_impostor(camera)?;
+    impostor.gd = gd;
+    resolve(&mut impostor, mesh, object, color, |i| visible[i]);
+    Ok(impostor)
 }
 
 /// A colour function that returns the mesh's albedo (material colour × texture), unlit.

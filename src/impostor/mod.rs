@@ -20,7 +20,7 @@ mod straight;
 mod walk;
 
 pub use billboard::Billboard;
-pub use build::{SurfaceSample, Tessellation, albedo_of, build, tessellate};
+pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};
 pub use pyramid::MaxPyramid;
 pub use walk::{WalkMode, WalkStats};
 

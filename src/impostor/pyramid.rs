@@ -6,6 +6,24 @@
 use crate::frame::Image;
 use glam::DVec2;
 
+/// Writes into `next` (half the size of `level`, rounded up) the maximum of each 2 × 2 block.
+fn reduce(level: &Image<f32>, next: &mut Image<f32>) {
+    let (w, h) = level.size();
+    let (nw, nh) = next.size();
+    for y in 0..nh {
+        for x in 0..nw {
+            let mut m = 0.0f32;
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let (cx, cy) = (2 * x + dx, 2 * y + dy);
+                if cx < w && cy < h {
+                    m = m.max(level.get(cx, cy));
+                }
+            }
+            next.set(x, y, m);
+        }
+    }
+}
+
 /// Max-`gd` levels, finest first.
 #[derive(Clone, Debug)]
 pub struct MaxPyramid {
@@ -13,6 +31,19 @@ pub struct MaxPyramid {
 }
 
 impl MaxPyramid {
+    /// Builds the pyramid of `gd` again, reusing the levels' memory when the size is unchanged.
+    pub fn rebuild(&mut self, gd: &Image<f32>) {
+        if self.levels.first().map(|l| l.size()) != Some(gd.size()) {
+            *self = MaxPyramid::new(gd);
+            return;
+        }
+        self.levels[0].pixels_mut().copy_from_slice(gd.pixels());
+        for k in 1..self.levels.len() {
+            let (done, rest) = self.levels.split_at_mut(k);
+            reduce(&done[k - 1], &mut rest[0]);
+        }
+    }
+
     /// Builds every level down to 1 × 1.
     pub fn new(gd: &Image<f32>) -> MaxPyramid {
         let mut levels = vec![gd.clone()];
@@ -23,18 +54,7 @@ impl MaxPyramid {
             }
             let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
             let mut next = Image::new(nw, nh, 0.0f32).expect("smaller than its parent");
-            for y in 0..nh {
-                for x in 0..nw {
-                    let mut m = 0.0f32;
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let (cx, cy) = (2 * x + dx, 2 * y + dy);
-                        if cx < w && cy < h {
-                            m = m.max(last.get(cx, cy));
-                        }
-                    }
-                    next.set(x, y, m);
-                }
-            }
+            reduce(last, &mut next);
             levels.push(next);
         }
         MaxPyramid { levels }

@@ -147,6 +147,42 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         item: Image::new(w, h, ItemId::NONE)?,
         attributes: Image::new(w, h, empty)?,
     };
+    let stats = draw_bands(camera, objects, shader, None, &mut target);
+    Ok((target, stats))
+}
+
+/// [`rasterize`] into an existing target, reusing its memory (for images rebuilt every frame):
+/// each band clears its rows in parallel before drawing. A target of another size is
+/// reallocated.
+pub fn rasterize_into<P: Projection, S: FragmentShader>(
+    camera: &P,
+    objects: &[&Mesh],
+    shader: &S,
+    empty: S::Output,
+    target: &mut RasterTarget<S::Output>,
+) -> Result<RasterStats, FrameError> {
+    let (w, h) = camera.resolution();
+    if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
+        *target = RasterTarget {
+            gd: Image::new(w, h, 0.0f32)?,
+            item: Image::new(w, h, ItemId::NONE)?,
+            attributes: Image::new(w, h, empty)?,
+        };
+    }
+    Ok(draw_bands(camera, objects, shader, Some(empty), target))
+}
+
+/// Bins the triangles into bands of rows and draws the bands in parallel (each band's
+/// triangles in input order, so the result does not depend on the thread count); clears each
+/// band first when `clear` gives the empty attribute.
+fn draw_bands<P: Projection, S: FragmentShader>(
+    camera: &P,
+    objects: &[&Mesh],
+    shader: &S,
+    clear: Option<S::Output>,
+    target: &mut RasterTarget<S::Output>,
+) -> RasterStats {
+    let w = target.gd.size().0;
     let (binned, mut stats) = setup::screen_triangles(camera, objects, BAND_ROWS);
     let n = (BAND_ROWS * w) as usize;
     let band_stats: Vec<RasterStats> = target
@@ -157,6 +193,11 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         .zip(target.attributes.pixels_mut().par_chunks_mut(n))
         .enumerate()
         .map(|(band_index, ((gd, item), attr))| {
+            if let Some(empty) = clear {
+                gd.fill(0.0);
+                item.fill(ItemId::NONE);
+                attr.fill(empty);
+            }
             let mut band = scan::Band {
                 width: w,
                 first_row: band_index as u32 * BAND_ROWS,
@@ -176,7 +217,7 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
     for s in band_stats {
         stats = stats + s;
     }
-    Ok((target, stats))
+    stats
 }
 
 #[cfg(test)]

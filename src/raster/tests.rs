@@ -257,3 +257,29 @@ fn huge_triangles_are_guard_band_clipped() {
     let (t, _) = rasterize(&cam, &[&m], &NoAttributes, ()).unwrap();
     assert!(t.item.pixels().iter().all(|id| !id.is_none()));
 }
+
+#[test]
+fn rasterizing_into_a_used_target_equals_a_fresh_rasterization() {
+    let cam = ScreenSpace(64, 64);
+    let big = mesh(
+        vec![
+            Vec3::new(2.0, 2.0, 1.0),
+            Vec3::new(62.0, 3.0, 1.0),
+            Vec3::new(30.0, 61.0, 1.0),
+        ],
+        vec![[0, 1, 2]],
+    );
+    let small = mesh(
+        vec![
+            Vec3::new(20.0, 20.0, 2.0),
+            Vec3::new(40.0, 22.0, 2.0),
+            Vec3::new(30.0, 35.0, 2.0),
+        ],
+        vec![[0, 1, 2]],
+    );
+    let (mut target, _) = rasterize(&cam, &[&big], &StoreFragment, None).unwrap();
+    rasterize_into(&cam, &[&small], &StoreFragment, None, &mut target).unwrap();
+    let (fresh, _) = rasterize(&cam, &[&small], &StoreFragment, None).unwrap();
+    assert!(target.gd == fresh.gd && target.item == fresh.item);
+    assert!(target.attributes == fresh.attributes);
+}
