@@ -194,7 +194,7 @@ fn hierarchical_and_linear_walks_give_identical_hits() {
     let mut rays = sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 11);
     rays.extend(s.rays());
     assert!(rays.len() >= 100_000);
-    for kind in [CheckCamera::Spoc(None), CheckCamera::Pinhole] {
+    for kind in [CheckCamera::Pinhole, CheckCamera::Spoc(None)] {
         let imp = build(
             s.camera(kind, 256).unwrap(),
             &s.target,
@@ -297,7 +297,9 @@ fn a_rebuilt_impostor_equals_a_fresh_build() {
         &(glam::Mat4::from_translation(glam::Vec3::new(0.1, 0.05, 0.0))
             * glam::Mat4::from_scale(glam::Vec3::splat(0.6))),
     );
-    builder.rebuild(&mut imp, &moved, 1, &albedo_of(&moved)).unwrap();
+    builder
+        .rebuild(&mut imp, &moved, 1, &albedo_of(&moved))
+        .unwrap();
     let fresh = build(cam, &moved, 1, &albedo_of(&moved)).unwrap();
     assert!(imp.gd == fresh.gd && imp.color == fresh.color && imp.position == fresh.position);
     assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);

@@ -137,7 +137,7 @@ impl Spoc {
     }
 
     /// The depth ramp `κ(z)`.
-    fn kappa(&self, z: f64) -> f64 {
+    pub fn kappa(&self, z: f64) -> f64 {
         self.k * ((z - self.z_near) / (self.z_far - self.z_near)).max(0.0)
     }
 }

@@ -233,7 +233,7 @@ where
         min: b.min - Vec3::splat(pad),
         max: b.max + Vec3::splat(pad),
     };
-    impostor.pyramid.rebuild(&impostor.gd);
+    impostor.rebuild_pyramid();
 }
 
 /// An impostor with every map empty, sized for its camera.

@@ -455,7 +455,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             exr_path.display()
         )));
     }
-    Ok(Impostor {
+    let mut impostor = Impostor {
         camera,
         color,
         pyramid: super::MaxPyramid::new(&gd),
@@ -471,5 +471,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
                 .collect(),
         )?,
         bounds,
-    })
+    };
+    impostor.rebuild_pyramid();
+    Ok(impostor)
 }

@@ -15,6 +15,7 @@ mod billboard;
 mod build;
 pub mod fidelity;
 pub mod file;
+mod front;
 mod pyramid;
 mod straight;
 mod walk;
@@ -206,12 +207,19 @@ pub struct Impostor {
     pub object: Image<u32>,
     /// World box of the replaced geometry: rays are clipped to it.
     pub bounds: Aabb,
-    /// Max-`gd` pyramid of `gd` (for the hierarchical walk); rebuild it with
-    /// [`MaxPyramid::new`] after editing `gd`.
+    /// Max pyramid of the texels' front bounds (the largest `gd` of a point behind a texel's
+    /// plane, 0 where empty; `front.rs`), for the hierarchical walk; rebuild it with
+    /// [`Impostor::rebuild_pyramid`] after editing the maps.
     pub pyramid: MaxPyramid,
 }
 
 impl Impostor {
+    /// Recomputes [`Impostor::pyramid`] from the maps.
+    pub fn rebuild_pyramid(&mut self) {
+        let bounds = front::front_bounds(self);
+        self.pyramid.rebuild(&bounds);
+    }
+
     /// Stored `gd` at image point `uv` (nearest texel; 0 outside the image).
     #[inline]
     pub fn gd_at(&self, uv: DVec2) -> f32 {

@@ -1,7 +1,10 @@
-//! The max-`gd` pyramid (issue 3, beyond paper 1): level 0 is the `gd` image, each further level
-//! halves the resolution keeping the largest `gd` of the texels a node covers. A node with
-//! maximum 0 covers only empty texels, so a ray whose image path stays inside it cannot cross the
-//! stored surface there; the hierarchical walk skips such stretches.
+//! A max pyramid (issue 3, beyond paper 1): level 0 is an image — for impostors, the texels'
+//! front bounds (`front.rs`; 0 where empty) — and each further level halves the resolution
+//! keeping the largest value of the texels a node covers. A ray whose image path stays inside a
+//! node while its `gd` exceeds the node's value is in front of every texel plane there and
+//! cannot cross the stored surface; the hierarchical walk skips such stretches.
+//!
+//! Invariant: a node's value is at least the value of every texel it covers.
 
 use crate::frame::Image;
 use glam::DVec2;

@@ -27,6 +27,9 @@ const THICKNESS_FOOTPRINTS: f64 = 2.0;
 const MIN_COS: f64 = 0.3;
 /// Samples per pixel of image path in the graph camera's algorithm 1.
 const GRAPH_UNIFORM_DENSITY: f64 = 4.0;
+/// The hierarchical walk tries to skip only while more samples than this remain: over a short
+/// rest of the path an attempt costs more reads than it saves.
+const MIN_SKIP_REMAINING: usize = 4;
 /// Upper bound on sub-segments per ray (bounds the work on degenerate input).
 const MAX_STEPS: usize = 1 << 16;
 
@@ -35,8 +38,9 @@ const MAX_STEPS: usize = 1 << 16;
 pub enum WalkMode {
     /// Every sub-segment in turn (algorithms.md §2.3).
     Linear,
-    /// Skips runs of samples whose image path provably stays over empty texels (max-`gd`
-    /// pyramid); returns exactly the hits of [`WalkMode::Linear`].
+    /// Skips runs of samples that provably lie in front of their texels' planes (over empty
+    /// texels, or in front of covered ones: the pyramid of front bounds); returns exactly the
+    /// hits of [`WalkMode::Linear`].
     Hierarchical,
     /// Every texel the image path crosses, once, in order ([`super::straight`]); for
     /// projective cameras (pinhole, orthographic). A SPOC impostor walks hierarchically instead.
@@ -57,7 +61,8 @@ pub(super) struct Sample {
     pub p: ImagePoint,
     /// The sample's texel, if inside the image.
     pub texel: Option<(u32, u32)>,
-    /// Stored `gd` at the sample's texel (0 when empty or outside).
+    /// Stored `gd` at the sample's texel (0 when empty or outside; NaN when not read yet — the
+    /// landing sample of a skip, known to be in front).
     pub stored: f32,
     /// Signed distance from the sample to its texel's plane, positive on the camera's side
     /// (+∞ over empty texels): positive while the ray is in front of the stored surface.
@@ -223,18 +228,26 @@ impl Impostor {
         };
         let at = |k: usize| c + (e - c) * (k as f64 / n as f64);
         let mut k = 0;
-        // The texel where a skip last failed: no second attempt from it.
+        // The pyramid level the last skip attempt reached (where the next one starts looking).
+        let mut level_hint = 2;
+        // The 2 × 2 node where a skip last failed: no second attempt while in it.
         let mut failed_at: Option<Option<(u32, u32)>> = None;
         while k < n {
-            // Skipping is attempted only from an empty texel: over covered texels the next
-            // samples are rarely all empty and the attempt would cost more than it saves.
-            if mode == WalkMode::Hierarchical && prev.stored == 0.0 && failed_at != Some(prev.texel)
+            // Skipping is attempted from a sample in front of its texel's front bound (every
+            // empty texel, and covered texels the ray passes well in front of).
+            let node = prev.texel.map(|(x, y)| (x >> 1, y >> 1));
+            if mode == WalkMode::Hierarchical
+                && n - k > MIN_SKIP_REMAINING
+                && failed_at != Some(node)
+                && self.in_front_of_bound(&prev)
             {
-                let skip = self.empty_run(at, k, n, prev.p.uv, &mut stats);
+                let skip = self.front_run(camera, &at, (k, n), &prev, &mut level_hint, &mut stats);
                 if skip > 0 {
-                    // Samples k+1 ..= k+skip all lie over empty texels: none can end a crossing,
-                    // and the linear walk arrives at sample k+skip in the same state. That
-                    // sample is known to be empty, so its texel need not be read.
+                    // Samples k+1 ..= k+skip are all in front of their texels' planes: none
+                    // can end a crossing, and the linear walk arrives at sample k+skip in the
+                    // same state.
+                    // Sample k+skip is in front of its plane; its texel is read only if the
+                    // next sample ends a crossing (`accept` needs it).
                     k += skip;
                     let Some(p) = camera.project(at(k)) else {
                         return (None, stats);
@@ -242,18 +255,22 @@ impl Impostor {
                     prev = Sample {
                         p,
                         texel: self.texel(p.uv),
-                        stored: 0.0,
+                        stored: f32::NAN,
                         delta: f64::INFINITY,
                     };
                     continue;
                 }
-                failed_at = Some(prev.texel);
+                failed_at = Some(node);
             }
             k += 1;
             let Some(cur) = self.sample(camera, at(k), &mut stats) else {
                 return (None, stats);
             };
             if prev.delta > 0.0 && cur.delta <= 0.0 {
+                if prev.stored.is_nan() {
+                    // The landing sample of a skip: read it now, as the linear walk did.
+                    prev = self.sample(camera, at(k - 1), &mut stats).unwrap_or(prev);
+                }
                 if let Some(hit) = self.accept(ray, &prev, &cur) {
                     return (Some(hit), stats);
                 }
@@ -263,28 +280,45 @@ impl Impostor {
         (None, stats)
     }
 
-    /// The longest run of samples after `k` whose image path provably stays over empty texels,
-    /// given that sample `k` (at image point `uv`) lies over an empty texel or outside the image.
+    /// Whether sample `s` lies in front of its texel's front bound (outside the image, always).
+    /// The bound is part of the texel the sample already read: no extra visit.
+    fn in_front_of_bound(&self, s: &Sample) -> bool {
+        if s.stored.is_nan() {
+            // The landing sample of a skip: its run proved it.
+            return true;
+        }
+        match s.texel {
+            None => true,
+            Some((x, y)) => s.p.gd > self.pyramid.node(0, x, y) as f64,
+        }
+    }
+
+    /// The longest run of samples after `k` that provably lie in front of their texels' planes,
+    /// given that sample `k` (`at_k`) lies in front of its texel's front bound.
     ///
-    /// Climbs the max-`gd` pyramid from that texel to the largest empty node holding it (one
-    /// read per level), then searches — doubling, then halving — for the longest run of samples
-    /// whose conservative image box ([`ImpostorCamera::segment_image_bounds`]) stays inside the
-    /// node. Containment costs projections, not texel reads.
-    fn empty_run(
+    /// Climbs the pyramid of front bounds from that texel to the largest node whose bound the
+    /// ray's `gd` at sample `k` exceeds (one read per level), then searches — doubling, then
+    /// halving — for the longest run whose conservative image box
+    /// ([`ImpostorCamera::segment_image_bounds`]) stays inside the node while the ray's `gd`
+    /// at the run's end (the smaller one: `gd` is monotone along a segment) still exceeds the
+    /// node's bound. Outside the image everything is empty: the run must stay on the same outer
+    /// side. Runs cost projections, not texel reads.
+    fn front_run<P: Projection>(
         &self,
-        at: impl Fn(usize) -> DVec3,
-        k: usize,
-        n: usize,
-        uv: DVec2,
+        camera: &P,
+        at: &impl Fn(usize) -> DVec3,
+        (k, n): (usize, usize),
+        at_k: &Sample,
+        level_hint: &mut usize,
         stats: &mut WalkStats,
     ) -> usize {
         let (w, h) = self.gd.size();
         let (wf, hf) = (w as f64, h as f64);
-        // The empty region around sample k, as a test on an image box.
-        let inside: Box<dyn Fn(DVec2, DVec2) -> bool> = match self.texel(uv) {
+        let uv = at_k.p.uv;
+        // The region around sample k, as a test on an image box, and the bound over it.
+        let (inside, bound): (Box<dyn Fn(DVec2, DVec2) -> bool>, f64) = match at_k.texel {
             None => {
-                // Outside the image everything is empty: stay on the same outer side.
-                if uv.x < 0.0 {
+                let side: Box<dyn Fn(DVec2, DVec2) -> bool> = if uv.x < 0.0 {
                     Box::new(|_, max: DVec2| max.x < 0.0)
                 } else if uv.x >= wf {
                     Box::new(move |min: DVec2, _| min.x >= wf)
@@ -292,20 +326,40 @@ impl Impostor {
                     Box::new(|_, max: DVec2| max.y < 0.0)
                 } else {
                     Box::new(move |min: DVec2, _| min.y >= hf)
-                }
+                };
+                (side, 0.0)
             }
             Some((x, y)) => {
-                let mut level = 0;
-                while level + 1 < self.pyramid.level_count() {
+                // Bounds grow up the pyramid, so "the node's bound is below the ray's gd" holds
+                // up to some level and fails above it: find that level by galloping from the
+                // level the last attempt reached (usually one or two reads).
+                let top = self.pyramid.level_count() - 1;
+                let node = |l: usize| self.pyramid.node(l, x >> l, y >> l) as f64;
+                let mut safe = |l: usize| {
                     stats.texel_visits += 1;
-                    if self
-                        .pyramid
-                        .node(level + 1, x >> (level + 1), y >> (level + 1))
-                        > 0.0
-                    {
-                        break;
+                    node(l) < at_k.p.gd
+                };
+                let start = (*level_hint).clamp(1, top.max(1));
+                let level = if top == 0 {
+                    0
+                } else if safe(start) {
+                    let mut l = start;
+                    while l < top && safe(l + 1) {
+                        l += 1;
                     }
-                    level += 1;
+                    l
+                } else {
+                    let mut l = start - 1;
+                    while l >= 1 && !safe(l) {
+                        l -= 1;
+                    }
+                    l
+                };
+                *level_hint = level.max(1);
+                let bound = node(level);
+                if level == 0 {
+                    // A run inside one texel is rarely longer than a sample or two.
+                    return 0;
                 }
                 let size = (1u32 << level) as f64;
                 let lo = DVec2::new(
@@ -313,13 +367,19 @@ impl Impostor {
                     ((y >> level) << level) as f64,
                 );
                 let hi = lo + DVec2::splat(size);
-                Box::new(move |min: DVec2, max: DVec2| min.cmpge(lo).all() && max.cmplt(hi).all())
+                (
+                    Box::new(move |min: DVec2, max: DVec2| {
+                        min.cmpge(lo).all() && max.cmplt(hi).all()
+                    }),
+                    bound,
+                )
             }
         };
         let fits = |from: usize, to: usize| {
             self.camera
                 .segment_image_bounds(at(from), at(to))
                 .is_some_and(|(min, max)| inside(min, max))
+                && camera.project(at(to)).is_some_and(|p| p.gd > bound)
         };
         let (mut run, mut step) = (0usize, 1usize);
         // Double while the run fits, then halve back down to single samples.
