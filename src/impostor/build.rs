@@ -233,28 +233,26 @@ where
         min: b.min - Vec3::splat(pad),
         max: b.max + Vec3::splat(pad),
     };
-    impostor.rebuild_pyramid();
+    impostor.maps_changed();
 }
 
 /// An impostor with every map empty, sized for its camera.
 fn empty_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     use crate::frame::Image;
     let (w, h) = camera.resolution();
-    let gd = Image::new(w, h, 0.0f32)?;
-    Ok(Impostor {
-        color: Image::new(w, h, Vec4::ZERO)?,
-        normal: Image::new(w, h, Vec3::ZERO)?,
-        face_normal: Image::new(w, h, Vec3::ZERO)?,
-        position: Image::new(w, h, Vec3::ZERO)?,
-        object: Image::new(w, h, NO_OBJECT)?,
-        pyramid: super::MaxPyramid::new(&gd),
-        gd,
-        bounds: Aabb {
+    Ok(Impostor::from_maps(
+        camera,
+        Image::new(w, h, Vec4::ZERO)?,
+        Image::new(w, h, 0.0f32)?,
+        Image::new(w, h, Vec3::ZERO)?,
+        Image::new(w, h, Vec3::ZERO)?,
+        Image::new(w, h, Vec3::ZERO)?,
+        Image::new(w, h, NO_OBJECT)?,
+        Aabb {
             min: Vec3::ZERO,
             max: Vec3::ZERO,
         },
-        camera,
-    })
+    ))
 }
 
 /// The surface point with barycentrics `b` in triangle `t` of `m`.

@@ -455,23 +455,24 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             exr_path.display()
         )));
     }
-    let mut impostor = Impostor {
+    let normal = vec3(get("N.X")?, get("N.Y")?, get("N.Z")?)?;
+    let face_normal = vec3(get("Ng.X")?, get("Ng.Y")?, get("Ng.Z")?)?;
+    let position = vec3(get("P.X")?, get("P.Y")?, get("P.Z")?)?;
+    let object = Image::from_vec(
+        w,
+        h,
+        ids.into_iter()
+            .map(|i| if i == 0.0 { NO_OBJECT } else { i as u32 - 1 })
+            .collect(),
+    )?;
+    Ok(Impostor::from_maps(
         camera,
         color,
-        pyramid: super::MaxPyramid::new(&gd),
         gd,
-        normal: vec3(get("N.X")?, get("N.Y")?, get("N.Z")?)?,
-        face_normal: vec3(get("Ng.X")?, get("Ng.Y")?, get("Ng.Z")?)?,
-        position: vec3(get("P.X")?, get("P.Y")?, get("P.Z")?)?,
-        object: Image::from_vec(
-            w,
-            h,
-            ids.into_iter()
-                .map(|i| if i == 0.0 { NO_OBJECT } else { i as u32 - 1 })
-                .collect(),
-        )?,
+        normal,
+        face_normal,
+        position,
+        object,
         bounds,
-    };
-    impostor.rebuild_pyramid();
-    Ok(impostor)
+    ))
 }

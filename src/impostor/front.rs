@@ -28,17 +28,31 @@ use rayon::prelude::*;
 /// Relative margin added to every bound (rounding of `f32` maps and of the walk's arithmetic).
 const MARGIN: f64 = 1e-5;
 
-/// The front bound of every texel of `impostor`.
-pub fn front_bounds(impostor: &Impostor) -> Image<f32> {
-    let (w, h) = impostor.gd.size();
-    let bounds: Vec<f32> = (0..h)
-        .into_par_iter()
-        .flat_map_iter(|y| (0..w).map(move |x| texel_bound(impostor, x, y)))
-        .collect();
-    Image::from_vec(w, h, bounds).expect("the size of the impostor")
+/// Writes the front bound of every texel of `impostor` into `out` (row-major, the impostor's
+/// size), in parallel over rows.
+pub fn front_bounds_into(impostor: &Impostor, out: &mut [f32]) {
+    let w = impostor.gd.size().0 as usize;
+    // The SPOC's κ range over the bounding box is the same for every texel.
+    let kappa = match &impostor.camera {
+        ImpostorCamera::Spoc(s) => spoc_kappa_range(s, &impostor.bounds),
+        _ => None,
+    };
+    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, b) in row.iter_mut().enumerate() {
+            *b = texel_bound(impostor, kappa, x as u32, y as u32);
+        }
+    });
 }
 
-fn texel_bound(imp: &Impostor, x: u32, y: u32) -> f32 {
+/// The front bound of every texel of `impostor`, as an image.
+pub fn front_bounds(impostor: &Impostor) -> Image<f32> {
+    let (w, h) = impostor.gd.size();
+    let mut out = vec![0.0; w as usize * h as usize];
+    front_bounds_into(impostor, &mut out);
+    Image::from_vec(w, h, out).expect("the size of the impostor")
+}
+
+fn texel_bound(imp: &Impostor, kappa: Option<(f64, f64)>, x: u32, y: u32) -> f32 {
     let gd = imp.gd.get(x, y);
     if gd <= 0.0 {
         return 0.0;
@@ -56,7 +70,7 @@ fn texel_bound(imp: &Impostor, x: u32, y: u32) -> f32 {
             // Every depth a walk sample can have lies in the bounding box's depth range, so
             // the texel's pre-image lies in the hull of the texel square undistorted with the
             // smallest and the largest κ there; gd* is affine over it: its corners bound it.
-            let Some((k_lo, k_hi)) = spoc_kappa_range(s, &imp.bounds) else {
+            let Some((k_lo, k_hi)) = kappa else {
                 return f32::INFINITY;
             };
             let pole = s.pole();

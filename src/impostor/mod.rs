@@ -22,6 +22,7 @@ mod walk;
 
 pub use billboard::Billboard;
 pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};
+pub use front::front_bounds;
 pub use pyramid::MaxPyramid;
 pub use walk::{WalkMode, WalkStats};
 
@@ -208,16 +209,52 @@ pub struct Impostor {
     /// World box of the replaced geometry: rays are clipped to it.
     pub bounds: Aabb,
     /// Max pyramid of the texels' front bounds (the largest `gd` of a point behind a texel's
-    /// plane, 0 where empty; `front.rs`), for the hierarchical walk; rebuild it with
-    /// [`Impostor::rebuild_pyramid`] after editing the maps.
-    pub pyramid: MaxPyramid,
+    /// plane, 0 where empty; `front.rs`), for the hierarchical walk: built on first use
+    /// ([`Impostor::pyramid`]); call [`Impostor::maps_changed`] after editing the maps.
+    pyramid: std::sync::OnceLock<MaxPyramid>,
 }
 
 impl Impostor {
-    /// Recomputes [`Impostor::pyramid`] from the maps.
-    pub fn rebuild_pyramid(&mut self) {
-        let bounds = front::front_bounds(self);
-        self.pyramid.rebuild(&bounds);
+    /// An impostor from its camera, maps and box (the maps all of the camera's size; empty
+    /// texels hold `gd` 0 and [`crate::trace::NO_OBJECT`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_maps(
+        camera: ImpostorCamera,
+        color: Image<crate::frame::Rgba>,
+        gd: Image<f32>,
+        normal: Image<Vec3>,
+        face_normal: Image<Vec3>,
+        position: Image<Vec3>,
+        object: Image<u32>,
+        bounds: Aabb,
+    ) -> Impostor {
+        Impostor {
+            camera,
+            color,
+            gd,
+            normal,
+            face_normal,
+            position,
+            object,
+            bounds,
+            pyramid: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// The pyramid of front bounds the hierarchical walk skips with, built on first use (so
+    /// building an impostor that is only walked linearly does not pay for it).
+    pub fn pyramid(&self) -> &MaxPyramid {
+        self.pyramid.get_or_init(|| {
+            let (w, h) = self.gd.size();
+            let mut pyramid = MaxPyramid::default();
+            pyramid.rebuild_with(w, h, |level0| front::front_bounds_into(self, level0));
+            pyramid
+        })
+    }
+
+    /// Drops the pyramid after the maps were edited; the next hierarchical walk rebuilds it.
+    pub fn maps_changed(&mut self) {
+        self.pyramid = std::sync::OnceLock::new();
     }
 
     /// Stored `gd` at image point `uv` (nearest texel; 0 outside the image).

@@ -27,20 +27,23 @@ fn reduce(level: &Image<f32>, next: &mut Image<f32>) {
     }
 }
 
-/// Max-`gd` levels, finest first.
-#[derive(Clone, Debug)]
+/// Levels of maxima, finest first.
+#[derive(Clone, Debug, Default)]
 pub struct MaxPyramid {
     levels: Vec<Image<f32>>,
 }
 
 impl MaxPyramid {
-    /// Builds the pyramid of `gd` again, reusing the levels' memory when the size is unchanged.
-    pub fn rebuild(&mut self, gd: &Image<f32>) {
-        if self.levels.first().map(|l| l.size()) != Some(gd.size()) {
-            *self = MaxPyramid::new(gd);
+    /// Builds the pyramid again from a level 0 that `fill` writes (row-major, `width × height`),
+    /// reusing the levels' memory when the size is unchanged.
+    pub fn rebuild_with(&mut self, width: u32, height: u32, fill: impl FnOnce(&mut [f32])) {
+        if self.levels.first().map(|l| l.size()) != Some((width, height)) {
+            let mut base = Image::new(width, height, 0.0f32).expect("an impostor's size");
+            fill(base.pixels_mut());
+            *self = MaxPyramid::new(&base);
             return;
         }
-        self.levels[0].pixels_mut().copy_from_slice(gd.pixels());
+        fill(self.levels[0].pixels_mut());
         for k in 1..self.levels.len() {
             let (done, rest) = self.levels.split_at_mut(k);
             reduce(&done[k - 1], &mut rest[0]);

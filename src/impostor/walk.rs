@@ -289,7 +289,7 @@ impl Impostor {
         }
         match s.texel {
             None => true,
-            Some((x, y)) => s.p.gd > self.pyramid.node(0, x, y) as f64,
+            Some((x, y)) => s.p.gd > self.pyramid().node(0, x, y) as f64,
         }
     }
 
@@ -333,8 +333,9 @@ impl Impostor {
                 // Bounds grow up the pyramid, so "the node's bound is below the ray's gd" holds
                 // up to some level and fails above it: find that level by galloping from the
                 // level the last attempt reached (usually one or two reads).
-                let top = self.pyramid.level_count() - 1;
-                let node = |l: usize| self.pyramid.node(l, x >> l, y >> l) as f64;
+                let pyramid = self.pyramid();
+                let top = pyramid.level_count() - 1;
+                let node = |l: usize| pyramid.node(l, x >> l, y >> l) as f64;
                 let mut safe = |l: usize| {
                     stats.texel_visits += 1;
                     node(l) < at_k.p.gd
