@@ -480,11 +480,41 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 "position  mean error {:.3e} world units = {:.3} texel footprints",
                 r.mean_position_error, r.mean_error_footprints
             );
-            println!("surface   {:.1} % captured", captured * 100.0);
+            println!(
+                "surface   {:.1} % captured within 1.5 footprints, {:.1} % within 1.5 texel extents on the surface",
+                captured.within_footprint * 100.0,
+                captured.within_texel * 100.0
+            );
             println!(
                 "walk      {:.1} texel visits per ray",
                 r.texel_visits_per_ray
             );
+            if matches!(imp.camera, trompe::impostor::ImpostorCamera::Spoc(_)) {
+                // Paper 1 Fig. 6–7: the pinhole depth image from the same point, beside it.
+                let pinhole = setup
+                    .camera(trompe::impostor::ViewCamera::Pinhole, resolution)
+                    .context("building the pinhole camera")?;
+                let p = timings
+                    .time("build pinhole impostor", || {
+                        trompe::impostor::build(
+                            pinhole,
+                            &setup.target,
+                            0,
+                            &trompe::impostor::albedo_of(&setup.target),
+                        )
+                    })
+                    .context("building the pinhole impostor")?;
+                let rp = fidelity::check(&p, &exact, &rays);
+                let cp = fidelity::surface_captured(&p, &setup.target, 50_000, 1);
+                println!(
+                    "beside it, the pinhole depth image from the same point: agreement {:.3} %, on hits {:.3} %, missed {}, surface {:.1} % / {:.1} %",
+                    rp.agreement() * 100.0,
+                    rp.hit_agreement() * 100.0,
+                    rp.missed,
+                    cp.within_footprint * 100.0,
+                    cp.within_texel * 100.0
+                );
+            }
             if matches!(imp.camera, trompe::impostor::ImpostorCamera::Graph(_)) {
                 // The default walk is §4.6's algorithm 2; algorithm 1 beside it.
                 let r1 = timings.time("check (algorithm 1)", || {
@@ -537,13 +567,14 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                     if !(distance.is_finite() && distance > 1.0) {
                         bail!("--distance {distance}: must be more than 1 radius");
                     }
-                    let cam = trompe::impostor::ImpostorCamera::around(
+                    let cam = trompe::impostor::ImpostorCamera::fitted(
                         kind,
                         center + dir * radius * distance,
                         center,
                         radius,
                         radius as f64,
                         resolution,
+                        &mesh.positions,
                     )
                     .with_context(|| format!("{}: placing the camera", input.display()))?;
                     (mesh, cam)

@@ -25,6 +25,7 @@ fn teapot_impostors_agree_with_the_bvh_on_reflected_rays() {
     // must do worse (it captures less of the teapot).
     let mut failures = Vec::new();
     let mut missed = Vec::new();
+    let mut captures = Vec::new();
     for (kind, goal) in [
         (CheckCamera::Spoc(None), 0.99),
         (CheckCamera::Pinhole, 0.95),
@@ -34,7 +35,7 @@ fn teapot_impostors_agree_with_the_bvh_on_reflected_rays() {
         let r = check(&imp, &exact, &rays);
         let captured = surface_captured(&imp, &s.target, 20_000, 7);
         eprintln!(
-            "{kind:?}: {r:?} agreement {:.4} hit agreement {:.4} captured {captured:.3}",
+            "{kind:?}: {r:?} agreement {:.4} hit agreement {:.4} captured {captured:?}",
             r.agreement(),
             r.hit_agreement()
         );
@@ -43,6 +44,7 @@ fn teapot_impostors_agree_with_the_bvh_on_reflected_rays() {
             "{kind:?}: the rays must actually reach the teapot: {r:?}"
         );
         missed.push(r.missed);
+        captures.push(captured);
         if r.agreement() < goal {
             failures.push(format!("{kind:?}: agreement {:.4} < {goal}", r.agreement()));
         }
@@ -51,6 +53,12 @@ fn teapot_impostors_agree_with_the_bvh_on_reflected_rays() {
     assert!(
         missed[0] < missed[1],
         "SPOC must miss fewer rays than the pinhole: {missed:?}"
+    );
+    // Paper 1 Fig. 1 vs 6: the SPOC stores more of the teapot than the pinhole depth image.
+    assert!(
+        captures[0].within_footprint > captures[1].within_footprint
+            && captures[0].within_texel > captures[1].within_texel,
+        "{captures:?}"
     );
 }
 
@@ -310,5 +318,38 @@ fn a_rebuilt_impostor_equals_a_fresh_build() {
             imp.walk_mode(r, f32::INFINITY, mode).0,
             fresh.walk_mode(r, f32::INFINITY, mode).0
         );
+    }
+}
+
+#[test]
+fn fitted_cameras_frame_the_object_at_95_percent() {
+    use trompe::impostor::ViewCamera;
+    let teapot = load(&shared("meshes/teapot.obj")).unwrap().mesh;
+    let b = teapot.bounds();
+    let eye = b.center() + glam::Vec3::new(0.2, 0.5, 1.0).normalize() * b.radius() * 2.5;
+    for kind in [
+        ViewCamera::Pinhole,
+        ViewCamera::Orthographic,
+        ViewCamera::Spoc(Some(0.9)),
+    ] {
+        let cam = ImpostorCamera::fitted(
+            kind,
+            eye,
+            b.center(),
+            b.radius(),
+            0.5,
+            200,
+            &teapot.positions,
+        )
+        .unwrap();
+        let extent = teapot
+            .positions
+            .iter()
+            .map(|p| {
+                let q = cam.project(p.as_dvec3()).unwrap();
+                (q.uv - DVec2::splat(100.0)).abs().max_element()
+            })
+            .fold(0.0f64, f64::max);
+        assert!((extent - 95.0).abs() < 0.01, "{kind:?}: {extent}");
     }
 }

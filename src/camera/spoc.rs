@@ -45,6 +45,23 @@ impl Spoc {
         k: f64,
         size: u32,
     ) -> Result<Self, CameraError> {
+        Self::around_framed(eye, center, radius, k, size, 1.0)
+    }
+
+    /// [`Spoc::around`] with the half-width of the view multiplied by `scale` (every image
+    /// offset from the pole divides by it; `κ` is unchanged): `scale < 1` frames an object
+    /// that fills less than its pushed-out bounding sphere more tightly.
+    pub fn around_framed(
+        eye: Vec3,
+        center: Vec3,
+        radius: f32,
+        k: f64,
+        size: u32,
+        scale: f64,
+    ) -> Result<Self, CameraError> {
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Err(CameraError::Degenerate("a framing scale must be positive"));
+        }
         let d = (center - eye).length() as f64;
         let r = radius as f64;
         if !(r > 0.0 && d > r * 1.0001) {
@@ -59,7 +76,7 @@ impl Spoc {
         }
         // Image radius of the sphere at unit focal distance: tan(asin(R/d)).
         let r_s = r / (d * d - r * r).sqrt();
-        let half = r_s * (1.0 + k) * 1.05;
+        let half = r_s * (1.0 + k) * 1.05 * scale;
         let fov = 2.0 * half.atan().to_degrees();
         let up = if ((center - eye).normalize().dot(Vec3::Y)).abs() > 0.99 {
             Vec3::Z

@@ -165,27 +165,60 @@ pub fn sphere_rays(
         .collect()
 }
 
-/// Fraction of the mesh's surface (area-weighted samples) that the impostor stores: a sample
-/// counts when its texel holds a point within 1.5 footprints of it.
-pub fn surface_captured(impostor: &Impostor, mesh: &Mesh, samples: usize, seed: u64) -> f64 {
+/// How much of a mesh's surface an impostor stores (fractions of area-weighted samples).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceCapture {
+    /// Samples whose texel holds a point within 1.5 footprints of them (the footprint measured
+    /// across the line of sight, as in the ray agreement test).
+    pub within_footprint: f64,
+    /// Samples whose texel holds a point within 1.5 times the texel's extent on the stored
+    /// surface — the footprint stretched by 1/cos θ (at most 20×) on a plane seen at θ from its
+    /// normal. A texel on a grazing surface covers that much of it.
+    pub within_texel: f64,
+}
+
+/// How much of `mesh`'s surface the impostor stores ([`SurfaceCapture`]), from `samples`
+/// area-weighted points.
+pub fn surface_captured(
+    impostor: &Impostor,
+    mesh: &Mesh,
+    samples: usize,
+    seed: u64,
+) -> SurfaceCapture {
     let points = crate::geom::sample_surface(mesh, samples, seed);
-    let captured = points
+    // Per sample: (within the footprint, within the texel's extent on its surface).
+    let per_point: Vec<(bool, bool)> = points
         .par_iter()
-        .filter(|p| {
+        .map(|p| {
             let Some(q) = impostor.camera.project(p.as_dvec3()) else {
-                return false;
+                return (false, false);
             };
             let Some((x, y)) = impostor.texel(q.uv) else {
-                return false;
+                return (false, false);
             };
             if impostor.gd.get(x, y) <= 0.0 {
-                return false;
+                return (false, false);
             }
             let stored = impostor.position.get(x, y);
-            (stored.distance(**p) as f64) <= AGREEMENT_FOOTPRINTS * impostor.footprint(q.uv, q.gd)
+            let distance = stored.distance(*p) as f64;
+            let footprint = impostor.footprint(q.uv, q.gd);
+            let n = impostor.face_normal.get(x, y).as_dvec3();
+            let view = impostor
+                .camera
+                .toward_camera(stored.as_dvec3())
+                .normalize_or_zero();
+            let cos = n.dot(view).abs().max(0.05);
+            (
+                distance <= AGREEMENT_FOOTPRINTS * footprint,
+                distance <= AGREEMENT_FOOTPRINTS * footprint / cos,
+            )
         })
-        .count();
-    captured as f64 / points.len().max(1) as f64
+        .collect();
+    let total = points.len().max(1) as f64;
+    SurfaceCapture {
+        within_footprint: per_point.iter().filter(|c| c.0).count() as f64 / total,
+        within_texel: per_point.iter().filter(|c| c.1).count() as f64 / total,
+    }
 }
 
 /// Which camera to build a checked impostor through (see [`super::ImpostorCamera::around`]).
@@ -294,8 +327,9 @@ impl ReflectorSetup {
             .collect()
     }
 
-    /// An impostor camera at the reflector's centre looking at the target, `size²` texels;
-    /// the SPOC strength follows from the reflector's radius (the region of the rays).
+    /// An impostor camera at the reflector's centre looking at the target, framed tightly on
+    /// it ([`super::ImpostorCamera::fitted`]), `size²` texels; the SPOC strength follows from
+    /// the reflector's radius (the region of the rays).
     pub fn camera(
         &self,
         kind: CheckCamera,
@@ -303,6 +337,14 @@ impl ReflectorSetup {
     ) -> Result<super::ImpostorCamera, crate::camera::CameraError> {
         let (eye, tb) = (self.reflector.bounds().center(), self.target.bounds());
         let region = self.reflector.bounds().radius() as f64;
-        super::ImpostorCamera::around(kind, eye, tb.center(), tb.radius(), region, size)
+        super::ImpostorCamera::fitted(
+            kind,
+            eye,
+            tb.center(),
+            tb.radius(),
+            region,
+            size,
+            &self.target.positions,
+        )
     }
 }

@@ -67,6 +67,49 @@ impl ImpostorCamera {
         region: f64,
         size: u32,
     ) -> Result<ImpostorCamera, crate::camera::CameraError> {
+        Self::around_framed(kind, eye, center, radius, region, size, 1.0)
+    }
+
+    /// [`ImpostorCamera::around`], then framed tightly on `points` (the object's vertices):
+    /// the view is narrowed until their image fills 95 % of the half-width, so no texel is
+    /// spent on the empty corners of the bounding sphere's image. If a point does not project,
+    /// the sphere's framing is kept.
+    #[allow(clippy::too_many_arguments)]
+    pub fn fitted(
+        kind: ViewCamera,
+        eye: Vec3,
+        center: Vec3,
+        radius: f32,
+        region: f64,
+        size: u32,
+        points: &[Vec3],
+    ) -> Result<ImpostorCamera, crate::camera::CameraError> {
+        let first = Self::around(kind, eye, center, radius, region, size)?;
+        let half = size as f64 / 2.0;
+        let mut extent = 0.0f64;
+        for p in points {
+            let Some(q) = first.project(p.as_dvec3()) else {
+                return Ok(first);
+            };
+            extent = extent.max((q.uv - DVec2::splat(half)).abs().max_element());
+        }
+        let scale = extent / half / 0.95;
+        if !(scale > 1e-3 && scale.is_finite()) {
+            return Ok(first);
+        }
+        Self::around_framed(kind, eye, center, radius, region, size, scale)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn around_framed(
+        kind: ViewCamera,
+        eye: Vec3,
+        center: Vec3,
+        radius: f32,
+        region: f64,
+        size: u32,
+        scale: f64,
+    ) -> Result<ImpostorCamera, crate::camera::CameraError> {
         let d = eye.distance(center) as f64;
         let r = radius as f64;
         if !(r > 0.0 && d > r * 1.0001) {
@@ -81,7 +124,7 @@ impl ImpostorCamera {
         };
         Ok(match kind {
             ViewCamera::Pinhole => {
-                let half = (r / (d * d - r * r).max(1e-12).sqrt()) * 1.05;
+                let half = (r / (d * d - r * r).max(1e-12).sqrt()) * 1.05 * scale;
                 let cam =
                     Pinhole::look_at(eye, center, up, 2.0 * half.atan().to_degrees(), size, size)?;
                 ImpostorCamera::Pinhole(cam.with_near((d - r) * 0.5))
@@ -92,7 +135,7 @@ impl ImpostorCamera {
                     eye,
                     center,
                     up,
-                    r * 1.05,
+                    r * 1.05 * scale,
                     d + r * 1.05,
                     size,
                     size,
@@ -100,7 +143,7 @@ impl ImpostorCamera {
             }
             ViewCamera::Spoc(k) => {
                 let k = k.unwrap_or_else(|| Spoc::strength_for_region(region, d));
-                ImpostorCamera::Spoc(Spoc::around(eye, center, radius, k, size)?)
+                ImpostorCamera::Spoc(Spoc::around_framed(eye, center, radius, k, size, scale)?)
             }
         })
     }
