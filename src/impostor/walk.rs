@@ -245,9 +245,8 @@ impl Impostor {
                 if skip > 0 {
                     // Samples k+1 ..= k+skip are all in front of their texels' planes: none
                     // can end a crossing, and the linear walk arrives at sample k+skip in the
-                    // same state.
-                    // Sample k+skip is in front of its plane; its texel is read only if the
-                    // next sample ends a crossing (`accept` needs it).
+                    // same state. That sample's texel is read only if the next sample ends a
+                    // crossing (`accept` needs it).
                     k += skip;
                     let Some(p) = camera.project(at(k)) else {
                         return (None, stats);
