@@ -53,6 +53,16 @@ pub trait Projection: Sync {
     /// is valid. The rasterizer clips triangles where it is negative.
     fn clip_distance(&self, p: DVec3) -> f64;
 
+    /// An upper bound, in pixels, on how far the image of the midpoint of a world segment strays
+    /// from the midpoint of the images `a` and `b` of its ends (the tessellation criterion of
+    /// algorithms.md §2.2), computed from `a` and `b` alone; `INFINITY` when the camera has no
+    /// bound cheaper than projecting the midpoint. Cameras that are projective on planes never
+    /// need a split and are not asked.
+    fn midpoint_deviation_bound(&self, a: &ImagePoint, b: &ImagePoint) -> f64 {
+        let _ = (a, b);
+        f64::INFINITY
+    }
+
     /// Projects an `f32` world point (convenience for mesh vertices).
     fn project_f32(&self, p: Vec3) -> Option<ImagePoint> {
         self.project(p.as_dvec3())

@@ -118,6 +118,12 @@ impl Pinhole {
         self.forward
     }
 
+    /// `M⁻¹(X − C) = t·(u, v, 1)`: the homogeneous image point of `X` (`t` is its last
+    /// coordinate; eye-space depth is `f·t`).
+    pub(crate) fn homogeneous(&self, p: DVec3) -> DVec3 {
+        self.m_inv * (p - self.c)
+    }
+
     /// Focal distance `f = c·n̂` (1 for cameras from [`Pinhole::look_at`]).
     pub fn focal(&self) -> f64 {
         self.m.z_axis.dot(self.forward)
@@ -142,14 +148,15 @@ impl Projection for Pinhole {
 
     /// `w = M⁻¹(X − C)`, `u = w.x/w.z`, `v = w.y/w.z`, `gd = 1/w.z`.
     fn project(&self, p: DVec3) -> Option<ImagePoint> {
-        let w = self.m_inv * (p - self.c);
+        let w = self.homogeneous(p);
         if w.z <= 0.0 {
             return None;
         }
+        let gd = 1.0 / w.z;
         Some(ImagePoint {
-            uv: DVec2::new(w.x / w.z, w.y / w.z),
-            gd: 1.0 / w.z,
-            inv_w: 1.0 / w.z,
+            uv: DVec2::new(w.x * gd, w.y * gd),
+            gd,
+            inv_w: gd,
         })
     }
 

@@ -25,6 +25,10 @@ pub struct Spoc {
     z_near: f64,
     z_far: f64,
     k: f64,
+    /// Derived, kept for the per-vertex cost of `project`: the focal distance `f` and the ramp's
+    /// slope `k/(z_f − z_n)`.
+    focal: f64,
+    slope: f64,
 }
 
 impl Spoc {
@@ -90,13 +94,7 @@ impl Spoc {
             .unwrap_or(DVec2::splat(size as f64 / 2.0));
         // Eye-space depth of the centre, z_O = (O − C)·n̂ (algorithms.md §3.2).
         let z_o = (center.as_dvec3() - ppc.position()).dot(ppc.forward());
-        Ok(Self {
-            ppc,
-            pole,
-            z_near: z_o - r,
-            z_far: z_o + r,
-            k,
-        })
+        Self::from_parts(ppc, pole, z_o - r, z_o + r, k)
     }
 
     /// Rebuilds a SPOC from its reference camera and parameters (for loading impostors).
@@ -112,6 +110,8 @@ impl Spoc {
             return Err(CameraError::Degenerate("SPOC parameters are degenerate"));
         }
         Ok(Self {
+            focal: ppc.focal(),
+            slope: k / (z_far - z_near),
             ppc,
             pole,
             z_near,
@@ -143,7 +143,7 @@ impl Spoc {
     /// corners scale `q_a`, `q_b` about the pole by the smallest and largest `1 + κ`.
     pub fn segment_image_bounds(&self, a: DVec3, b: DVec3) -> Option<(DVec2, DVec2)> {
         let (qa, qb) = (self.ppc.project(a)?, self.ppc.project(b)?);
-        let f = self.ppc.focal();
+        let f = self.focal;
         let (sa, sb) = (1.0 + self.kappa(f / qa.gd), 1.0 + self.kappa(f / qb.gd));
         let (s0, s1) = (sa.min(sb), sa.max(sb));
         let corners = [qa.uv, qb.uv].map(|q| [s0, s1].map(|s| self.pole + (q - self.pole) * s));
@@ -155,7 +155,7 @@ impl Spoc {
 
     /// The depth ramp `κ(z)`.
     pub fn kappa(&self, z: f64) -> f64 {
-        self.k * ((z - self.z_near) / (self.z_far - self.z_near)).max(0.0)
+        self.slope * (z - self.z_near).max(0.0)
     }
 }
 
@@ -166,23 +166,50 @@ impl Projection for Spoc {
 
     /// `(u′, v′) = p0 + (1 + κ(z))(q − p0)`, `gd = 1/t` of the undistorted pinhole point.
     fn project(&self, p: DVec3) -> Option<ImagePoint> {
-        let q = self.ppc.project(p)?;
-        let z = self.ppc.focal() / q.gd;
+        // The pinhole's homogeneous point t·(q, 1), with eye depth z = f·t.
+        let w = self.ppc.homogeneous(p);
+        if w.z <= 0.0 {
+            return None;
+        }
+        let gd = 1.0 / w.z;
+        let q = DVec2::new(w.x * gd, w.y * gd);
         Some(ImagePoint {
-            uv: self.pole + (q.uv - self.pole) * (1.0 + self.kappa(z)),
-            ..q
+            uv: self.pole + (q - self.pole) * (1.0 + self.kappa(self.focal * w.z)),
+            gd,
+            inv_w: gd,
         })
     }
 
     /// `t = 1/gd`, `q = p0 + ((u′, v′) − p0)/(1 + κ(z))`, `X = C + t·M·(q, 1)`.
     fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
-        let z = self.ppc.focal() / gd;
+        let z = self.focal / gd;
         let q = self.pole + (uv - self.pole) / (1.0 + self.kappa(z));
         self.ppc.unproject(q, gd)
     }
 
     fn clip_distance(&self, p: DVec3) -> f64 {
         self.ppc.clip_distance(p)
+    }
+
+    /// With `r = q − p0` the pinhole image relative to the pole, `s = 1 + κ(z)`, and `Δ`, bars
+    /// the differences and means of the two ends: the pinhole image of the midpoint is
+    /// `r̄ + Δz·Δr/(4z̄)`, and `s` at the midpoint is `s̄ − ε` with `0 ≤ ε ≤ K|Δz|/4`
+    /// (`κ` is a convex hinge of slope `K = k/(z_f − z_n)`, linear in `z`, and `z` is affine
+    /// along the segment). The deviation is then exactly `s̄·Δz·Δr/(4z̄) − Δs·Δr/4 − ε·r_m`, so
+    /// `|dev| ≤ |Δz|/4 · (|Δr|·(s̄/z̄ + K) + K·|r_m|)`, with `|Δr| ≤ |Δuv| + K|Δz|·|uv_b − p0|`
+    /// (since `s ≥ 1`) and `|r_m| ≤ max |uv − p0|`. Cheaper over-estimates keep it to one
+    /// division: `s̄ ≤ 1 + k`, `1/z̄ ≤ max gd / f`, and `|x| ≤ |x₁| + |x₂|`.
+    fn midpoint_deviation_bound(&self, a: &ImagePoint, b: &ImagePoint) -> f64 {
+        if !(a.gd > 0.0 && b.gd > 0.0) {
+            return f64::INFINITY;
+        }
+        let l1 = |x: DVec2| x.x.abs() + x.y.abs();
+        // |Δz| = f·|1/gd_a − 1/gd_b|.
+        let dz = self.focal * (a.gd - b.gd).abs() / (a.gd * b.gd);
+        let (ra, rb) = (l1(a.uv - self.pole), l1(b.uv - self.pole));
+        let dr = l1(b.uv - a.uv) + self.slope * dz * rb;
+        let inv_z_mean = a.gd.max(b.gd) / self.focal;
+        0.25 * dz * (dr * ((1.0 + self.k) * inv_z_mean + self.slope) + self.slope * ra.max(rb))
     }
 }
 
@@ -242,6 +269,31 @@ mod tests {
         let p0 = s.project(DVec3::new(0.2, 0.0, -0.3)).unwrap();
         let p1 = s.project(DVec3::new(0.2001, 0.0, -0.3)).unwrap();
         assert!((p0.uv - p1.uv).length() > 0.0);
+    }
+
+    #[test]
+    fn midpoint_deviation_bound_holds() {
+        // Segments of every length and direction, across z_n and the pole: the exact deviation
+        // never exceeds the bound, and the bound is not vacuous for short segments.
+        let s = spoc();
+        let mut tight = 0;
+        for i in 0..4000 {
+            let a = random_point(i);
+            let len = [0.001, 0.01, 0.1, 1.0][i as usize % 4];
+            let b = a + (random_point(i + 7919) - DVec3::splat(0.0)).normalize_or_zero() * len;
+            let (pa, pb) = (s.project(a).unwrap(), s.project(b).unwrap());
+            let pm = s.project((a + b) * 0.5).unwrap();
+            let exact = (pm.uv - (pa.uv + pb.uv) * 0.5).length();
+            let bound = s.midpoint_deviation_bound(&pa, &pb);
+            assert!(
+                exact <= bound * (1.0 + 1e-9) + 1e-12,
+                "{a} {b}: {exact} > {bound}"
+            );
+            if len <= 0.01 && bound < 0.5 {
+                tight += 1;
+            }
+        }
+        assert!(tight > 1900, "{tight}");
     }
 
     #[test]

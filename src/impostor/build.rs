@@ -2,7 +2,7 @@
 //! camera, keeping the largest `gd`; curved cameras first tessellate it adaptively.
 
 use super::{Impostor, ImpostorCamera};
-use crate::camera::Projection;
+use crate::camera::{ImagePoint, Projection};
 use crate::frame::FrameError;
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{Fragment, FragmentShader, rasterize, rasterize_into};
@@ -64,45 +64,72 @@ pub struct Tessellation {
 /// tessellation has no T-junctions and the image no cracks.
 /// Returns `None` when no edge needs a split (the mesh can be rasterized as it is).
 pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation> {
+    tessellate_with(camera, mesh, &mut TessellationScratch::default())
+}
+
+/// Per-vertex images and per-triangle split flags, kept by an [`ImpostorBuilder`] between
+/// builds: allocating them fresh costs more (page faults) than filling them.
+#[derive(Default)]
+struct TessellationScratch {
+    projected: Vec<Option<ImagePoint>>,
+    splits: Vec<bool>,
+}
+
+/// [`tessellate`] with reusable working memory.
+fn tessellate_with<P: Projection>(
+    camera: &P,
+    mesh: &Mesh,
+    scratch: &mut TessellationScratch,
+) -> Option<Tessellation> {
     // Split decisions depend on the edge alone (see above).
-    // Whether edge (a, b), whose ends project to (pa, pb), must split.
-    let split_projected = |a: Vec3, b: Vec3, pa: glam::DVec2, pb: glam::DVec2| -> bool {
-        if (pa - pb).length() < 1.0 {
+    // Whether edge (a, b), whose ends project to (pa, pb), must split. The camera's cheap
+    // bound settles nearly every edge of a detailed mesh without projecting its midpoint.
+    let split_projected = |a: Vec3, b: Vec3, pa: &ImagePoint, pb: &ImagePoint| -> bool {
+        if (pa.uv - pb.uv).length_squared() < 1.0
+            || camera.midpoint_deviation_bound(pa, pb) <= MAX_DEVIATION_PX
+        {
             return false;
         }
         let m = (a + b) * 0.5;
         camera
             .project(m.as_dvec3())
-            .is_some_and(|pm| (pm.uv - (pa + pb) * 0.5).length() > MAX_DEVIATION_PX)
+            .is_some_and(|pm| (pm.uv - (pa.uv + pb.uv) * 0.5).length() > MAX_DEVIATION_PX)
     };
     let needs_split = |a: Vec3, b: Vec3| -> bool {
         match (camera.project(a.as_dvec3()), camera.project(b.as_dvec3())) {
-            (Some(pa), Some(pb)) => split_projected(a, b, pa.uv, pb.uv),
+            (Some(pa), Some(pb)) => split_projected(a, b, &pa, &pb),
             _ => false,
         }
     };
     // Most triangles of a detailed mesh need no split (the paper notes this): find them from
     // the projected vertices alone, and give back the mesh untouched when none does.
-    let projected: Vec<Option<glam::DVec2>> = mesh
-        .positions
-        .par_iter()
-        .map(|p| camera.project(p.as_dvec3()).map(|q| q.uv))
-        .collect();
+    let TessellationScratch { projected, splits } = scratch;
+    projected.clear();
+    projected.par_extend(
+        mesh.positions
+            .par_iter()
+            .map(|p| camera.project(p.as_dvec3())),
+    );
+    let projected = &*projected;
     let needs_any_split = |t: usize| {
         let [a, b, c] = mesh.triangles[t].map(|i| i as usize);
         [(a, b), (b, c), (c, a)]
             .iter()
             .any(|&(i, j)| match (projected[i], projected[j]) {
                 (Some(pi), Some(pj)) => {
-                    split_projected(mesh.positions[i], mesh.positions[j], pi, pj)
+                    split_projected(mesh.positions[i], mesh.positions[j], &pi, &pj)
                 }
                 _ => false,
             })
     };
-    let split_any = (0..mesh.triangles.len())
-        .into_par_iter()
-        .any(needs_any_split);
-    if !split_any {
+    splits.clear();
+    splits.par_extend(
+        (0..mesh.triangles.len())
+            .into_par_iter()
+            .map(needs_any_split),
+    );
+    let splits = &*splits;
+    if !splits.contains(&true) {
         return None;
     }
     // Fixed chunks of source triangles, tessellated in parallel and concatenated in order.
@@ -114,7 +141,7 @@ pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation
             let mut source = Vec::with_capacity(chunk.len());
             let mut stack = Vec::new();
             for &t in chunk {
-                if !needs_any_split(t) {
+                if !splits[t] {
                     positions.extend_from_slice(&mesh.corners(t));
                     source.push((t as u32, [Vec3::X, Vec3::Y, Vec3::Z]));
                     continue;
@@ -303,6 +330,7 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
 #[derive(Default)]
 pub struct ImpostorBuilder {
     visibility: Option<crate::raster::RasterTarget<Vec3>>,
+    tessellation: TessellationScratch,
 }
 
 impl ImpostorBuilder {
@@ -342,7 +370,7 @@ impl ImpostorBuilder {
         }
         let camera = &impostor.camera;
         let tessellation = if camera.is_curved() {
-            tessellate(camera, mesh)
+            tessellate_with(camera, mesh, &mut self.tessellation)
         } else {
             None
         };

@@ -228,6 +228,12 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Graph(c) => c.clip_distance(p),
         }
     }
+    fn midpoint_deviation_bound(&self, a: &ImagePoint, b: &ImagePoint) -> f64 {
+        match self {
+            ImpostorCamera::Spoc(c) => c.midpoint_deviation_bound(a, b),
+            _ => f64::INFINITY,
+        }
+    }
 }
 
 /// A depth image that stands in for geometry.

@@ -103,6 +103,20 @@ pub struct RasterTarget<T> {
     pub item: Image<ItemId>,
     /// The shader's output ([`FragmentShader::Output`]); `empty` where nothing was drawn.
     pub attributes: Image<T>,
+    /// Set-up triangles: working memory kept for the next rasterization into this target.
+    binned: setup::Binned,
+}
+
+impl<T: Copy> RasterTarget<T> {
+    /// An empty `width × height` target, attributes filled with `empty`.
+    pub fn new(width: u32, height: u32, empty: T) -> Result<RasterTarget<T>, FrameError> {
+        Ok(RasterTarget {
+            gd: Image::new(width, height, 0.0f32)?,
+            item: Image::new(width, height, ItemId::NONE)?,
+            attributes: Image::new(width, height, empty)?,
+            binned: setup::Binned::default(),
+        })
+    }
 }
 
 /// Counters of one rasterization (summed over bands in a fixed order).
@@ -142,11 +156,7 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
     empty: S::Output,
 ) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
     let (w, h) = camera.resolution();
-    let mut target = RasterTarget {
-        gd: Image::new(w, h, 0.0f32)?,
-        item: Image::new(w, h, ItemId::NONE)?,
-        attributes: Image::new(w, h, empty)?,
-    };
+    let mut target = RasterTarget::new(w, h, empty)?;
     let stats = draw_bands(camera, objects, shader, None, &mut target);
     Ok((target, stats))
 }
@@ -163,11 +173,7 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
 ) -> Result<RasterStats, FrameError> {
     let (w, h) = camera.resolution();
     if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
-        *target = RasterTarget {
-            gd: Image::new(w, h, 0.0f32)?,
-            item: Image::new(w, h, ItemId::NONE)?,
-            attributes: Image::new(w, h, empty)?,
-        };
+        *target = RasterTarget::new(w, h, empty)?;
     }
     Ok(draw_bands(camera, objects, shader, Some(empty), target))
 }
@@ -183,14 +189,19 @@ fn draw_bands<P: Projection, S: FragmentShader>(
     target: &mut RasterTarget<S::Output>,
 ) -> RasterStats {
     let w = target.gd.size().0;
-    let (binned, mut stats) = setup::screen_triangles(camera, objects, BAND_ROWS);
+    let mut stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
+    let RasterTarget {
+        gd,
+        item,
+        attributes,
+        binned,
+    } = target;
     let n = (BAND_ROWS * w) as usize;
-    let band_stats: Vec<RasterStats> = target
-        .gd
+    let band_stats: Vec<RasterStats> = gd
         .pixels_mut()
         .par_chunks_mut(n)
-        .zip(target.item.pixels_mut().par_chunks_mut(n))
-        .zip(target.attributes.pixels_mut().par_chunks_mut(n))
+        .zip(item.pixels_mut().par_chunks_mut(n))
+        .zip(attributes.pixels_mut().par_chunks_mut(n))
         .enumerate()
         .map(|(band_index, ((gd, item), attr))| {
             if let Some(empty) = clear {
@@ -206,8 +217,8 @@ fn draw_bands<P: Projection, S: FragmentShader>(
                 attr,
             };
             let mut s = RasterStats::default();
-            for chunk in &binned.chunks {
-                for t in &chunk[band_index] {
+            for chunk in binned.chunks() {
+                for t in chunk.band(band_index) {
                     band.draw(t, shader, &mut s);
                 }
             }

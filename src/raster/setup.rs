@@ -1,5 +1,6 @@
-//! Triangle setup: world-space clipping against the camera's near boundary, projection,
-//! guard-band clipping in image space, snapping to fixed point, and attribute planes.
+//! Triangle setup: world-space clipping against the camera's near boundary, projection (once
+//! per mesh vertex), guard-band clipping in image space, snapping to fixed point, attribute
+//! planes, and binning into bands of rows.
 
 use super::{ItemId, RasterStats};
 use crate::camera::{ImagePoint, Projection};
@@ -53,112 +54,212 @@ struct Corner {
     q: DVec3,
 }
 
-/// Screen triangles binned by band: `chunks[c][band]` holds, in input order, the triangles of
-/// input chunk `c` that touch `band`. Walking the chunks in order visits a band's triangles in
-/// input order, and each (chunk, band) list is contiguous in memory for the scan.
+/// Screen triangles binned by band, and the working memory that produces them — kept in the
+/// [`super::RasterTarget`] so that rasterizing again into it allocates nothing (fresh
+/// allocations of this size cost page faults that rival the rasterization itself).
+///
+/// Each input chunk of [`SETUP_CHUNK`] triangles holds its screen triangles once and, per band,
+/// the indices of those touching it in input order: walking the chunks in order visits a band's
+/// triangles in input order.
+#[derive(Clone, Debug, Default)]
 pub(super) struct Binned {
-    pub chunks: Vec<Vec<Vec<ScreenTri>>>,
+    chunks: Vec<BinnedChunk>,
+    /// Per object, its vertices seen through the camera.
+    seen: Vec<Vec<SeenVertex>>,
 }
 
-/// Sets up every triangle of every object and bins it into bands of `band_rows` rows
-/// (parallel over fixed chunks of the input, so the result does not depend on the thread count).
+impl Binned {
+    /// The input chunks, in input order.
+    pub fn chunks(&self) -> &[BinnedChunk] {
+        &self.chunks
+    }
+}
+
+/// The screen triangles of one input chunk, in input order, and their order by band.
+#[derive(Clone, Debug, Default)]
+pub(super) struct BinnedChunk {
+    tris: Vec<ScreenTri>,
+    /// Indices into `tris`, sorted by band (stable): band `b` is
+    /// `order[band_start[b] .. band_start[b + 1]]`. A triangle spanning several bands appears
+    /// in each.
+    order: Vec<u32>,
+    band_start: Vec<u32>,
+}
+
+impl BinnedChunk {
+    /// The triangles of this chunk that touch band `band`, in input order.
+    pub fn band(&self, band: usize) -> impl Iterator<Item = &ScreenTri> {
+        self.order[self.band_start[band] as usize..self.band_start[band + 1] as usize]
+            .iter()
+            .map(|&i| &self.tris[i as usize])
+    }
+
+    /// Sets up the triangles `first .. first + count` of the concatenated objects and sorts
+    /// them by band; returns how many screen triangles setup produced.
+    fn fill<P: Projection>(
+        &mut self,
+        camera: &P,
+        objects: &[&Mesh],
+        seen: &[Vec<SeenVertex>],
+        (first, count): (usize, usize),
+        band_rows: u32,
+    ) -> usize {
+        let (w, h) = camera.resolution();
+        let band_count = h.div_ceil(band_rows) as usize;
+        self.tris.clear();
+        self.tris.reserve(count);
+        let mut skip = first;
+        let mut left = count;
+        for (o, mesh) in objects.iter().enumerate() {
+            let n = mesh.triangles.len();
+            if skip >= n {
+                skip -= n;
+                continue;
+            }
+            let here = (n - skip).min(left);
+            for t in skip..skip + here {
+                let corners = mesh.triangles[t].map(|i| i as usize);
+                let item = ItemId {
+                    object: o as u32,
+                    triangle: t as u32,
+                };
+                setup_triangle(
+                    camera,
+                    corners.map(|i| (mesh.positions[i].as_dvec3(), seen[o][i])),
+                    item,
+                    w,
+                    h,
+                    &mut self.tris,
+                );
+            }
+            (skip, left) = (0, left - here);
+            if left == 0 {
+                break;
+            }
+        }
+        // Counting sort of (triangle, band) pairs by band, stable in input order.
+        let bands_of =
+            |t: &ScreenTri| (t.rows.0 / band_rows) as usize..=(t.rows.1 / band_rows) as usize;
+        self.band_start.clear();
+        self.band_start.resize(band_count + 1, 0);
+        for t in &self.tris {
+            for b in bands_of(t) {
+                self.band_start[b + 1] += 1;
+            }
+        }
+        for b in 0..band_count {
+            self.band_start[b + 1] += self.band_start[b];
+        }
+        self.order.clear();
+        self.order.resize(self.band_start[band_count] as usize, 0);
+        let mut fill = self.band_start.clone();
+        for (i, t) in self.tris.iter().enumerate() {
+            for b in bands_of(t) {
+                self.order[fill[b] as usize] = i as u32;
+                fill[b] += 1;
+            }
+        }
+        self.tris.len()
+    }
+}
+
+/// A mesh vertex seen through the camera, computed once per vertex rather than once per
+/// triangle corner (each vertex of a closed mesh is a corner of about six triangles).
+#[derive(Clone, Copy, Debug)]
+struct SeenVertex {
+    /// `clip_distance` of the vertex.
+    clip: f64,
+    /// Its image, when it projects inside the guard band with a finite, positive `gd`.
+    image: Option<ImagePoint>,
+}
+
+/// Sets up every triangle of every object and bins it into bands of `band_rows` rows, into
+/// `binned` (parallel over fixed chunks of the input, so the result does not depend on the
+/// thread count).
 pub(super) fn screen_triangles<P: Projection>(
     camera: &P,
     objects: &[&Mesh],
     band_rows: u32,
-) -> (Binned, RasterStats) {
-    let (w, h) = camera.resolution();
-    let band_count = h.div_ceil(band_rows) as usize;
-    let refs: Vec<(u32, u32)> = objects
-        .iter()
+    binned: &mut Binned,
+) -> RasterStats {
+    binned.seen.resize_with(objects.len(), Vec::new);
+    for (seen, m) in binned.seen.iter_mut().zip(objects) {
+        seen.clear();
+        seen.par_extend(m.positions.par_iter().map(|p| {
+            let x = p.as_dvec3();
+            let clip = camera.clip_distance(x);
+            let image = (clip >= 0.0)
+                .then(|| camera.project(x))
+                .flatten()
+                .filter(|q| {
+                    q.gd > 0.0 && q.gd.is_finite() && q.uv.x.abs() < GUARD && q.uv.y.abs() < GUARD
+                });
+            SeenVertex { clip, image }
+        }));
+    }
+    let total: usize = objects.iter().map(|m| m.triangles.len()).sum();
+    let chunk_count = total.div_ceil(SETUP_CHUNK);
+    binned.chunks.resize_with(chunk_count, BinnedChunk::default);
+    let seen = &binned.seen;
+    let screen: usize = binned
+        .chunks
+        .par_iter_mut()
         .enumerate()
-        .flat_map(|(o, m)| (0..m.triangles.len() as u32).map(move |t| (o as u32, t)))
-        .collect();
-    let chunks: Vec<(Vec<Vec<ScreenTri>>, u64)> = refs
-        .par_chunks(SETUP_CHUNK)
-        .map(|chunk| {
-            let mut one = Vec::with_capacity(8);
-            let mut bands: Vec<Vec<ScreenTri>> = vec![Vec::new(); band_count];
-            let mut count = 0;
-            for &(o, t) in chunk {
-                let mesh = objects[o as usize];
-                let item = ItemId {
-                    object: o,
-                    triangle: t,
-                };
-                setup_triangle(
-                    camera,
-                    mesh.corners(t as usize).map(|p| p.as_dvec3()),
-                    item,
-                    w,
-                    h,
-                    &mut one,
-                );
-                for tri in one.drain(..) {
-                    count += 1;
-                    let (b0, b1) = (
-                        (tri.rows.0 / band_rows) as usize,
-                        (tri.rows.1 / band_rows) as usize,
-                    );
-                    for band in &mut bands[b0..b1] {
-                        band.push(tri.clone());
-                    }
-                    bands[b1].push(tri);
-                }
-            }
-            (bands, count)
+        .map(|(c, chunk)| {
+            let first = c * SETUP_CHUNK;
+            let range = (first, SETUP_CHUNK.min(total - first));
+            chunk.fill(camera, objects, seen, range, band_rows)
         })
-        .collect();
-    let stats = RasterStats {
-        triangles_in: refs.len() as u64,
-        screen_triangles: chunks.iter().map(|c| c.1).sum(),
+        .sum();
+    RasterStats {
+        triangles_in: total as u64,
+        screen_triangles: screen as u64,
         ..RasterStats::default()
-    };
-    (
-        Binned {
-            chunks: chunks.into_iter().map(|c| c.0).collect(),
-        },
-        stats,
-    )
+    }
 }
 
-/// Triangles set up per parallel task.
-const SETUP_CHUNK: usize = 2048;
+/// Triangles set up per parallel task. Small enough that a chunk's screen triangles (about
+/// 100 kB) stay below the size at which the system allocator maps fresh pages: with 2048 a
+/// fresh rasterization of the bunny spent more time in page faults than in drawing.
+const SETUP_CHUNK: usize = 512;
 
 fn setup_triangle<P: Projection>(
     camera: &P,
-    p: [DVec3; 3],
+    corners: [(DVec3, SeenVertex); 3],
     item: ItemId,
     w: u32,
     h: u32,
     out: &mut Vec<ScreenTri>,
 ) {
     // Fast path: wholly inside the near boundary and the guard band — no clipping.
-    let d = p.map(|x| camera.clip_distance(x));
-    if d.iter().all(|&x| x >= 0.0) {
-        if let [Some(a), Some(b), Some(c)] = p.map(|x| camera.project(x)) {
-            let ok = |q: &ImagePoint| {
-                q.gd > 0.0 && q.gd.is_finite() && q.uv.x.abs() < GUARD && q.uv.y.abs() < GUARD
+    let [(pa, a), (pb, b), (pc, c)] = corners;
+    {
+        if let (Some(ia), Some(ib), Some(ic)) = (a.image, b.image, c.image) {
+            let corner = |q: ImagePoint, world, b: DVec3| Corner {
+                world,
+                uv: q.uv,
+                gd: q.gd,
+                inv_w: q.inv_w,
+                q: b * q.inv_w,
             };
-            if ok(&a) && ok(&b) && ok(&c) {
-                let corner = |q: ImagePoint, world, b: DVec3| Corner {
-                    world,
-                    uv: q.uv,
-                    gd: q.gd,
-                    inv_w: q.inv_w,
-                    q: b * q.inv_w,
-                };
-                let c3 = [
-                    corner(a, p[0], DVec3::X),
-                    corner(b, p[1], DVec3::Y),
-                    corner(c, p[2], DVec3::Z),
-                ];
-                out.extend(screen_triangle(c3, item, w, h));
-                return;
-            }
+            let c3 = [
+                corner(ia, pa, DVec3::X),
+                corner(ib, pb, DVec3::Y),
+                corner(ic, pc, DVec3::Z),
+            ];
+            out.extend(screen_triangle(c3, item, w, h));
+            return;
         }
     }
-    setup_clipped(camera, p, d, item, w, h, out);
+    setup_clipped(
+        camera,
+        corners.map(|c| c.0),
+        corners.map(|c| c.1.clip),
+        item,
+        w,
+        h,
+        out,
+    );
 }
 
 /// The general path: clip to the near boundary in world space, then to the guard band.
