@@ -14,7 +14,7 @@
 //! * [`trace`] — the [`RayQuery`] trait, the exact BVH (ground truth), the environment at infinity.
 //! * [`scene`] — TOML scene files, camera paths, animation.
 //! * [`render`] — the ground-truth renderers: raster and Whitted ray tracing.
-//! * [`report`], [`validate`], [`bench`] — the demo report, cross-method checks, benchmarks.
+//! * [`report`], [`validate`], [`bench`](mod@bench) — the demo report, cross-method checks, benchmarks.
 //!
 //! ## Conventions (said once, here)
 //!

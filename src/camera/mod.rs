@@ -54,12 +54,13 @@ pub trait Projection: Sync {
     fn clip_distance(&self, p: DVec3) -> f64;
 
     /// An upper bound, in pixels, on how far the image of the midpoint of a world segment strays
-    /// from the midpoint of the images `a` and `b` of its ends (the tessellation criterion of
-    /// algorithms.md §2.2), computed from `a` and `b` alone; `INFINITY` when the camera has no
-    /// bound cheaper than projecting the midpoint. Cameras that are projective on planes never
-    /// need a split and are not asked.
-    fn midpoint_deviation_bound(&self, a: &ImagePoint, b: &ImagePoint) -> f64 {
-        let _ = (a, b);
+    /// from the midpoint of the images of its ends (the tessellation criterion of
+    /// algorithms.md §2.2), valid for every segment whose two ends have images among `ends`
+    /// (two for an edge, three for all edges of a triangle at once) and computed from those
+    /// images alone; `INFINITY` when the camera has no bound cheaper than projecting the
+    /// midpoint. Cameras that are projective on planes never need a split and are not asked.
+    fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
+        let _ = ends;
         f64::INFINITY
     }
 

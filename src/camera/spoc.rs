@@ -192,24 +192,35 @@ impl Projection for Spoc {
     }
 
     /// With `r = q − p0` the pinhole image relative to the pole, `s = 1 + κ(z)`, and `Δ`, bars
-    /// the differences and means of the two ends: the pinhole image of the midpoint is
-    /// `r̄ + Δz·Δr/(4z̄)`, and `s` at the midpoint is `s̄ − ε` with `0 ≤ ε ≤ K|Δz|/4`
-    /// (`κ` is a convex hinge of slope `K = k/(z_f − z_n)`, linear in `z`, and `z` is affine
-    /// along the segment). The deviation is then exactly `s̄·Δz·Δr/(4z̄) − Δs·Δr/4 − ε·r_m`, so
+    /// the differences and means of a segment's two ends: the pinhole image of its midpoint is
+    /// `r̄ + Δz·Δr/(4z̄)`, and `s` there is `s̄ − ε` with `0 ≤ ε ≤ K|Δz|/4` (`κ` is a convex
+    /// hinge of slope `K = k/(z_f − z_n)`, and `z` is affine along the segment). The deviation
+    /// is then exactly `s̄·Δz·Δr/(4z̄) − Δs·Δr/4 − ε·r_m`, so
     /// `|dev| ≤ |Δz|/4 · (|Δr|·(s̄/z̄ + K) + K·|r_m|)`, with `|Δr| ≤ |Δuv| + K|Δz|·|uv_b − p0|`
-    /// (since `s ≥ 1`) and `|r_m| ≤ max |uv − p0|`. Cheaper over-estimates keep it to one
-    /// division: `s̄ ≤ 1 + k`, `1/z̄ ≤ max gd / f`, and `|x| ≤ |x₁| + |x₂|`.
-    fn midpoint_deviation_bound(&self, a: &ImagePoint, b: &ImagePoint) -> f64 {
-        if !(a.gd > 0.0 && b.gd > 0.0) {
+    /// (since `s ≥ 1`) and `|r_m| ≤ max |uv − p0|`. Over-estimates that hold for any two of
+    /// `ends` keep it to one division: `s̄ ≤ 1 + k`, `1/z̄ ≤ max gd / f`,
+    /// `|Δz| ≤ f·(max gd − min gd)/(max gd · min gd)`, and `|x| ≤ |x₁| + |x₂|` (so `|Δuv|` is
+    /// at most the width plus the height of the images' bounding box).
+    fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
+        let Some(first) = ends.first() else {
+            return 0.0;
+        };
+        let (mut gd_min, mut gd_max) = (first.gd, first.gd);
+        let (mut lo, mut hi) = (first.uv, first.uv);
+        let mut r_max: f64 = 0.0;
+        for p in ends {
+            (gd_min, gd_max) = (gd_min.min(p.gd), gd_max.max(p.gd));
+            (lo, hi) = (lo.min(p.uv), hi.max(p.uv));
+            let r = p.uv - self.pole;
+            r_max = r_max.max(r.x.abs() + r.y.abs());
+        }
+        if gd_min.is_nan() || gd_min <= 0.0 {
             return f64::INFINITY;
         }
-        let l1 = |x: DVec2| x.x.abs() + x.y.abs();
-        // |Δz| = f·|1/gd_a − 1/gd_b|.
-        let dz = self.focal * (a.gd - b.gd).abs() / (a.gd * b.gd);
-        let (ra, rb) = (l1(a.uv - self.pole), l1(b.uv - self.pole));
-        let dr = l1(b.uv - a.uv) + self.slope * dz * rb;
-        let inv_z_mean = a.gd.max(b.gd) / self.focal;
-        0.25 * dz * (dr * ((1.0 + self.k) * inv_z_mean + self.slope) + self.slope * ra.max(rb))
+        let dz = self.focal * (gd_max - gd_min) / (gd_max * gd_min);
+        let dr = (hi.x - lo.x) + (hi.y - lo.y) + self.slope * dz * r_max;
+        let inv_z_mean = gd_max / self.focal;
+        0.25 * dz * (dr * ((1.0 + self.k) * inv_z_mean + self.slope) + self.slope * r_max)
     }
 }
 
@@ -284,7 +295,10 @@ mod tests {
             let (pa, pb) = (s.project(a).unwrap(), s.project(b).unwrap());
             let pm = s.project((a + b) * 0.5).unwrap();
             let exact = (pm.uv - (pa.uv + pb.uv) * 0.5).length();
-            let bound = s.midpoint_deviation_bound(&pa, &pb);
+            let bound = s.midpoint_deviation_bound(&[pa, pb]);
+            // A third point only loosens the bound.
+            let c = s.project(random_point(i + 104_729)).unwrap();
+            assert!(s.midpoint_deviation_bound(&[pa, pb, c]) >= bound);
             assert!(
                 exact <= bound * (1.0 + 1e-9) + 1e-12,
                 "{a} {b}: {exact} > {bound}"

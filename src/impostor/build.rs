@@ -5,7 +5,10 @@ use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
 use crate::frame::FrameError;
 use crate::geom::{Aabb, Material, Mesh};
-use crate::raster::{Fragment, FragmentShader, rasterize, rasterize_into};
+use crate::raster::{
+    BAND_ROWS, FinishedBand, Fragment, FragmentShader, ItemId, RasterTarget, rasterize,
+    rasterize_into_then,
+};
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -86,7 +89,7 @@ fn tessellate_with<P: Projection>(
     // bound settles nearly every edge of a detailed mesh without projecting its midpoint.
     let split_projected = |a: Vec3, b: Vec3, pa: &ImagePoint, pb: &ImagePoint| -> bool {
         if (pa.uv - pb.uv).length_squared() < 1.0
-            || camera.midpoint_deviation_bound(pa, pb) <= MAX_DEVIATION_PX
+            || camera.midpoint_deviation_bound(&[*pa, *pb]) <= MAX_DEVIATION_PX
         {
             return false;
         }
@@ -113,6 +116,12 @@ fn tessellate_with<P: Projection>(
     let projected = &*projected;
     let needs_any_split = |t: usize| {
         let [a, b, c] = mesh.triangles[t].map(|i| i as usize);
+        // One bound for the three edges settles nearly every triangle.
+        if let (Some(pa), Some(pb), Some(pc)) = (projected[a], projected[b], projected[c]) {
+            if camera.midpoint_deviation_bound(&[pa, pb, pc]) <= MAX_DEVIATION_PX {
+                return false;
+            }
+        }
         [(a, b), (b, c), (c, a)]
             .iter()
             .any(|&(i, j)| match (projected[i], projected[j]) {
@@ -186,74 +195,134 @@ fn tessellate_with<P: Projection>(
 
 /// The first pass of construction writes, per fragment that passes the depth test, only its
 /// barycentrics (the item buffer holds its triangle): a visibility buffer. Surface attributes
-/// are resolved afterwards, once per covered texel ([`resolve`]); writing them per fragment
-/// into a wide attribute image cost more than the rasterization itself.
+/// are resolved afterwards, once per covered texel ([`resolve_run`]); writing them per
+/// fragment into a wide attribute image cost more than the rasterization itself. Two weights
+/// are stored, the third is `1 − b₁ − b₂` ([`full_barycentrics`]).
 struct Barycentrics;
 
 impl FragmentShader for Barycentrics {
-    type Output = Vec3;
-    fn shade(&self, f: &Fragment) -> Vec3 {
-        f.bary
+    type Output = Vec2;
+    fn shade(&self, f: &Fragment) -> Vec2 {
+        Vec2::new(f.bary.y, f.bary.z)
     }
+}
+
+/// The three weights from the two a [`Barycentrics`] buffer stores.
+fn full_barycentrics(b: Vec2) -> Vec3 {
+    Vec3::new(1.0 - b.x - b.y, b.x, b.y)
 }
 
 /// A visible point of the source mesh: triangle and barycentrics.
 type Visible = (u32, Vec3);
 
+/// A run of texels of every map of an impostor (the same texels of each), row-major.
+struct TexelMaps<'a> {
+    color: &'a mut [Vec4],
+    normal: &'a mut [Vec3],
+    face_normal: &'a mut [Vec3],
+    position: &'a mut [Vec3],
+    object: &'a mut [u32],
+}
+
+impl Impostor {
+    /// Its maps cut into runs of `n` texels (the last may be shorter), for parallel filling.
+    fn texel_runs(&mut self, n: usize) -> Vec<TexelMaps<'_>> {
+        self.color
+            .pixels_mut()
+            .chunks_mut(n)
+            .zip(self.normal.pixels_mut().chunks_mut(n))
+            .zip(self.face_normal.pixels_mut().chunks_mut(n))
+            .zip(self.position.pixels_mut().chunks_mut(n))
+            .zip(self.object.pixels_mut().chunks_mut(n))
+            .map(
+                |((((color, normal), face_normal), position), object)| TexelMaps {
+                    color,
+                    normal,
+                    face_normal,
+                    position,
+                    object,
+                },
+            )
+            .collect()
+    }
+}
+
+/// What resolving a visibility buffer needs besides the visible points.
+struct ResolveInputs<'a, F> {
+    camera: &'a ImpostorCamera,
+    mesh: &'a Mesh,
+    object: u32,
+    color: &'a F,
+}
+
+/// Fills a run of texels from the visible points `visible(i)` of its texels `i` (counted from
+/// the run's start). Texels with no visible point are cleared where the object map says they
+/// were written before (invariant: the maps are empty wherever `object` is [`NO_OBJECT`]).
+fn resolve_run<F, V>(run: &mut TexelMaps<'_>, inputs: &ResolveInputs<'_, F>, visible: V)
+where
+    F: Fn(&SurfaceSample) -> Vec3 + Sync,
+    V: Fn(usize) -> Option<Visible>,
+{
+    let ResolveInputs {
+        camera,
+        mesh,
+        object,
+        color,
+    } = inputs;
+    for x in 0..run.color.len() {
+        let Some((t, b)) = visible(x) else {
+            // Only texels written last time need clearing: most of an impostor's image is
+            // empty, and skipping it halves the pass.
+            if run.object[x] != NO_OBJECT {
+                run.color[x] = Vec4::ZERO;
+                run.normal[x] = Vec3::ZERO;
+                run.face_normal[x] = Vec3::ZERO;
+                run.position[x] = Vec3::ZERO;
+                run.object[x] = NO_OBJECT;
+            }
+            continue;
+        };
+        let (s, face) = surface_sample(mesh, t, b);
+        run.color[x] = color(&s).extend(1.0);
+        run.normal[x] = s.normal;
+        // The face normal, turned toward the camera.
+        let toward = camera.toward_camera(s.position.as_dvec3());
+        run.face_normal[x] = if face.as_dvec3().dot(toward) < 0.0 {
+            -face
+        } else {
+            face
+        };
+        run.position[x] = s.position;
+        run.object[x] = *object;
+    }
+}
+
 /// Fills the impostor's maps from the visible points `visible(i)` of texels `i` (row-major),
-/// in parallel over rows. Texels with no visible point are cleared where the object map says
-/// they were written before (invariant: the maps are empty wherever `object` is
-/// [`NO_OBJECT`]).
+/// in parallel over rows (see [`resolve_run`]).
 fn resolve<F, V>(impostor: &mut Impostor, mesh: &Mesh, object: u32, color: &F, visible: V)
 where
     F: Fn(&SurfaceSample) -> Vec3 + Sync,
     V: Fn(usize) -> Option<Visible> + Sync,
 {
-    let Impostor {
-        camera,
-        color: colors,
-        normal,
-        face_normal,
-        position,
-        object: objects,
-        ..
-    } = impostor;
-    let row = colors.size().0 as usize;
-    let camera = &*camera;
-    colors
-        .pixels_mut()
-        .par_chunks_mut(row)
-        .zip(normal.pixels_mut().par_chunks_mut(row))
-        .zip(face_normal.pixels_mut().par_chunks_mut(row))
-        .zip(position.pixels_mut().par_chunks_mut(row))
-        .zip(objects.pixels_mut().par_chunks_mut(row))
+    let row = impostor.color.size().0 as usize;
+    let camera = impostor.camera.clone();
+    let inputs = ResolveInputs {
+        camera: &camera,
+        mesh,
+        object,
+        color,
+    };
+    impostor
+        .texel_runs(row)
+        .into_par_iter()
         .enumerate()
-        .for_each(|(y, ((((c, nr), fnr), pos), obj))| {
-            for x in 0..row {
-                let Some((t, b)) = visible(y * row + x) else {
-                    // Only texels written last time need clearing: most of an impostor's
-                    // image is empty, and skipping it halves the pass.
-                    if obj[x] != NO_OBJECT {
-                        (c[x], nr[x], fnr[x], pos[x], obj[x]) =
-                            (Vec4::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, NO_OBJECT);
-                    }
-                    continue;
-                };
-                let s = surface_sample(mesh, t, b);
-                c[x] = color(&s).extend(1.0);
-                nr[x] = s.normal;
-                // The face normal, turned toward the camera.
-                let face = mesh.face_normal(t as usize);
-                let toward = camera.toward_camera(s.position.as_dvec3());
-                fnr[x] = if face.as_dvec3().dot(toward) < 0.0 {
-                    -face
-                } else {
-                    face
-                };
-                pos[x] = s.position;
-                obj[x] = object;
-            }
-        });
+        .for_each(|(y, mut run)| resolve_run(&mut run, &inputs, |x| visible(y * row + x)));
+    finish_resolve(impostor, mesh);
+}
+
+/// Sets the bounds of a freshly resolved impostor (the mesh's box, padded) and drops what was
+/// derived from its old maps.
+fn finish_resolve(impostor: &mut Impostor, mesh: &Mesh) {
     let b = mesh.bounds();
     let pad = b.extent().max_element() * 1e-4;
     impostor.bounds = Aabb {
@@ -283,21 +352,25 @@ fn empty_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
 }
 
 /// The surface point with barycentrics `b` in triangle `t` of `m`.
-fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> SurfaceSample {
+/// Also returns the triangle's unit face normal (zero if degenerate).
+fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3) {
     let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
-    let position = m.positions[i0] * b.x + m.positions[i1] * b.y + m.positions[i2] * b.z;
-    let normal = (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z)
-        .normalize_or(m.face_normal(t as usize));
+    let [p0, p1, p2] = [i0, i1, i2].map(|i| m.positions[i]);
+    let position = p0 * b.x + p1 * b.y + p2 * b.z;
+    let face = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    let normal =
+        (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z).normalize_or(face);
     let uv = m
         .uvs
         .as_ref()
         .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
-    SurfaceSample {
+    let sample = SurfaceSample {
         position,
         normal,
         uv,
         triangle: t,
-    }
+    };
+    (sample, face)
 }
 
 /// The source triangle and barycentrics of a fragment of sub-triangle `t` (or of `t` itself
@@ -329,7 +402,7 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
 /// rebuilds its impostors for dynamic scenes) allocates nothing.
 #[derive(Default)]
 pub struct ImpostorBuilder {
-    visibility: Option<crate::raster::RasterTarget<Vec3>>,
+    visibility: Option<crate::raster::RasterTarget<Vec2>>,
     tessellation: TessellationScratch,
 }
 
@@ -378,19 +451,41 @@ impl ImpostorBuilder {
             Some(t) => (&t.mesh, Some(t.source.as_slice())),
             None => (mesh, None),
         };
+        let (w, h) = camera.resolution();
         let target = match &mut self.visibility {
             Some(t) => t,
-            slot => slot.insert(rasterize(camera, &[], &Barycentrics, Vec3::ZERO)?.0),
+            slot => slot.insert(RasterTarget::new(w, h, Vec2::ZERO)?),
         };
-        rasterize_into(camera, &[raster_mesh], &Barycentrics, Vec3::ZERO, target)?;
+        // Each band of the visibility buffer is resolved into the maps as soon as it is drawn.
+        let camera = impostor.camera.clone();
+        let inputs = ResolveInputs {
+            camera: &camera,
+            mesh,
+            object,
+            color,
+        };
+        let runs = impostor.texel_runs((BAND_ROWS * w) as usize);
+        debug_assert_eq!(runs.len(), h.div_ceil(BAND_ROWS) as usize);
+        rasterize_into_then(
+            &camera,
+            &[raster_mesh],
+            &Barycentrics,
+            Vec2::ZERO,
+            target,
+            runs,
+            |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
+                resolve_run(run, &inputs, |x| {
+                    let item = band.item[x];
+                    (item != ItemId::NONE).then(|| {
+                        let b = full_barycentrics(band.attributes[x]);
+                        to_source(source, item.triangle, b)
+                    })
+                });
+            },
+        )?;
         // The new depth becomes the impostor's; its old one is the next pass's scratch.
         std::mem::swap(&mut impostor.gd, &mut target.gd);
-        let (item, bary) = (&target.item, &target.attributes);
-        let visible = |i: usize| {
-            (item.pixels()[i] != crate::raster::ItemId::NONE)
-                .then(|| to_source(source, item.pixels()[i].triangle, bary.pixels()[i]))
-        };
-        resolve(impostor, mesh, object, color, visible);
+        finish_resolve(impostor, mesh);
         Ok(())
     }
 }
@@ -470,7 +565,7 @@ fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         if part.source.is_empty() {
             continue;
         }
-        let (target, _) = rasterize(&g.frustum(j), &[&part.mesh], &Barycentrics, Vec3::ZERO)?;
+        let (target, _) = rasterize(&g.frustum(j), &[&part.mesh], &Barycentrics, Vec2::ZERO)?;
         let (new_gd, item, bary) = (&target.gd, &target.item, &target.attributes);
         for (i, &g_new) in new_gd.pixels().iter().enumerate() {
             if g_new > gd.pixels()[i] {
@@ -478,7 +573,7 @@ fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
                 visible[i] = Some(to_source(
                     Some(&part.source),
                     item.pixels()[i].triangle,
-                    bary.pixels()[i],
+                    full_barycentrics(bary.pixels()[i]),
                 ));
             }
         }

@@ -5,7 +5,7 @@
 //! world position and object id — and the bounding box of what it replaces. [`build`] makes one
 //! by rasterizing a mesh through the camera (tessellating adaptively for curved cameras, §2.2);
 //! the impostor implements [`crate::trace::RayQuery`] by walking the ray's projection across the
-//! image (§2.3, [`walk`]); [`file`] saves and loads it (OpenEXR channels + JSON sidecar).
+//! image (§2.3, `walk`); [`file`](mod@file) saves and loads it (OpenEXR channels + JSON sidecar).
 //!
 //! Invariants: texel `gd` follows algorithms.md §1.2 (0 = empty, larger = nearer); every non-empty
 //! texel holds the world position of the surface point it shows, so a hit's position is exact up
@@ -228,9 +228,9 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Graph(c) => c.clip_distance(p),
         }
     }
-    fn midpoint_deviation_bound(&self, a: &ImagePoint, b: &ImagePoint) -> f64 {
+    fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
         match self {
-            ImpostorCamera::Spoc(c) => c.midpoint_deviation_bound(a, b),
+            ImpostorCamera::Spoc(c) => c.midpoint_deviation_bound(ends),
             _ => f64::INFINITY,
         }
     }

@@ -42,7 +42,7 @@ pub enum WalkMode {
     /// texels, or in front of covered ones: the pyramid of front bounds); returns exactly the
     /// hits of [`WalkMode::Linear`].
     Hierarchical,
-    /// Every texel the image path crosses, once, in order ([`super::straight`]); for
+    /// Every texel the image path crosses, once, in order (`impostor/straight.rs`); for
     /// projective cameras (pinhole, orthographic). A SPOC impostor walks hierarchically instead.
     Exact,
 }

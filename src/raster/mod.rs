@@ -1,10 +1,12 @@
 //! A triangle rasterizer generic over the camera's [`Projection`] (papers 1, 4, 5; the
 //! impostor construction of paper 1 §3.1 / algorithms.md §2.2 runs through it).
 //!
-//! Pipeline: [`setup`] clips each triangle where the camera's `clip_distance` is negative (in
-//! world space), projects the corners through the camera, clips to a guard band, snaps them to
+//! Pipeline: `setup` projects every mesh vertex once, clips each triangle where the camera's
+//! `clip_distance` is negative (in world space), clips to a guard band, snaps the corners to
 //! 1/256 pixel and bins the screen triangles into bands of [`BAND_ROWS`] rows; bands are
-//! rasterized in parallel by [`scan`], each owning its rows of every buffer.
+//! rasterized in parallel by `scan`, each owning its rows of every buffer, and may be
+//! finished at once by a caller's pass ([`rasterize_into_then`]). A [`RasterTarget`] keeps the
+//! set-up triangles' memory, so drawing into it again allocates nothing.
 //!
 //! Invariants:
 //! - **Watertight, top-left rule**: coverage uses exact integer edge functions on snapped
@@ -157,7 +159,15 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
 ) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
     let (w, h) = camera.resolution();
     let mut target = RasterTarget::new(w, h, empty)?;
-    let stats = draw_bands(camera, objects, shader, None, &mut target);
+    let stats = draw_bands(
+        camera,
+        objects,
+        shader,
+        None,
+        &mut target,
+        (),
+        |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
+    );
     Ok((target, stats))
 }
 
@@ -175,19 +185,110 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
     if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
         *target = RasterTarget::new(w, h, empty)?;
     }
-    Ok(draw_bands(camera, objects, shader, Some(empty), target))
+    Ok(draw_bands(
+        camera,
+        objects,
+        shader,
+        Some(empty),
+        target,
+        (),
+        |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
+    ))
+}
+
+/// One band of rows just drawn, handed to the `finish` callback of [`rasterize_into_then`].
+pub struct FinishedBand<'a, T> {
+    /// Index of the band's first pixel in the row-major image (`first row × width`).
+    pub first_pixel: usize,
+    /// The band's depth, item and attribute pixels, row-major.
+    pub gd: &'a [f32],
+    /// Item buffer of the band.
+    pub item: &'a [ItemId],
+    /// Attributes of the band.
+    pub attributes: &'a [T],
+}
+
+/// [`rasterize_into`], then `finish` on each band of [`BAND_ROWS`] rows as soon as it is drawn,
+/// while its pixels are still in cache, with `outputs[band]` — for instance that band's rows of
+/// other images (deferred shading of a visibility buffer).
+///
+/// # Panics
+/// When `outputs` does not hold one entry per band (`height.div_ceil(BAND_ROWS)`): a caller's
+/// bug, not bad input.
+pub fn rasterize_into_then<P, S, O, F>(
+    camera: &P,
+    objects: &[&Mesh],
+    shader: &S,
+    empty: S::Output,
+    target: &mut RasterTarget<S::Output>,
+    outputs: Vec<O>,
+    finish: F,
+) -> Result<RasterStats, FrameError>
+where
+    P: Projection,
+    S: FragmentShader,
+    O: Send,
+    F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
+{
+    let (w, h) = camera.resolution();
+    assert_eq!(
+        outputs.len(),
+        h.div_ceil(BAND_ROWS) as usize,
+        "one output per band"
+    );
+    if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
+        *target = RasterTarget::new(w, h, empty)?;
+    }
+    Ok(draw_bands(
+        camera,
+        objects,
+        shader,
+        Some(empty),
+        target,
+        outputs,
+        |band: FinishedBand<'_, S::Output>, out: &mut O| finish(band, out),
+    ))
+}
+
+/// Per-band values handed to the finishing callback of [`draw_bands`]: one per band, or `()`
+/// for none.
+trait BandOutputs: Send {
+    type Item: Send;
+    fn into_bands(self, bands: usize) -> Vec<Self::Item>;
+}
+
+impl BandOutputs for () {
+    type Item = ();
+    fn into_bands(self, bands: usize) -> Vec<()> {
+        vec![(); bands]
+    }
+}
+
+impl<O: Send> BandOutputs for Vec<O> {
+    type Item = O;
+    fn into_bands(self, _: usize) -> Vec<O> {
+        self
+    }
 }
 
 /// Bins the triangles into bands of rows and draws the bands in parallel (each band's
 /// triangles in input order, so the result does not depend on the thread count); clears each
-/// band first when `clear` gives the empty attribute.
-fn draw_bands<P: Projection, S: FragmentShader>(
+/// band first when `clear` gives the empty attribute; then calls `finish` on the drawn band.
+fn draw_bands<P, S, B, F>(
     camera: &P,
     objects: &[&Mesh],
     shader: &S,
     clear: Option<S::Output>,
     target: &mut RasterTarget<S::Output>,
-) -> RasterStats {
+    outputs: B,
+    finish: F,
+) -> RasterStats
+where
+    P: Projection,
+    S: FragmentShader,
+    B: BandOutputs,
+    F: Fn(FinishedBand<'_, S::Output>, &mut B::Item) + Sync,
+{
     let w = target.gd.size().0;
     let mut stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
     let RasterTarget {
@@ -197,13 +298,15 @@ fn draw_bands<P: Projection, S: FragmentShader>(
         binned,
     } = target;
     let n = (BAND_ROWS * w) as usize;
+    let outputs = outputs.into_bands(gd.pixels().len().div_ceil(n));
     let band_stats: Vec<RasterStats> = gd
         .pixels_mut()
         .par_chunks_mut(n)
         .zip(item.pixels_mut().par_chunks_mut(n))
         .zip(attributes.pixels_mut().par_chunks_mut(n))
+        .zip(outputs)
         .enumerate()
-        .map(|(band_index, ((gd, item), attr))| {
+        .map(|(band_index, (((gd, item), attr), mut out))| {
             if let Some(empty) = clear {
                 gd.fill(0.0);
                 item.fill(ItemId::NONE);
@@ -222,6 +325,15 @@ fn draw_bands<P: Projection, S: FragmentShader>(
                     band.draw(t, shader, &mut s);
                 }
             }
+            finish(
+                FinishedBand {
+                    first_pixel: band_index * n,
+                    gd: band.gd,
+                    item: band.item,
+                    attributes: band.attr,
+                },
+                &mut out,
+            );
             s
         })
         .collect();

@@ -1,5 +1,5 @@
 //! Ground-truth renderers (all papers): `raster` shades what the rasterizer sees, `trace` is a
-//! Whitted ray tracer over any [`RayQuery`] — the reference later methods are compared with.
+//! Whitted ray tracer over any [`RayQuery`](crate::trace::RayQuery) — the reference later methods are compared with.
 //!
 //! Both methods share one shading model ([`shading`]): Lambert with the sun plus the
 //! environment's diffuse irradiance, no shadows; mirrors and glass reflect and refract. The
