@@ -165,7 +165,7 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         shader,
         None,
         &mut target,
-        (),
+        vec![(); h.div_ceil(BAND_ROWS) as usize],
         |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
     );
     Ok((target, stats))
@@ -191,7 +191,7 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
         shader,
         Some(empty),
         target,
-        (),
+        vec![(); h.div_ceil(BAND_ROWS) as usize],
         |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
     ))
 }
@@ -246,48 +246,28 @@ where
         Some(empty),
         target,
         outputs,
-        |band: FinishedBand<'_, S::Output>, out: &mut O| finish(band, out),
+        finish,
     ))
-}
-
-/// Per-band values handed to the finishing callback of [`draw_bands`]: one per band, or `()`
-/// for none.
-trait BandOutputs: Send {
-    type Item: Send;
-    fn into_bands(self, bands: usize) -> Vec<Self::Item>;
-}
-
-impl BandOutputs for () {
-    type Item = ();
-    fn into_bands(self, bands: usize) -> Vec<()> {
-        vec![(); bands]
-    }
-}
-
-impl<O: Send> BandOutputs for Vec<O> {
-    type Item = O;
-    fn into_bands(self, _: usize) -> Vec<O> {
-        self
-    }
 }
 
 /// Bins the triangles into bands of rows and draws the bands in parallel (each band's
 /// triangles in input order, so the result does not depend on the thread count); clears each
 /// band first when `clear` gives the empty attribute; then calls `finish` on the drawn band.
-fn draw_bands<P, S, B, F>(
+/// `outputs` holds one value per band (a `Vec<()>` allocates nothing when there are none).
+fn draw_bands<P, S, O, F>(
     camera: &P,
     objects: &[&Mesh],
     shader: &S,
     clear: Option<S::Output>,
     target: &mut RasterTarget<S::Output>,
-    outputs: B,
+    outputs: Vec<O>,
     finish: F,
 ) -> RasterStats
 where
     P: Projection,
     S: FragmentShader,
-    B: BandOutputs,
-    F: Fn(FinishedBand<'_, S::Output>, &mut B::Item) + Sync,
+    O: Send,
+    F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
 {
     let w = target.gd.size().0;
     let mut stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
@@ -298,7 +278,6 @@ where
         binned,
     } = target;
     let n = (BAND_ROWS * w) as usize;
-    let outputs = outputs.into_bands(gd.pixels().len().div_ceil(n));
     let band_stats: Vec<RasterStats> = gd
         .pixels_mut()
         .par_chunks_mut(n)
