@@ -6,8 +6,8 @@ use crate::camera::{ImagePoint, Projection};
 use crate::frame::FrameError;
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
-    BAND_ROWS, FinishedBand, Fragment, FragmentShader, ItemId, RasterTarget, rasterize,
-    rasterize_into_then,
+    BAND_ROWS, FinishedBand, Fragment, FragmentShader, ItemId, rasterize, rasterize_into_then,
+    rasterize_then,
 };
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
@@ -452,10 +452,6 @@ impl ImpostorBuilder {
             None => (mesh, None),
         };
         let (w, h) = camera.resolution();
-        let target = match &mut self.visibility {
-            Some(t) => t,
-            slot => slot.insert(RasterTarget::new(w, h, Vec2::ZERO)?),
-        };
         // Each band of the visibility buffer is resolved into the maps as soon as it is drawn.
         let camera = impostor.camera.clone();
         let inputs = ResolveInputs {
@@ -466,23 +462,27 @@ impl ImpostorBuilder {
         };
         let runs = impostor.texel_runs((BAND_ROWS * w) as usize);
         debug_assert_eq!(runs.len(), h.div_ceil(BAND_ROWS) as usize);
-        rasterize_into_then(
-            &camera,
-            &[raster_mesh],
-            &Barycentrics,
-            Vec2::ZERO,
-            target,
-            runs,
-            |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
-                resolve_run(run, &inputs, |x| {
-                    let item = band.item[x];
-                    (item != ItemId::NONE).then(|| {
-                        let b = full_barycentrics(band.attributes[x]);
-                        to_source(source, item.triangle, b)
-                    })
-                });
-            },
-        )?;
+        let finish = |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
+            resolve_run(run, &inputs, |x| {
+                let item = band.item[x];
+                (item != ItemId::NONE).then(|| {
+                    let b = full_barycentrics(band.attributes[x]);
+                    to_source(source, item.triangle, b)
+                })
+            });
+        };
+        let (meshes, shader) = ([raster_mesh], &Barycentrics);
+        let target = match &mut self.visibility {
+            Some(target) => {
+                rasterize_into_then(&camera, &meshes, shader, Vec2::ZERO, target, runs, finish)?;
+                target
+            }
+            slot => {
+                let (target, _) =
+                    rasterize_then(&camera, &meshes, shader, Vec2::ZERO, runs, finish)?;
+                slot.insert(target)
+            }
+        };
         // The new depth becomes the impostor's; its old one is the next pass's scratch.
         std::mem::swap(&mut impostor.gd, &mut target.gd);
         finish_resolve(impostor, mesh);

@@ -182,14 +182,18 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
     target: &mut RasterTarget<S::Output>,
 ) -> Result<RasterStats, FrameError> {
     let (w, h) = camera.resolution();
-    if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
+    // A reallocated target is already clear.
+    let clear = if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
         *target = RasterTarget::new(w, h, empty)?;
-    }
+        None
+    } else {
+        Some(empty)
+    };
     Ok(draw_bands(
         camera,
         objects,
         shader,
-        Some(empty),
+        clear,
         target,
         vec![(); h.div_ceil(BAND_ROWS) as usize],
         |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
@@ -236,18 +240,45 @@ where
         h.div_ceil(BAND_ROWS) as usize,
         "one output per band"
     );
-    if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
+    // A reallocated target is already clear.
+    let clear = if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
         *target = RasterTarget::new(w, h, empty)?;
-    }
+        None
+    } else {
+        Some(empty)
+    };
     Ok(draw_bands(
-        camera,
-        objects,
-        shader,
-        Some(empty),
-        target,
-        outputs,
-        finish,
+        camera, objects, shader, clear, target, outputs, finish,
     ))
+}
+
+/// [`rasterize`] with the finishing pass of [`rasterize_into_then`], into a new target.
+///
+/// # Panics
+/// When `outputs` does not hold one entry per band, as [`rasterize_into_then`].
+pub fn rasterize_then<P, S, O, F>(
+    camera: &P,
+    objects: &[&Mesh],
+    shader: &S,
+    empty: S::Output,
+    outputs: Vec<O>,
+    finish: F,
+) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError>
+where
+    P: Projection,
+    S: FragmentShader,
+    O: Send,
+    F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
+{
+    let (w, h) = camera.resolution();
+    assert_eq!(
+        outputs.len(),
+        h.div_ceil(BAND_ROWS) as usize,
+        "one output per band"
+    );
+    let mut target = RasterTarget::new(w, h, empty)?;
+    let stats = draw_bands(camera, objects, shader, None, &mut target, outputs, finish);
+    Ok((target, stats))
 }
 
 /// Bins the triangles into bands of rows and draws the bands in parallel (each band's
