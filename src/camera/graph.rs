@@ -673,6 +673,12 @@ impl Projection for GraphCamera {
     fn clip_distance(&self, p: DVec3) -> f64 {
         self.root.clip_distance(p)
     }
+
+    /// A segment crossing a shared face bends there: no bound. (Construction clips triangles
+    /// to each frustum and draws them through [`FrustumProjection`], which is projective.)
+    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
+        f64::INFINITY
+    }
 }
 
 #[cfg(test)]

@@ -54,14 +54,18 @@ pub trait Projection: Sync {
     fn clip_distance(&self, p: DVec3) -> f64;
 
     /// An upper bound, in pixels, on how far the image of the midpoint of a world segment strays
-    /// from the midpoint of the images of its ends (the tessellation criterion of
-    /// algorithms.md §2.2), valid for every segment whose two ends have images among `ends`
+    /// from the midpoint of the images of its ends — the tessellation criterion of
+    /// algorithms.md §2.2 — valid for every segment whose two ends have images among `ends`
     /// (two for an edge, three for all edges of a triangle at once) and computed from those
-    /// images alone; `INFINITY` when the camera has no bound cheaper than projecting the
-    /// midpoint. Cameras that are projective on planes never need a split and are not asked.
+    /// images alone; `INFINITY` when the camera has no such bound.
+    ///
+    /// The default, 0, is for cameras projective on planes (pinhole, orthographic, one frustum
+    /// of a graph camera): they image a segment straight, and the rasterizer's perspective-
+    /// correct interpolation puts its midpoint exactly where the camera does, so a triangle
+    /// never needs splitting. A curved camera must override it.
     fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
         let _ = ends;
-        f64::INFINITY
+        0.0
     }
 
     /// Projects an `f32` world point (convenience for mesh vertices).

@@ -6,8 +6,8 @@ use crate::camera::{ImagePoint, Projection};
 use crate::frame::FrameError;
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
-    BAND_ROWS, FinishedBand, Fragment, FragmentShader, ItemId, rasterize, rasterize_into_then,
-    rasterize_then,
+    BAND_ROWS, FinishedBand, Fragment, FragmentShader, ItemId, RasterStats, rasterize,
+    rasterize_into_then, rasterize_then,
 };
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
@@ -441,18 +441,37 @@ impl ImpostorBuilder {
             *impostor = build_graph(g.clone(), mesh, object, color)?;
             return Ok(());
         }
-        let camera = &impostor.camera;
-        let tessellation = if camera.is_curved() {
-            tessellate_with(camera, mesh, &mut self.tessellation)
-        } else {
-            None
-        };
-        let (raster_mesh, source) = match &tessellation {
-            Some(t) => (&t.mesh, Some(t.source.as_slice())),
-            None => (mesh, None),
-        };
-        let (w, h) = camera.resolution();
-        // Each band of the visibility buffer is resolved into the maps as soon as it is drawn.
+        // Detailed meshes rarely need splitting (paper 1 §3.1): draw the mesh as it is, and
+        // tessellate only when the rasterizer reports triangles the camera may curve by more
+        // than the tolerance, or that it had to clip — then draw the tessellation instead.
+        let stats = self.draw_and_resolve(impostor, mesh, (mesh, None), object, color)?;
+        if impostor.camera.is_curved() && stats.curved + stats.clipped > 0 {
+            if let Some(t) = tessellate_with(&impostor.camera, mesh, &mut self.tessellation) {
+                let drawn = (&t.mesh, Some(t.source.as_slice()));
+                self.draw_and_resolve(impostor, mesh, drawn, object, color)?;
+            }
+        }
+        // The new depth becomes the impostor's; its old one is the next pass's scratch.
+        if let Some(target) = &mut self.visibility {
+            std::mem::swap(&mut impostor.gd, &mut target.gd);
+        }
+        finish_resolve(impostor, mesh);
+        Ok(())
+    }
+
+    /// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle)
+    /// through the impostor's camera into the visibility buffer, resolving each band into the
+    /// impostor's maps (surface points of `mesh`) as soon as it is drawn. The new `gd` is left
+    /// in the visibility buffer.
+    fn draw_and_resolve<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        impostor: &mut Impostor,
+        mesh: &Mesh,
+        (drawn, source): (&Mesh, Option<&[SourceTriangle]>),
+        object: u32,
+        color: &F,
+    ) -> Result<RasterStats, FrameError> {
+        let (w, h) = impostor.camera.resolution();
         let camera = impostor.camera.clone();
         let inputs = ResolveInputs {
             camera: &camera,
@@ -471,22 +490,18 @@ impl ImpostorBuilder {
                 })
             });
         };
-        let (meshes, shader) = ([raster_mesh], &Barycentrics);
-        let target = match &mut self.visibility {
+        let (meshes, shader) = ([drawn], &Barycentrics);
+        Ok(match &mut self.visibility {
             Some(target) => {
-                rasterize_into_then(&camera, &meshes, shader, Vec2::ZERO, target, runs, finish)?;
-                target
+                rasterize_into_then(&camera, &meshes, shader, Vec2::ZERO, target, runs, finish)?
             }
             slot => {
-                let (target, _) =
+                let (target, stats) =
                     rasterize_then(&camera, &meshes, shader, Vec2::ZERO, runs, finish)?;
-                slot.insert(target)
+                *slot = Some(target);
+                stats
             }
-        };
-        // The new depth becomes the impostor's; its old one is the next pass's scratch.
-        std::mem::swap(&mut impostor.gd, &mut target.gd);
-        finish_resolve(impostor, mesh);
-        Ok(())
+        })
     }
 }
 
@@ -622,7 +637,7 @@ mod tests {
             tess.source.len()
         );
         let imp = build(
-            ImpostorCamera::Spoc(spoc),
+            ImpostorCamera::Spoc(spoc.clone()),
             &sphere,
             0,
             &|_: &SurfaceSample| Vec3::ONE,
@@ -637,6 +652,17 @@ mod tests {
             }
         }
         assert!(rows_checked > 20);
+        // The builder drew the tessellation, not the coarse mesh: the rasterizer flagged the
+        // coarse triangles as curved.
+        let shader = crate::raster::NoAttributes;
+        let (coarse, stats) = rasterize(&spoc, &[&sphere], &shader, ()).unwrap();
+        assert!(stats.curved > 0 && stats.clipped == 0, "{stats:?}");
+        let (fine, _) = rasterize(&spoc, &[&tess.mesh], &shader, ()).unwrap();
+        assert!(imp.gd == fine.gd && imp.gd != coarse.gd);
+        let pinhole = rasterize(spoc.pinhole(), &[&sphere], &shader, ())
+            .unwrap()
+            .1;
+        assert_eq!(pinhole.curved, 0);
         // Every stored position lies on the sphere's triangles (radius between inscribed and 0.5).
         for (p, &g) in imp.position.pixels().iter().zip(imp.gd.pixels()) {
             if g > 0.0 {

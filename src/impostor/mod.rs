@@ -230,8 +230,10 @@ impl Projection for ImpostorCamera {
     }
     fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
         match self {
+            ImpostorCamera::Pinhole(c) => c.midpoint_deviation_bound(ends),
+            ImpostorCamera::Orthographic(c) => c.midpoint_deviation_bound(ends),
             ImpostorCamera::Spoc(c) => c.midpoint_deviation_bound(ends),
-            _ => f64::INFINITY,
+            ImpostorCamera::Graph(c) => c.midpoint_deviation_bound(ends),
         }
     }
 }

@@ -33,6 +33,11 @@ use rayon::prelude::*;
 /// Rows per parallel band (the tile height).
 pub const BAND_ROWS: u32 = 16;
 
+/// How far, in pixels, a curved camera's image of an edge may stray from the straight edge the
+/// rasterizer draws before the triangle counts as [`RasterStats::curved`] (the 0.5 px of
+/// algorithms.md §2.2).
+pub const STRAIGHT_EDGE_TOLERANCE_PX: f64 = 0.5;
+
 /// Which triangle of which object covers a pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ItemId {
@@ -134,6 +139,13 @@ pub struct RasterStats {
     pub fragments: u64,
     /// Fragments that passed the depth test.
     pub written: u64,
+    /// Triangles with a corner outside the camera's domain or guard band (clipped in setup).
+    pub clipped: u64,
+    /// Wholly imaged triangles whose edges the camera may curve by more than
+    /// [`STRAIGHT_EDGE_TOLERANCE_PX`] ([`Projection::midpoint_deviation_bound`]): drawn with
+    /// straight edges, they may be misplaced. Always 0 for cameras projective on planes; a
+    /// curved camera's caller tessellates when it is not (or when `clipped` is not).
+    pub curved: u64,
 }
 
 impl std::ops::Add for RasterStats {
@@ -145,6 +157,8 @@ impl std::ops::Add for RasterStats {
             culled: self.culled + o.culled,
             fragments: self.fragments + o.fragments,
             written: self.written + o.written,
+            clipped: self.clipped + o.clipped,
+            curved: self.curved + o.curved,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! per mesh vertex), guard-band clipping in image space, snapping to fixed point, attribute
 //! planes, and binning into bands of rows.
 
-use super::{ItemId, RasterStats};
+use super::{ItemId, RasterStats, STRAIGHT_EDGE_TOLERANCE_PX};
 use crate::camera::{ImagePoint, Projection};
 use crate::geom::Mesh;
 use glam::{DVec2, DVec3};
@@ -95,7 +95,7 @@ impl BinnedChunk {
     }
 
     /// Sets up the triangles `first .. first + count` of the concatenated objects and sorts
-    /// them by band; returns how many screen triangles setup produced.
+    /// them by band; returns the setup counters (`screen_triangles`, `clipped`, `curved`).
     fn fill<P: Projection>(
         &mut self,
         camera: &P,
@@ -103,13 +103,14 @@ impl BinnedChunk {
         seen: &[Vec<SeenVertex>],
         (first, count): (usize, usize),
         band_rows: u32,
-    ) -> usize {
+    ) -> RasterStats {
         let (w, h) = camera.resolution();
         let band_count = h.div_ceil(band_rows) as usize;
         self.tris.clear();
         self.tris.reserve(count);
         let mut skip = first;
         let mut left = count;
+        let mut stats = RasterStats::default();
         for (o, mesh) in objects.iter().enumerate() {
             let n = mesh.triangles.len();
             if skip >= n {
@@ -123,14 +124,15 @@ impl BinnedChunk {
                     object: o as u32,
                     triangle: t as u32,
                 };
-                setup_triangle(
-                    camera,
-                    corners.map(|i| (mesh.positions[i].as_dvec3(), seen[o][i])),
-                    item,
-                    w,
-                    h,
-                    &mut self.tris,
-                );
+                let corners = corners.map(|i| (mesh.positions[i].as_dvec3(), seen[o][i]));
+                match corners.map(|c| c.1.image) {
+                    [Some(a), Some(b), Some(c)] => {
+                        let bound = camera.midpoint_deviation_bound(&[a, b, c]);
+                        stats.curved += u64::from(bound > STRAIGHT_EDGE_TOLERANCE_PX);
+                    }
+                    _ => stats.clipped += 1,
+                }
+                setup_triangle(camera, corners, item, w, h, &mut self.tris);
             }
             (skip, left) = (0, left - here);
             if left == 0 {
@@ -159,7 +161,8 @@ impl BinnedChunk {
                 fill[b] += 1;
             }
         }
-        self.tris.len()
+        stats.screen_triangles = self.tris.len() as u64;
+        stats
     }
 }
 
@@ -201,7 +204,7 @@ pub(super) fn screen_triangles<P: Projection>(
     let chunk_count = total.div_ceil(SETUP_CHUNK);
     binned.chunks.resize_with(chunk_count, BinnedChunk::default);
     let seen = &binned.seen;
-    let screen: usize = binned
+    let per_chunk: Vec<RasterStats> = binned
         .chunks
         .par_iter_mut()
         .enumerate()
@@ -210,12 +213,14 @@ pub(super) fn screen_triangles<P: Projection>(
             let range = (first, SETUP_CHUNK.min(total - first));
             chunk.fill(camera, objects, seen, range, band_rows)
         })
-        .sum();
-    RasterStats {
-        triangles_in: total as u64,
-        screen_triangles: screen as u64,
-        ..RasterStats::default()
-    }
+        .collect();
+    per_chunk.into_iter().fold(
+        RasterStats {
+            triangles_in: total as u64,
+            ..RasterStats::default()
+        },
+        |a, b| a + b,
+    )
 }
 
 /// Triangles set up per parallel task. Small enough that a chunk's screen triangles (about
@@ -233,23 +238,21 @@ fn setup_triangle<P: Projection>(
 ) {
     // Fast path: wholly inside the near boundary and the guard band — no clipping.
     let [(pa, a), (pb, b), (pc, c)] = corners;
-    {
-        if let (Some(ia), Some(ib), Some(ic)) = (a.image, b.image, c.image) {
-            let corner = |q: ImagePoint, world, b: DVec3| Corner {
-                world,
-                uv: q.uv,
-                gd: q.gd,
-                inv_w: q.inv_w,
-                q: b * q.inv_w,
-            };
-            let c3 = [
-                corner(ia, pa, DVec3::X),
-                corner(ib, pb, DVec3::Y),
-                corner(ic, pc, DVec3::Z),
-            ];
-            out.extend(screen_triangle(c3, item, w, h));
-            return;
-        }
+    if let (Some(ia), Some(ib), Some(ic)) = (a.image, b.image, c.image) {
+        let corner = |q: ImagePoint, world, b: DVec3| Corner {
+            world,
+            uv: q.uv,
+            gd: q.gd,
+            inv_w: q.inv_w,
+            q: b * q.inv_w,
+        };
+        let c3 = [
+            corner(ia, pa, DVec3::X),
+            corner(ib, pb, DVec3::Y),
+            corner(ic, pc, DVec3::Z),
+        ];
+        out.extend(screen_triangle(c3, item, w, h));
+        return;
     }
     setup_clipped(
         camera,
