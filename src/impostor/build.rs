@@ -1,5 +1,6 @@
 //! Impostor construction (paper 1 §3.1; algorithms.md §2.2): rasterize the mesh through the
-//! camera, keeping the largest `gd`; curved cameras first tessellate it adaptively.
+//! camera, keeping the largest `gd`; through a curved camera, triangles the rasterizer reports
+//! as curved beyond half a pixel are tessellated adaptively and the mesh drawn again.
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
