@@ -171,18 +171,9 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
     shader: &S,
     empty: S::Output,
 ) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
-    let (w, h) = camera.resolution();
-    let mut target = RasterTarget::new(w, h, empty)?;
-    let stats = draw_bands(
-        camera,
-        objects,
-        shader,
-        None,
-        &mut target,
-        vec![(); h.div_ceil(BAND_ROWS) as usize],
-        |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
-    );
-    Ok((target, stats))
+    let bands = camera.resolution().1.div_ceil(BAND_ROWS) as usize;
+    let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
+    rasterize_then(camera, objects, shader, empty, vec![(); bands], no_finish)
 }
 
 /// [`rasterize`] into an existing target, reusing its memory (for images rebuilt every frame):
@@ -195,23 +186,17 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
     empty: S::Output,
     target: &mut RasterTarget<S::Output>,
 ) -> Result<RasterStats, FrameError> {
-    let (w, h) = camera.resolution();
-    // A reallocated target is already clear.
-    let clear = if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
-        *target = RasterTarget::new(w, h, empty)?;
-        None
-    } else {
-        Some(empty)
-    };
-    Ok(draw_bands(
+    let bands = camera.resolution().1.div_ceil(BAND_ROWS) as usize;
+    let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
+    rasterize_into_then(
         camera,
         objects,
         shader,
-        clear,
+        empty,
         target,
-        vec![(); h.div_ceil(BAND_ROWS) as usize],
-        |_: FinishedBand<'_, S::Output>, _: &mut ()| {},
-    ))
+        vec![(); bands],
+        no_finish,
+    )
 }
 
 /// One band of rows just drawn, handed to the `finish` callback of [`rasterize_into_then`].
@@ -249,11 +234,6 @@ where
     F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
 {
     let (w, h) = camera.resolution();
-    assert_eq!(
-        outputs.len(),
-        h.div_ceil(BAND_ROWS) as usize,
-        "one output per band"
-    );
     // A reallocated target is already clear.
     let clear = if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
         *target = RasterTarget::new(w, h, empty)?;
@@ -285,11 +265,6 @@ where
     F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
 {
     let (w, h) = camera.resolution();
-    assert_eq!(
-        outputs.len(),
-        h.div_ceil(BAND_ROWS) as usize,
-        "one output per band"
-    );
     let mut target = RasterTarget::new(w, h, empty)?;
     let stats = draw_bands(camera, objects, shader, None, &mut target, outputs, finish);
     Ok((target, stats))
@@ -323,6 +298,11 @@ where
         binned,
     } = target;
     let n = (BAND_ROWS * w) as usize;
+    assert_eq!(
+        outputs.len(),
+        gd.pixels().len().div_ceil(n),
+        "one output per band"
+    );
     let band_stats: Vec<RasterStats> = gd
         .pixels_mut()
         .par_chunks_mut(n)
