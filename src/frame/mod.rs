@@ -92,17 +92,55 @@ pub struct Image<T> {
     data: Vec<T>,
 }
 
-impl<T: Copy> Image<T> {
+impl<T: Copy + Send + Sync> Image<T> {
     /// A `width × height` image filled with `fill`; refuses empty and absurd sizes.
+    ///
+    /// A large image is filled by every worker thread, each writing its own stretch: the
+    /// first write to a fresh page of memory is a page fault, and those are served in parallel.
     pub fn new(width: u32, height: u32, fill: T) -> Result<Self, FrameError> {
         let (w, h) = check_size(width as u64, height as u64)?;
+        let n = w as usize * h as usize;
+        let data = if n * std::mem::size_of::<T>() < PARALLEL_FILL_BYTES {
+            vec![fill; n]
+        } else {
+            let mut data = Vec::with_capacity(n);
+            rayon::iter::ParallelExtend::par_extend(&mut data, rayon::iter::repeat_n(fill, n));
+            data
+        };
         Ok(Self {
             width: w,
             height: h,
-            data: vec![fill; w as usize * h as usize],
+            data,
         })
     }
+}
 
+impl<T: Copy + bytemuck::Zeroable> Image<T> {
+    /// A `width × height` image of all-zero pixels, from memory the operating system hands out
+    /// zeroed: no page of it is touched until a pixel on it is written, so a producer that
+    /// writes its pixels in parallel bands also takes their page faults in parallel, and pages
+    /// it never writes cost nothing.
+    pub fn zeroed(width: u32, height: u32) -> Result<Self, FrameError> {
+        let (w, h) = check_size(width as u64, height as u64)?;
+        let data = bytemuck::allocation::try_zeroed_vec(w as usize * h as usize).map_err(|()| {
+            FrameError::InvalidSize {
+                width: width as u64,
+                height: height as u64,
+                reason: "out of memory",
+            }
+        })?;
+        Ok(Self {
+            width: w,
+            height: h,
+            data,
+        })
+    }
+}
+
+/// Images at least this large are filled in parallel ([`Image::new`]).
+const PARALLEL_FILL_BYTES: usize = 1 << 20;
+
+impl<T: Copy> Image<T> {
     /// Wraps existing pixels; `data.len()` must equal `width * height`.
     pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Result<Self, FrameError> {
         check_size(width as u64, height as u64)?;
@@ -300,6 +338,20 @@ mod tests {
         assert!(Image::new(1_000_000, 1_000_000, 0.0f32).is_err());
         assert!(Image::new(16_384, 16_384, 0u8).is_err());
         assert!(Image::new(8192, 8192, 0u8).is_ok());
+        assert!(Image::<Vec3>::zeroed(0, 10).is_err());
+        assert!(Image::<Vec4>::zeroed(1_000_000, 1_000_000).is_err());
+    }
+
+    #[test]
+    fn images_filled_in_parallel_hold_the_fill_everywhere() {
+        // 1024² Vec4 is 16 MiB: past the parallel-fill size.
+        let fill = Vec4::new(1.0, -2.0, 3.5, 0.25);
+        let img = Image::new(1024, 1024, fill).unwrap();
+        assert_eq!(img.pixels().len(), 1024 * 1024);
+        assert!(img.pixels().iter().all(|&p| p == fill));
+        let zeros = Image::<Vec3>::zeroed(1024, 768).unwrap();
+        assert_eq!(zeros.size(), (1024, 768));
+        assert!(zeros.pixels().iter().all(|&p| p == Vec3::ZERO));
     }
 
     #[test]

@@ -248,17 +248,29 @@ impl Impostor {
     }
 }
 
+/// What an impostor's maps hold before a resolve pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MapsBefore {
+    /// The result of an earlier resolve: every map is empty wherever `object` is
+    /// [`NO_OBJECT`], so only texels with an object need clearing.
+    Resolved,
+    /// Zeros everywhere, fresh from [`zeroed_impostor`]: an empty texel only needs its object
+    /// set to [`NO_OBJECT`], and the other maps' pages of empty rows are never touched.
+    Zeroed,
+}
+
 /// What resolving a visibility buffer needs besides the visible points.
 struct ResolveInputs<'a, F> {
     camera: &'a ImpostorCamera,
     mesh: &'a Mesh,
     object: u32,
     color: &'a F,
+    before: MapsBefore,
 }
 
 /// Fills a run of texels from the visible points `visible(i)` of its texels `i` (counted from
-/// the run's start). Texels with no visible point are cleared where the object map says they
-/// were written before (invariant: the maps are empty wherever `object` is [`NO_OBJECT`]).
+/// the run's start), and empties the texels with none. After it, every map is empty wherever
+/// `object` is [`NO_OBJECT`].
 fn resolve_run<F, V>(run: &mut TexelMaps<'_>, inputs: &ResolveInputs<'_, F>, visible: V)
 where
     F: Fn(&SurfaceSample) -> Vec3 + Sync,
@@ -269,17 +281,24 @@ where
         mesh,
         object,
         color,
+        before,
     } = inputs;
     for x in 0..run.color.len() {
         let Some((t, b)) = visible(x) else {
-            // Only texels written last time need clearing: most of an impostor's image is
-            // empty, and skipping it halves the pass.
-            if run.object[x] != NO_OBJECT {
-                run.color[x] = Vec4::ZERO;
-                run.normal[x] = Vec3::ZERO;
-                run.face_normal[x] = Vec3::ZERO;
-                run.position[x] = Vec3::ZERO;
-                run.object[x] = NO_OBJECT;
+            match before {
+                // Written, not read first: reading a fresh page maps the shared zero page,
+                // and the write after it then pays a second fault.
+                MapsBefore::Zeroed => run.object[x] = NO_OBJECT,
+                // Only texels written last time need clearing: most of an impostor's image
+                // is empty, and skipping it halves the pass.
+                MapsBefore::Resolved if run.object[x] != NO_OBJECT => {
+                    run.color[x] = Vec4::ZERO;
+                    run.normal[x] = Vec3::ZERO;
+                    run.face_normal[x] = Vec3::ZERO;
+                    run.position[x] = Vec3::ZERO;
+                    run.object[x] = NO_OBJECT;
+                }
+                MapsBefore::Resolved => {}
             }
             continue;
         };
@@ -300,8 +319,13 @@ where
 
 /// Fills the impostor's maps from the visible points `visible(i)` of texels `i` (row-major),
 /// in parallel over rows (see [`resolve_run`]).
-fn resolve<F, V>(impostor: &mut Impostor, mesh: &Mesh, object: u32, color: &F, visible: V)
-where
+fn resolve<F, V>(
+    impostor: &mut Impostor,
+    (mesh, object): (&Mesh, u32),
+    color: &F,
+    before: MapsBefore,
+    visible: V,
+) where
     F: Fn(&SurfaceSample) -> Vec3 + Sync,
     V: Fn(usize) -> Option<Visible> + Sync,
 {
@@ -312,6 +336,7 @@ where
         mesh,
         object,
         color,
+        before,
     };
     impostor
         .texel_runs(row)
@@ -333,18 +358,20 @@ fn finish_resolve(impostor: &mut Impostor, mesh: &Mesh) {
     impostor.maps_changed();
 }
 
-/// An impostor with every map empty, sized for its camera.
-fn empty_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
+/// An impostor sized for its camera whose maps are all zeros — object 0 everywhere, so not yet
+/// a valid impostor: resolve it with [`MapsBefore::Zeroed`]. Its memory is not touched here
+/// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
+fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     use crate::frame::Image;
     let (w, h) = camera.resolution();
     Ok(Impostor::from_maps(
         camera,
-        Image::new(w, h, Vec4::ZERO)?,
-        Image::new(w, h, 0.0f32)?,
-        Image::new(w, h, Vec3::ZERO)?,
-        Image::new(w, h, Vec3::ZERO)?,
-        Image::new(w, h, Vec3::ZERO)?,
-        Image::new(w, h, NO_OBJECT)?,
+        Image::zeroed(w, h)?,
+        Image::zeroed(w, h)?,
+        Image::zeroed(w, h)?,
+        Image::zeroed(w, h)?,
+        Image::zeroed(w, h)?,
+        Image::zeroed(w, h)?,
         Aabb {
             min: Vec3::ZERO,
             max: Vec3::ZERO,
@@ -424,8 +451,8 @@ impl ImpostorBuilder {
         if let ImpostorCamera::Graph(g) = &camera {
             return build_graph(g.clone(), mesh, object, color);
         }
-        let mut impostor = empty_impostor(camera)?;
-        self.rebuild(&mut impostor, mesh, object, color)?;
+        let mut impostor = zeroed_impostor(camera)?;
+        self.resolve_again(&mut impostor, (mesh, object), color, MapsBefore::Zeroed)?;
         Ok(impostor)
     }
 
@@ -442,14 +469,27 @@ impl ImpostorBuilder {
             *impostor = build_graph(g.clone(), mesh, object, color)?;
             return Ok(());
         }
+        self.resolve_again(impostor, (mesh, object), color, MapsBefore::Resolved)
+    }
+
+    /// Draws `mesh` through the camera of `impostor` (not a graph camera) and resolves it into
+    /// its maps, which hold `before`.
+    fn resolve_again<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        impostor: &mut Impostor,
+        (mesh, object): (&Mesh, u32),
+        color: &F,
+        before: MapsBefore,
+    ) -> Result<(), FrameError> {
         // Detailed meshes rarely need splitting (paper 1 §3.1): draw the mesh as it is, and
         // tessellate only when the rasterizer reports triangles the camera may curve by more
         // than the tolerance, or that it had to clip — then draw the tessellation instead.
-        let stats = self.draw_and_resolve(impostor, mesh, (mesh, None), object, color)?;
+        let stats = self.draw_and_resolve(impostor, (mesh, object), (mesh, None), color, before)?;
         if impostor.camera.is_curved() && stats.curved + stats.clipped > 0 {
             if let Some(t) = tessellate_with(&impostor.camera, mesh, &mut self.tessellation) {
                 let drawn = (&t.mesh, Some(t.source.as_slice()));
-                self.draw_and_resolve(impostor, mesh, drawn, object, color)?;
+                let before = MapsBefore::Resolved;
+                self.draw_and_resolve(impostor, (mesh, object), drawn, color, before)?;
             }
         }
         // The new depth becomes the impostor's; its old one is the next pass's scratch.
@@ -462,15 +502,15 @@ impl ImpostorBuilder {
 
     /// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle)
     /// through the impostor's camera into the visibility buffer, resolving each band into the
-    /// impostor's maps (surface points of `mesh`) as soon as it is drawn. The new `gd` is left
-    /// in the visibility buffer.
+    /// impostor's maps (surface points of `mesh`, which hold `before`) as soon as it is drawn.
+    /// The new `gd` is left in the visibility buffer.
     fn draw_and_resolve<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         &mut self,
         impostor: &mut Impostor,
-        mesh: &Mesh,
+        (mesh, object): (&Mesh, u32),
         (drawn, source): (&Mesh, Option<&[SourceTriangle]>),
-        object: u32,
         color: &F,
+        before: MapsBefore,
     ) -> Result<RasterStats, FrameError> {
         let (w, h) = impostor.camera.resolution();
         let camera = impostor.camera.clone();
@@ -479,6 +519,7 @@ impl ImpostorBuilder {
             mesh,
             object,
             color,
+            before,
         };
         let runs = impostor.texel_runs((BAND_ROWS * w) as usize);
         debug_assert_eq!(runs.len(), h.div_ceil(BAND_ROWS) as usize);
@@ -594,9 +635,10 @@ fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
             }
         }
     }
-    let mut impostor = empty_impostor(camera)?;
+    let mut impostor = zeroed_impostor(camera)?;
     impostor.gd = gd;
-    resolve(&mut impostor, mesh, object, color, |i| visible[i]);
+    let before = MapsBefore::Zeroed;
+    resolve(&mut impostor, (mesh, object), color, before, |i| visible[i]);
     Ok(impostor)
 }
 

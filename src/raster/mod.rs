@@ -114,7 +114,7 @@ pub struct RasterTarget<T> {
     binned: setup::Binned,
 }
 
-impl<T: Copy> RasterTarget<T> {
+impl<T: Copy + Send + Sync> RasterTarget<T> {
     /// An empty `width × height` target, attributes filled with `empty`.
     pub fn new(width: u32, height: u32, empty: T) -> Result<RasterTarget<T>, FrameError> {
         Ok(RasterTarget {
