@@ -154,11 +154,12 @@ impl BinnedChunk {
         }
         self.order.clear();
         self.order.resize(self.band_start[band_count] as usize, 0);
-        let mut fill = self.band_start.clone();
+        // The next free slot of each band in `order`.
+        let mut next_slot = self.band_start.clone();
         for (i, t) in self.tris.iter().enumerate() {
             for b in bands_of(t) {
-                self.order[fill[b] as usize] = i as u32;
-                fill[b] += 1;
+                self.order[next_slot[b] as usize] = i as u32;
+                next_slot[b] += 1;
             }
         }
         stats.screen_triangles = self.tris.len() as u64;
