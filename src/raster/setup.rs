@@ -376,8 +376,12 @@ fn clip_polygon(
     out
 }
 
+/// `x` on the sub-pixel grid, to the nearest step (ties away from zero, to within an ulp).
+/// Added and truncated rather than `f64::round`, which without SSE 4.1 is a library call — one
+/// per corner coordinate of every triangle. `|x| <` [`GUARD`] keeps it well inside `i64`.
 fn snap(x: f64) -> i64 {
-    (x * ONE as f64).round() as i64
+    let steps = x * ONE as f64;
+    (steps + 0.5f64.copysign(steps)) as i64
 }
 
 fn screen_triangle(c: [Corner; 3], item: ItemId, w: u32, h: u32) -> Option<ScreenTri> {
@@ -420,20 +424,42 @@ fn screen_triangle(c: [Corner; 3], item: ItemId, w: u32, h: u32) -> Option<Scree
 fn planes(e: [DVec2; 2], f: [[f64; 5]; 3]) -> [Plane; 5] {
     let [e1, e2] = e;
     let det = e1.x * e2.y - e1.y * e2.x;
+    if det.abs() < 1e-12 {
+        // Sliver: degenerate in image space; use constants, the corners' means.
+        return std::array::from_fn(|k| Plane {
+            f0: (f[0][k] + f[1][k] + f[2][k]) / 3.0,
+            dfdx: 0.0,
+            dfdy: 0.0,
+        });
+    }
+    // One division for the ten gradients.
+    let inv_det = 1.0 / det;
     std::array::from_fn(|k| {
         let (f0, f1, f2) = (f[0][k], f[1][k], f[2][k]);
-        if det.abs() < 1e-12 {
-            // Sliver: degenerate in image space; use a constant, the corners' mean.
-            return Plane {
-                f0: (f0 + f1 + f2) / 3.0,
-                dfdx: 0.0,
-                dfdy: 0.0,
-            };
-        }
         Plane {
             f0,
-            dfdx: ((f1 - f0) * e2.y - (f2 - f0) * e1.y) / det,
-            dfdy: ((f2 - f0) * e1.x - (f1 - f0) * e2.x) / det,
+            dfdx: ((f1 - f0) * e2.y - (f2 - f0) * e1.y) * inv_det,
+            dfdy: ((f2 - f0) * e1.x - (f1 - f0) * e2.x) * inv_det,
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn snapping_rounds_to_the_nearest_sub_pixel_step() {
+        let step = 1.0 / ONE as f64;
+        for &x in &[0.0, 0.3, 1.0, 511.49, -0.3, -7.77, 1234.567, -65_000.123] {
+            let expected = (x * ONE as f64).round() as i64;
+            assert_eq!(snap(x), expected, "{x}");
+            // Just either side of a half step: the nearer grid point.
+            let half = (expected as f64 + 0.5) * step;
+            assert_eq!(snap(half - 1e-6), expected, "{x}");
+            assert_eq!(snap(half + 1e-6), expected + 1, "{x}");
+        }
+        assert_eq!(snap(0.5 * step), 1);
+        assert_eq!(snap(-0.5 * step), -1);
+    }
 }
