@@ -116,10 +116,11 @@ impl<T: Copy + Send + Sync> Image<T> {
 }
 
 impl<T: Copy + bytemuck::Zeroable> Image<T> {
-    /// A `width × height` image of all-zero pixels, from memory the operating system hands out
-    /// zeroed: no page of it is touched until a pixel on it is written, so a producer that
-    /// writes its pixels in parallel bands also takes their page faults in parallel, and pages
-    /// it never writes cost nothing.
+    /// A `width × height` image of all-zero pixels, asked of the allocator as zeroed memory.
+    /// A large buffer new to the process comes from the operating system already zero and
+    /// untouched: a producer that writes its pixels in parallel bands then takes their page
+    /// faults in parallel, and pages it never writes cost nothing. (Memory the allocator
+    /// recycles, it clears itself.)
     pub fn zeroed(width: u32, height: u32) -> Result<Self, FrameError> {
         let (w, h) = check_size(width as u64, height as u64)?;
         let data = bytemuck::allocation::try_zeroed_vec(w as usize * h as usize).map_err(|()| {
