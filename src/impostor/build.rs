@@ -452,7 +452,7 @@ impl ImpostorBuilder {
             return build_graph(g.clone(), mesh, object, color);
         }
         let mut impostor = zeroed_impostor(camera)?;
-        self.resolve_again(&mut impostor, (mesh, object), color, MapsBefore::Zeroed)?;
+        self.build_into(&mut impostor, (mesh, object), color, MapsBefore::Zeroed)?;
         Ok(impostor)
     }
 
@@ -469,12 +469,12 @@ impl ImpostorBuilder {
             *impostor = build_graph(g.clone(), mesh, object, color)?;
             return Ok(());
         }
-        self.resolve_again(impostor, (mesh, object), color, MapsBefore::Resolved)
+        self.build_into(impostor, (mesh, object), color, MapsBefore::Resolved)
     }
 
     /// Draws `mesh` through the camera of `impostor` (not a graph camera) and resolves it into
     /// its maps, which hold `before`.
-    fn resolve_again<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    fn build_into<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         &mut self,
         impostor: &mut Impostor,
         (mesh, object): (&Mesh, u32),
