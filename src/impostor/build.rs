@@ -4,11 +4,11 @@
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
-use crate::frame::FrameError;
+use crate::frame::{FrameError, Image};
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
-    BAND_ROWS, FinishedBand, Fragment, FragmentShader, ItemId, RasterStats, rasterize,
-    rasterize_into_then, rasterize_then,
+    BAND_ROWS, DepthTarget, FinishedBand, Fragment, FragmentShader, ItemId, RasterMemory,
+    RasterStats, rasterize, rasterize_depth_then,
 };
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
@@ -226,9 +226,11 @@ struct TexelMaps<'a> {
 }
 
 impl Impostor {
-    /// Its maps cut into runs of `n` texels (the last may be shorter), for parallel filling.
-    fn texel_runs(&mut self, n: usize) -> Vec<TexelMaps<'_>> {
-        self.color
+    /// Its `gd`, and its other maps cut into runs of `n` texels (the last may be shorter) for
+    /// parallel filling.
+    fn gd_and_texel_runs(&mut self, n: usize) -> (&mut Image<f32>, Vec<TexelMaps<'_>>) {
+        let runs = self
+            .color
             .pixels_mut()
             .chunks_mut(n)
             .zip(self.normal.pixels_mut().chunks_mut(n))
@@ -244,7 +246,8 @@ impl Impostor {
                     object,
                 },
             )
-            .collect()
+            .collect();
+        (&mut self.gd, runs)
     }
 }
 
@@ -339,7 +342,8 @@ fn resolve<F, V>(
         before,
     };
     impostor
-        .texel_runs(row)
+        .gd_and_texel_runs(row)
+        .1
         .into_par_iter()
         .enumerate()
         .for_each(|(y, mut run)| resolve_run(&mut run, &inputs, |x| visible(y * row + x)));
@@ -362,7 +366,6 @@ fn finish_resolve(impostor: &mut Impostor, mesh: &Mesh) {
 /// a valid impostor: resolve it with [`MapsBefore::Zeroed`]. Its memory is not touched here
 /// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
 fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
-    use crate::frame::Image;
     let (w, h) = camera.resolution();
     Ok(Impostor::from_maps(
         camera,
@@ -425,12 +428,12 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     ImpostorBuilder::default().build(camera, mesh, object, color)
 }
 
-/// Builds impostors while keeping its working memory — the visibility buffer here, the
-/// impostor's own maps in [`ImpostorBuilder::rebuild`] — so a rebuild every frame (paper 1 §6
-/// rebuilds its impostors for dynamic scenes) allocates nothing.
+/// Builds impostors while keeping its working memory — the rasterizer's here, the impostor's
+/// own maps in [`ImpostorBuilder::rebuild`] — so a rebuild every frame (paper 1 §6 rebuilds
+/// its impostors for dynamic scenes) allocates nothing.
 #[derive(Default)]
 pub struct ImpostorBuilder {
-    visibility: Option<crate::raster::RasterTarget<Vec2>>,
+    raster: RasterMemory<Vec2>,
     tessellation: TessellationScratch,
 }
 
@@ -492,18 +495,14 @@ impl ImpostorBuilder {
                 self.draw_and_resolve(impostor, (mesh, object), drawn, color, before)?;
             }
         }
-        // The new depth becomes the impostor's; its old one is the next pass's scratch.
-        if let Some(target) = &mut self.visibility {
-            std::mem::swap(&mut impostor.gd, &mut target.gd);
-        }
         finish_resolve(impostor, mesh);
         Ok(())
     }
 
     /// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle)
-    /// through the impostor's camera into the visibility buffer, resolving each band into the
-    /// impostor's maps (surface points of `mesh`, which hold `before`) as soon as it is drawn.
-    /// The new `gd` is left in the visibility buffer.
+    /// through the impostor's camera into its `gd`, resolving each band of the visibility
+    /// buffer into its other maps (surface points of `mesh`; the maps hold `before`) as soon as
+    /// the band is drawn.
     fn draw_and_resolve<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         &mut self,
         impostor: &mut Impostor,
@@ -512,7 +511,7 @@ impl ImpostorBuilder {
         color: &F,
         before: MapsBefore,
     ) -> Result<RasterStats, FrameError> {
-        let (w, h) = impostor.camera.resolution();
+        let w = impostor.camera.resolution().0;
         let camera = impostor.camera.clone();
         let inputs = ResolveInputs {
             camera: &camera,
@@ -521,8 +520,7 @@ impl ImpostorBuilder {
             color,
             before,
         };
-        let runs = impostor.texel_runs((BAND_ROWS * w) as usize);
-        debug_assert_eq!(runs.len(), h.div_ceil(BAND_ROWS) as usize);
+        let (gd, runs) = impostor.gd_and_texel_runs((BAND_ROWS * w) as usize);
         let finish = |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
             resolve_run(run, &inputs, |x| {
                 let item = band.item[x];
@@ -532,18 +530,21 @@ impl ImpostorBuilder {
                 })
             });
         };
-        let (meshes, shader) = ([drawn], &Barycentrics);
-        Ok(match &mut self.visibility {
-            Some(target) => {
-                rasterize_into_then(&camera, &meshes, shader, Vec2::ZERO, target, runs, finish)?
-            }
-            slot => {
-                let (target, stats) =
-                    rasterize_then(&camera, &meshes, shader, Vec2::ZERO, runs, finish)?;
-                *slot = Some(target);
-                stats
-            }
-        })
+        let target = DepthTarget {
+            gd,
+            zeroed: before == MapsBefore::Zeroed,
+            memory: &mut self.raster,
+        };
+        let meshes = [drawn];
+        rasterize_depth_then(
+            &camera,
+            &meshes,
+            &Barycentrics,
+            Vec2::ZERO,
+            target,
+            runs,
+            finish,
+        )
     }
 }
 

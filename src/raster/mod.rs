@@ -4,9 +4,10 @@
 //! Pipeline: `setup` projects every mesh vertex once, clips each triangle where the camera's
 //! `clip_distance` is negative (in world space), clips to a guard band, snaps the corners to
 //! 1/256 pixel and bins the screen triangles into bands of [`BAND_ROWS`] rows; bands are
-//! rasterized in parallel by `scan`, each owning its rows of every buffer, and may be
-//! finished at once by a caller's pass ([`rasterize_into_then`]). A [`RasterTarget`] keeps the
-//! set-up triangles' memory, so drawing into it again allocates nothing.
+//! rasterized in parallel by `scan`, each owning its rows of every buffer. A [`RasterTarget`]
+//! keeps the set-up triangles' memory, so drawing into it again allocates nothing. Or only a
+//! depth image is kept ([`rasterize_depth_then`]): each band's item and attribute rows are
+//! scratch, finished by a caller's pass as soon as the band is drawn.
 //!
 //! Invariants:
 //! - **Watertight, top-left rule**: coverage uses exact integer edge functions on snapped
@@ -171,9 +172,11 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
     shader: &S,
     empty: S::Output,
 ) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
-    let bands = camera.resolution().1.div_ceil(BAND_ROWS) as usize;
-    let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
-    rasterize_then(camera, objects, shader, empty, vec![(); bands], no_finish)
+    let (w, h) = camera.resolution();
+    let mut target = RasterTarget::new(w, h, empty)?;
+    // New, so already clear.
+    let stats = draw_target(camera, objects, (shader, empty), &mut target, false);
+    Ok((target, stats))
 }
 
 /// [`rasterize`] into an existing target, reusing its memory (for images rebuilt every frame):
@@ -186,20 +189,15 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
     empty: S::Output,
     target: &mut RasterTarget<S::Output>,
 ) -> Result<RasterStats, FrameError> {
-    let bands = camera.resolution().1.div_ceil(BAND_ROWS) as usize;
-    let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
-    rasterize_into_then(
-        camera,
-        objects,
-        shader,
-        empty,
-        target,
-        vec![(); bands],
-        no_finish,
-    )
+    let (w, h) = camera.resolution();
+    let clear = target.gd.size() == (w, h) && target.attributes.size() == (w, h);
+    if !clear {
+        *target = RasterTarget::new(w, h, empty)?;
+    }
+    Ok(draw_target(camera, objects, (shader, empty), target, clear))
 }
 
-/// One band of rows just drawn, handed to the `finish` callback of [`rasterize_into_then`].
+/// One band of rows just drawn, handed to the `finish` callback of [`rasterize_depth_then`].
 pub struct FinishedBand<'a, T> {
     /// Index of the band's first pixel in the row-major image (`first row × width`).
     pub first_pixel: usize,
@@ -211,19 +209,55 @@ pub struct FinishedBand<'a, T> {
     pub attributes: &'a [T],
 }
 
-/// [`rasterize_into`], then `finish` on each band of [`BAND_ROWS`] rows as soon as it is drawn,
-/// while its pixels are still in cache, with `outputs[band]` — for instance that band's rows of
-/// other images (deferred shading of a visibility buffer).
+/// Working memory that one rasterization leaves to the next: the set-up triangles and the
+/// scratch rows of [`rasterize_depth_then`]. Keep it to draw again without allocating.
+pub struct RasterMemory<T> {
+    binned: setup::Binned,
+    /// Item and attribute rows of one band each, lent to the bands being drawn.
+    rows: std::sync::Mutex<Vec<BandScratch<T>>>,
+}
+
+impl<T> Default for RasterMemory<T> {
+    fn default() -> Self {
+        RasterMemory {
+            binned: setup::Binned::default(),
+            rows: std::sync::Mutex::new(Vec::new()),
+        }
+    }
+}
+
+/// The item and attribute rows of one band, as scratch.
+type BandScratch<T> = (Vec<ItemId>, Vec<T>);
+
+/// A depth image to rasterize into, and what it holds.
+pub struct DepthTarget<'a, T> {
+    /// Generalized depth, of the camera's size.
+    pub gd: &'a mut Image<f32>,
+    /// True when `gd` is all zeros (for example fresh from [`Image::zeroed`]): its rows are
+    /// then drawn without being cleared, and rows nothing covers are never written.
+    pub zeroed: bool,
+    /// Working memory, kept between rasterizations.
+    pub memory: &'a mut RasterMemory<T>,
+}
+
+/// Rasterizes into a depth image alone: each band's item and attribute rows exist only while
+/// it is drawn and finished. `finish` is called on each band of [`BAND_ROWS`] rows as soon as
+/// it is drawn, while its pixels are in cache, with `outputs[band]` — for instance that band's
+/// rows of other images: the deferred shading of a visibility buffer that is never whole in
+/// memory (a whole one cost more in memory traffic than the rasterization itself).
+///
+/// # Errors
+/// When `target.gd` is not of the camera's size.
 ///
 /// # Panics
 /// When `outputs` does not hold one entry per band (`height.div_ceil(BAND_ROWS)`): a caller's
 /// bug, not bad input.
-pub fn rasterize_into_then<P, S, O, F>(
+pub fn rasterize_depth_then<P, S, O, F>(
     camera: &P,
     objects: &[&Mesh],
     shader: &S,
     empty: S::Output,
-    target: &mut RasterTarget<S::Output>,
+    target: DepthTarget<'_, S::Output>,
     outputs: Vec<O>,
     finish: F,
 ) -> Result<RasterStats, FrameError>
@@ -234,117 +268,169 @@ where
     F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
 {
     let (w, h) = camera.resolution();
-    // A reallocated target is already clear.
-    let clear = if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
-        *target = RasterTarget::new(w, h, empty)?;
-        None
-    } else {
-        Some(empty)
+    if target.gd.size() != (w, h) {
+        let (gw, gh) = target.gd.size();
+        return Err(FrameError::InvalidSize {
+            width: gw as u64,
+            height: gh as u64,
+            reason: "the depth image is not of the camera's size",
+        });
+    }
+    let RasterMemory { binned, rows } = target.memory;
+    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, binned);
+    let pass = BandPass {
+        shader,
+        empty,
+        clear: !target.zeroed,
+        width: w,
+        binned,
     };
-    Ok(draw_bands(
-        camera, objects, shader, clear, target, outputs, finish,
+    Ok(pass.draw(
+        stats,
+        target.gd.pixels_mut(),
+        BandRows::Scratch(rows),
+        outputs,
+        finish,
     ))
 }
 
-/// [`rasterize`] with the finishing pass of [`rasterize_into_then`], into a new target.
-///
-/// # Panics
-/// When `outputs` does not hold one entry per band, as [`rasterize_into_then`].
-pub fn rasterize_then<P, S, O, F>(
-    camera: &P,
-    objects: &[&Mesh],
-    shader: &S,
-    empty: S::Output,
-    outputs: Vec<O>,
-    finish: F,
-) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError>
-where
-    P: Projection,
-    S: FragmentShader,
-    O: Send,
-    F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
-{
-    let (w, h) = camera.resolution();
-    let mut target = RasterTarget::new(w, h, empty)?;
-    let stats = draw_bands(camera, objects, shader, None, &mut target, outputs, finish);
-    Ok((target, stats))
+/// Where a band's item and attribute rows live while it is drawn.
+enum BandRows<'a, T> {
+    /// Rows of whole images, kept after the rasterization.
+    Images(&'a mut [ItemId], &'a mut [T]),
+    /// Scratch rows from a pool, given back when the band is finished.
+    Scratch(&'a std::sync::Mutex<Vec<BandScratch<T>>>),
 }
 
-/// Bins the triangles into bands of rows and draws the bands in parallel (each band's
-/// triangles in input order, so the result does not depend on the thread count); clears each
-/// band first when `clear` gives the empty attribute; then calls `finish` on the drawn band.
-/// `outputs` holds one value per band (a `Vec<()>` allocates nothing when there are none).
-fn draw_bands<P, S, O, F>(
+/// Bins the triangles of `objects` and draws the bands of `target` (of the camera's size) in
+/// parallel, clearing each band's rows first when `clear` is set.
+fn draw_target<P: Projection, S: FragmentShader>(
     camera: &P,
     objects: &[&Mesh],
-    shader: &S,
-    clear: Option<S::Output>,
+    (shader, empty): (&S, S::Output),
     target: &mut RasterTarget<S::Output>,
-    outputs: Vec<O>,
-    finish: F,
-) -> RasterStats
-where
-    P: Projection,
-    S: FragmentShader,
-    O: Send,
-    F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
-{
-    let w = target.gd.size().0;
-    let mut stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
+    clear: bool,
+) -> RasterStats {
+    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
     let RasterTarget {
         gd,
         item,
         attributes,
         binned,
     } = target;
-    let n = (BAND_ROWS * w) as usize;
-    assert_eq!(
-        outputs.len(),
-        gd.pixels().len().div_ceil(n),
-        "one output per band"
-    );
-    let band_stats: Vec<RasterStats> = gd
-        .pixels_mut()
-        .par_chunks_mut(n)
-        .zip(item.pixels_mut().par_chunks_mut(n))
-        .zip(attributes.pixels_mut().par_chunks_mut(n))
-        .zip(outputs)
-        .enumerate()
-        .map(|(band_index, (((gd, item), attr), mut out))| {
-            if let Some(empty) = clear {
-                gd.fill(0.0);
-                item.fill(ItemId::NONE);
-                attr.fill(empty);
-            }
-            let mut band = scan::Band {
-                width: w,
-                first_row: band_index as u32 * BAND_ROWS,
-                gd,
-                item,
-                attr,
-            };
-            let mut s = RasterStats::default();
-            for chunk in binned.chunks() {
-                for t in chunk.band(band_index) {
-                    band.draw(t, shader, &mut s);
-                }
-            }
-            finish(
-                FinishedBand {
-                    first_pixel: band_index * n,
-                    gd: band.gd,
-                    item: band.item,
-                    attributes: band.attr,
-                },
-                &mut out,
-            );
-            s
-        })
-        .collect();
-    for s in band_stats {
-        stats = stats + s;
+    let pass = BandPass {
+        shader,
+        empty,
+        clear,
+        width: gd.size().0,
+        binned,
+    };
+    let bands = gd.size().1.div_ceil(BAND_ROWS) as usize;
+    let rows = BandRows::Images(item.pixels_mut(), attributes.pixels_mut());
+    let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
+    pass.draw(stats, gd.pixels_mut(), rows, vec![(); bands], no_finish)
+}
+
+/// What every band of one rasterization shares.
+struct BandPass<'a, S: FragmentShader> {
+    shader: &'a S,
+    /// The attribute of an empty pixel.
+    empty: S::Output,
+    /// Whether the bands' rows of the target images are cleared before drawing (scratch rows
+    /// always are).
+    clear: bool,
+    width: u32,
+    binned: &'a setup::Binned,
+}
+
+impl<S: FragmentShader> BandPass<'_, S> {
+    /// Draws the bands of `gd` in parallel (each band's triangles in input order, so the result
+    /// does not depend on the thread count), then calls `finish` on each drawn band.
+    /// `outputs` holds one value per band (a `Vec<()>` allocates nothing when there are none).
+    fn draw<O, F>(
+        &self,
+        mut stats: RasterStats,
+        gd: &mut [f32],
+        rows: BandRows<'_, S::Output>,
+        outputs: Vec<O>,
+        finish: F,
+    ) -> RasterStats
+    where
+        O: Send,
+        F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
+    {
+        let n = (BAND_ROWS * self.width) as usize;
+        assert_eq!(outputs.len(), gd.len().div_ceil(n), "one output per band");
+        let bands = gd.par_chunks_mut(n).zip(outputs).enumerate();
+        let band_stats: Vec<RasterStats> = match rows {
+            BandRows::Images(item, attributes) => bands
+                .zip(item.par_chunks_mut(n).zip(attributes.par_chunks_mut(n)))
+                .map(|((index, (gd, mut out)), (item, attr))| {
+                    if self.clear {
+                        item.fill(ItemId::NONE);
+                        attr.fill(self.empty);
+                    }
+                    self.band(index, gd, (item, attr), &finish, &mut out)
+                })
+                .collect(),
+            BandRows::Scratch(pool) => bands
+                .map(|(index, (gd, mut out))| {
+                    let lock = || pool.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+                    let (mut item, mut attr) = lock().pop().unwrap_or_default();
+                    item.clear();
+                    item.resize(gd.len(), ItemId::NONE);
+                    attr.clear();
+                    attr.resize(gd.len(), self.empty);
+                    let s = self.band(index, gd, (&mut item, &mut attr), &finish, &mut out);
+                    lock().push((item, attr));
+                    s
+                })
+                .collect(),
+        };
+        for s in band_stats {
+            stats = stats + s;
+        }
+        stats
     }
-    stats
+
+    /// Draws band `index` (its rows of `gd`, item and attributes) and finishes it.
+    fn band<O, F>(
+        &self,
+        index: usize,
+        gd: &mut [f32],
+        (item, attr): (&mut [ItemId], &mut [S::Output]),
+        finish: &F,
+        out: &mut O,
+    ) -> RasterStats
+    where
+        F: Fn(FinishedBand<'_, S::Output>, &mut O),
+    {
+        if self.clear {
+            gd.fill(0.0);
+        }
+        let mut band = scan::Band {
+            width: self.width,
+            first_row: index as u32 * BAND_ROWS,
+            gd,
+            item,
+            attr,
+        };
+        let mut s = RasterStats::default();
+        for chunk in self.binned.chunks() {
+            for t in chunk.band(index) {
+                band.draw(t, self.shader, &mut s);
+            }
+        }
+        let first_pixel = index * (BAND_ROWS * self.width) as usize;
+        let finished = FinishedBand {
+            first_pixel,
+            gd: band.gd,
+            item: band.item,
+            attributes: band.attr,
+        };
+        finish(finished, out);
+        s
+    }
 }
 
 #[cfg(test)]

@@ -334,27 +334,82 @@ fn binning_across_chunks_and_objects_keeps_input_order() {
 
 #[test]
 fn each_band_is_finished_with_its_own_output() {
-    // The finishing callback sees every band once, with its final pixels, and its own output.
+    // Drawing into a depth image alone, the finishing callback sees every band once, with its
+    // own output and the final pixels a whole-image rasterization holds there (scratch rows
+    // reused from band to band, and from one rasterization to the next, hold nothing stale).
     let cam = ScreenSpace(64, 40);
     let m = scattered_triangles(300, 3);
     let bands = 40u32.div_ceil(BAND_ROWS) as usize;
-    let mut copy = vec![0.0f32; 64 * 40];
-    let outputs: Vec<&mut [f32]> = copy.chunks_mut((BAND_ROWS * 64) as usize).collect();
-    assert_eq!(outputs.len(), bands);
-    let mut target = RasterTarget::new(64, 40, ()).unwrap();
-    rasterize_into_then(
+    let (whole, _) = rasterize(&cam, &[&m], &StoreFragment, None).unwrap();
+    let mut memory = RasterMemory::default();
+    let mut gd = Image::new(64, 40, 0.5f32).unwrap();
+    for (last, mesh) in [(false, scattered_triangles(200, 5)), (true, m.clone())] {
+        let mut copy = vec![(0.0f32, ItemId::NONE, None); 64 * 40];
+        let outputs: Vec<_> = copy.chunks_mut((BAND_ROWS * 64) as usize).collect();
+        assert_eq!(outputs.len(), bands);
+        let target = DepthTarget {
+            gd: &mut gd,
+            zeroed: false,
+            memory: &mut memory,
+        };
+        rasterize_depth_then(
+            &cam,
+            &[&mesh],
+            &StoreFragment,
+            None,
+            target,
+            outputs,
+            |band: FinishedBand<'_, Option<Fragment>>, out: &mut &mut [_]| {
+                assert_eq!(band.first_pixel % (BAND_ROWS * 64) as usize, 0);
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = (band.gd[i], band.item[i], band.attributes[i]);
+                }
+            },
+        )
+        .unwrap();
+        if last {
+            let got: Vec<_> = copy.iter().map(|c| c.1).collect();
+            assert!(gd == whole.gd && got.as_slice() == whole.item.pixels());
+            assert!(
+                copy.iter()
+                    .map(|c| c.2)
+                    .eq(whole.attributes.pixels().iter().copied())
+            );
+            assert!(
+                copy.iter()
+                    .map(|c| c.0)
+                    .eq(whole.gd.pixels().iter().copied())
+            );
+        }
+    }
+    // A zeroed depth image is drawn without clearing: the same result.
+    let mut fresh = Image::zeroed(64, 40).unwrap();
+    let target = DepthTarget {
+        gd: &mut fresh,
+        zeroed: true,
+        memory: &mut memory,
+    };
+    let outputs = vec![(); bands];
+    rasterize_depth_then(
         &cam,
         &[&m],
-        &NoAttributes,
-        (),
-        &mut target,
+        &StoreFragment,
+        None,
+        target,
         outputs,
-        |band: FinishedBand<'_, ()>, out: &mut &mut [f32]| {
-            assert_eq!(band.first_pixel % (BAND_ROWS * 64) as usize, 0);
-            out.copy_from_slice(band.gd);
-        },
+        |_, _| {},
     )
     .unwrap();
-    let (fresh, _) = rasterize(&cam, &[&m], &NoAttributes, ()).unwrap();
-    assert!(copy.as_slice() == fresh.gd.pixels() && target.gd == fresh.gd);
+    assert!(fresh == whole.gd);
+    // A depth image of another size is an error, not a panic.
+    let mut small = Image::new(8, 8, 0.0f32).unwrap();
+    let target = DepthTarget {
+        gd: &mut small,
+        zeroed: false,
+        memory: &mut RasterMemory::default(),
+    };
+    let outputs = vec![(); bands];
+    assert!(
+        rasterize_depth_then(&cam, &[&m], &NoAttributes, (), target, outputs, |_, _| {}).is_err()
+    );
 }
