@@ -477,8 +477,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             );
             println!("missed    {}   spurious {}", r.missed, r.spurious);
             println!(
-                "position  mean error {:.3e} world units = {:.3} texel footprints",
-                r.mean_position_error, r.mean_error_footprints
+                "position  mean error {:.3e} world units = {:.3} texel footprints (median {:.2e})",
+                r.mean_position_error, r.mean_error_footprints, r.median_error_footprints
             );
             println!(
                 "surface   {:.1} % captured within 1.5 footprints, {:.1} % within 1.5 texel extents on the surface",

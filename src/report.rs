@@ -277,7 +277,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
     let mut impostors = Vec::new();
     let _ = writeln!(html, "<div class=row>");
     let mut table = String::from(
-        "<table><tr><th>camera</th><th>k</th><th>rays</th><th>exact hits</th><th>agreement</th><th>agreement on hits</th><th>missed</th><th>spurious</th><th>mean error (texels)</th><th>surface captured (within 1.5 footprints / 1.5 texel extents)</th><th>texel visits / ray</th></tr>\n",
+        "<table><tr><th>camera</th><th>k</th><th>rays</th><th>exact hits</th><th>agreement</th><th>agreement on hits</th><th>missed</th><th>spurious</th><th>error, mean / median (texel footprints)</th><th>surface captured (within 1.5 footprints / 1.5 texel extents)</th><th>texel visits / ray</th></tr>\n",
     );
     for kind in [CheckCamera::Pinhole, CheckCamera::Spoc(None)] {
         let cam = setup.camera(kind, 512).map_err(camera_error)?;
@@ -300,7 +300,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
         let captured = fidelity::surface_captured(&imp, &setup.target, 50_000, 1);
         let _ = writeln!(
             table,
-            "<tr><td>{name}</td><td>{k}</td><td>{}</td><td>{}</td><td>{:.2} %</td><td>{:.2} %</td><td>{}</td><td>{}</td><td>{:.2}</td><td>{:.1} % / {:.1} %</td><td>{:.1}</td></tr>",
+            "<tr><td>{name}</td><td>{k}</td><td>{}</td><td>{}</td><td>{:.2} %</td><td>{:.2} %</td><td>{}</td><td>{}</td><td>{:.2} / {:.1e}</td><td>{:.1} % / {:.1} %</td><td>{:.1}</td></tr>",
             r.rays,
             r.exact_hits,
             r.agreement() * 100.0,
@@ -308,6 +308,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
             r.missed,
             r.spurious,
             r.mean_error_footprints,
+            r.median_error_footprints,
             captured.within_footprint * 100.0,
             captured.within_texel * 100.0,
             r.texel_visits_per_ray
@@ -476,11 +477,12 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
             let r = check_with(&imp, &exact, &rays, mode);
             let _ = write!(
                 rows,
-                "<tr><td>{name}</td><td>{}</td><td>{:.2} %</td><td>{:.2} %</td><td>{:.2}</td><td>{:.0}</td></tr>",
+                "<tr><td>{name}</td><td>{}</td><td>{:.2} %</td><td>{:.2} %</td><td>{:.2} / {:.1e}</td><td>{:.0}</td></tr>",
                 r.rays,
                 r.agreement() * 100.0,
                 r.hit_agreement() * 100.0,
                 r.mean_error_footprints,
+                r.median_error_footprints,
                 r.texel_visits_per_ray
             );
         }
@@ -571,7 +573,7 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
     io::write_png(&out.join("maze-frusta.png"), &view)?;
     let _ = writeln!(
         html,
-        "<h2>Graph camera (paper 1 §5)</h2>\n<p>A graph camera built from <code>scenes/maze.maze</code> by a breadth-first walk of its corridors from the entrance (algorithms.md §4): {} frusta — a bend at every turn, a split at each of the {} junctions. Left: the impostor it builds, every corridor the walk reached in one continuous image (deeper corridors get fewer pixels, as in the paper's Fig. 12). Right: the maze from above, each frustum outlined between its entry face and the faces of its children (root in yellow), and a few generalized rays in white (Fig. 9).</p>\n<div class=row><figure><img src=\"maze-graph-camera.png\"><figcaption>graph-camera impostor, {:.1} % of texels covered</figcaption></figure><figure><img src=\"maze-frusta.png\"><figcaption>frusta over the maze</figcaption></figure></div>\n<p>Reflected rays of a mirror bunny standing in the first corridor (Fig. 5), answered by the impostor and by the exact BVH (<code>trompe impostor check scenes/maze.maze --camera graph</code>):</p>\n<table><tr><th>walk</th><th>rays</th><th>agreement</th><th>on hits</th><th>mean error (texels)</th><th>texel visits / ray</th></tr>{}</table>",
+        "<h2>Graph camera (paper 1 §5)</h2>\n<p>A graph camera built from <code>scenes/maze.maze</code> by a breadth-first walk of its corridors from the entrance (algorithms.md §4): {} frusta — a bend at every turn, a split at each of the {} junctions. Left: the impostor it builds, every corridor the walk reached in one continuous image (deeper corridors get fewer pixels, as in the paper's Fig. 12). Right: the maze from above, each frustum outlined between its entry face and the faces of its children (root in yellow), and a few generalized rays in white (Fig. 9).</p>\n<div class=row><figure><img src=\"maze-graph-camera.png\"><figcaption>graph-camera impostor, {:.1} % of texels covered</figcaption></figure><figure><img src=\"maze-frusta.png\"><figcaption>frusta over the maze</figcaption></figure></div>\n<p>Reflected rays of a mirror bunny standing in the first corridor (Fig. 5), answered by the impostor and by the exact BVH (<code>trompe impostor check scenes/maze.maze --camera graph</code>):</p>\n<table><tr><th>walk</th><th>rays</th><th>agreement</th><th>on hits</th><th>error, mean / median (texel footprints)</th><th>texel visits / ray</th></tr>{}</table>",
         g.frusta().len(),
         splits,
         imp.coverage() * 100.0,

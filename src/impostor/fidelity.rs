@@ -35,6 +35,9 @@ pub struct FidelityReport {
     pub mean_position_error: f64,
     /// The same, in texel footprints.
     pub mean_error_footprints: f64,
+    /// Median of that error, in texel footprints: the typical hit, which the mean's few far
+    /// hits (another surface, on the rays that disagree) do not move.
+    pub median_error_footprints: f64,
     /// Mean texel visits per ray.
     pub texel_visits_per_ray: f64,
 }
@@ -113,6 +116,8 @@ where
         })
         .collect();
     let both: Vec<&One> = per_ray.iter().filter(|o| o.exact && o.imp).collect();
+    let mut errors_fp: Vec<f64> = both.iter().map(|o| o.err_fp).collect();
+    errors_fp.sort_by(f64::total_cmp);
     FidelityReport {
         rays: rays.len(),
         exact_hits: per_ray.iter().filter(|o| o.exact).count(),
@@ -121,10 +126,20 @@ where
         missed: per_ray.iter().filter(|o| o.exact && !o.imp).count(),
         spurious: per_ray.iter().filter(|o| !o.exact && o.imp).count(),
         mean_position_error: both.iter().map(|o| o.err).sum::<f64>() / both.len().max(1) as f64,
-        mean_error_footprints: both.iter().map(|o| o.err_fp).sum::<f64>()
-            / both.len().max(1) as f64,
+        mean_error_footprints: errors_fp.iter().sum::<f64>() / both.len().max(1) as f64,
+        median_error_footprints: median(&errors_fp),
         texel_visits_per_ray: per_ray.iter().map(|o| o.visits as f64).sum::<f64>()
             / rays.len().max(1) as f64,
+    }
+}
+
+/// The middle of sorted `values` (the mean of the two middle ones for an even count; 0 for
+/// none).
+fn median(values: &[f64]) -> f64 {
+    match values.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => values[n / 2],
+        n => 0.5 * (values[n / 2 - 1] + values[n / 2]),
     }
 }
 
