@@ -297,8 +297,8 @@ impl ReflectorSetup {
     }
 
     /// Paper 1's Fig. 5 setting: the reflector (largest extent 0.5) stands on the floor of the
-    /// maze's first corridor, two cells in, and the viewer looks at it from the maze camera's
-    /// root. The target is the maze itself, in its own coordinates.
+    /// maze's first corridor, two cells in, and the viewer looks at it from 2.5 cells outside
+    /// the entrance. The target is the maze itself, in its own coordinates.
     pub fn in_maze(
         maze: &crate::scene::maze::Maze,
         reflector: &Mesh,
@@ -310,8 +310,10 @@ impl ReflectorSetup {
                 "a mesh with no extent cannot be placed",
             ));
         }
-        let (eye, dir) = maze.entrance_view();
-        let at = eye + dir * (crate::scene::maze::ROOT_BACK + 2.0);
+        // The viewer stands 2.5 cells outside the entrance, wherever the camera's root is.
+        let (root, dir) = maze.entrance_view();
+        let entrance = root + dir * crate::scene::maze::ROOT_BACK;
+        let (eye, at) = (entrance - dir * 2.5, entrance + dir * 2.0);
         let reflector = Arc::new(fit(
             reflector,
             0.5,
