@@ -392,10 +392,10 @@ pub const ROOT_BACK: f64 = 2.5;
 
 /// How far behind a junction's face, in cells, the slice that goes straight on is seen from:
 /// the farther, the less the rest of the corridor shrinks in its slice.
-const STRAIGHT_APEX_BACK: f64 = 3.0;
+pub const STRAIGHT_APEX_BACK: f64 = 3.0;
 
 /// How far behind the corner, in cells, a slice that turns into a side corridor is seen from.
-const SIDE_APEX_BACK: f64 = 2.0;
+pub const SIDE_APEX_BACK: f64 = 2.0;
 
 /// Faces reach 1.5 m around each corner: enough for a 1 m corridor, walls hide the rest.
 const FACE_EXTENT: f64 = 1.5;
