@@ -76,11 +76,9 @@ impl<T: Copy> Band<'_, T> {
                     if gd32 > self.gd[idx] {
                         let [inv_w, q0, q1, q2] =
                             [w_p, q0, q1, q2].map(|p| p.f0 + p.dfdx * dx + p.dfdy * dy);
-                        let bary = Vec3::new(
-                            (q0 / inv_w) as f32,
-                            (q1 / inv_w) as f32,
-                            (q2 / inv_w) as f32,
-                        );
+                        // One division for the three weights.
+                        let w = 1.0 / inv_w;
+                        let bary = Vec3::new((q0 * w) as f32, (q1 * w) as f32, (q2 * w) as f32);
                         let fragment = Fragment {
                             x,
                             y,
