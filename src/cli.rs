@@ -37,6 +37,9 @@ pub enum Command {
         /// Renderer.
         #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
         method: MethodArg,
+        /// Impostor resolution (square), for --method impostor.
+        #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION)]
+        impostor_resolution: u32,
         /// Time in seconds (camera path and animation); default: the scene's.
         #[arg(long)]
         time: Option<f32>,
@@ -196,13 +199,18 @@ pub enum MethodArg {
     Raster,
     /// Whitted ray tracing through the exact BVH.
     Trace,
+    /// Exact primary rays; rays from mirrors and glass answered by SPOC impostors of the diffuse
+    /// objects (paper 1).
+    Impostor,
 }
 
-impl From<MethodArg> for Method {
-    fn from(m: MethodArg) -> Method {
-        match m {
+impl MethodArg {
+    /// The renderer, with the impostor resolution for `Impostor`.
+    fn method(self, impostor_resolution: u32) -> Method {
+        match self {
             MethodArg::Raster => Method::Raster,
             MethodArg::Trace => Method::Trace,
+            MethodArg::Impostor => Method::Impostor(impostor_resolution),
         }
     }
 }
@@ -262,6 +270,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             scene,
             output,
             method,
+            impostor_resolution,
             time,
             depth,
             normals,
@@ -280,7 +289,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 eprintln!("warning: {w}");
             }
             let t = time.unwrap_or(s.render.time);
-            let method: Method = method.into();
+            let method = method.method(impostor_resolution);
             let pb = bar(&format!("{method}"), s.camera.height as u64);
             let (frame, steps) =
                 render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;

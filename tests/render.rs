@@ -1,10 +1,11 @@
-//! The two ground-truth renderers: agreement on diffuse scenes, determinism across thread counts.
+//! The ground-truth renderers: agreement on diffuse scenes, determinism across thread counts;
+//! and the impostor method against them.
 
 mod common;
 use std::path::PathBuf;
 use trompe::frame::metrics;
 use trompe::render::{Method, render};
-use trompe::scene::Scene;
+use trompe::scene::{Scene, Surface};
 
 fn scene(name: &str) -> Scene {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -59,7 +60,7 @@ fn mirrors_differ_between_methods() {
 fn same_pixels_for_one_and_two_threads() {
     for name in ["diffuse.toml", "reflections.toml"] {
         let s = scene(name);
-        for method in [Method::Raster, Method::Trace] {
+        for method in [Method::Raster, Method::Trace, Method::Impostor(128)] {
             let run = |threads: usize| {
                 let pool = rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
@@ -75,4 +76,63 @@ fn same_pixels_for_one_and_two_threads() {
             );
         }
     }
+}
+
+#[test]
+fn impostor_reflections_come_close_to_the_traced_ones() {
+    // Paper 1: the rays mirrors and glass send out are answered by impostors of the diffuse
+    // objects. Where a primary ray meets a diffuse object nothing changes; on the reflections
+    // the method must come far closer to `trace` than environment mapping does.
+    let s = scene("reflections.toml");
+    let (trace, _) = render(&s, Method::Trace, &()).unwrap();
+    let (impostor, _) = render(&s, Method::Impostor(512), &()).unwrap();
+    let (raster, _) = render(&s, Method::Raster, &()).unwrap();
+    let view = s.view(s.render.time).unwrap();
+    let reflectors: Vec<u32> = (0..view.surfaces.len() as u32)
+        .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
+        .collect();
+    assert_eq!(reflectors, [1, 2, 4], "the scene's mirrors and glass");
+    let mut diffuse_pixels = 0;
+    for ((a, b), id) in trace
+        .color
+        .pixels()
+        .iter()
+        .zip(impostor.color.pixels())
+        .zip(trace.object_id.pixels())
+    {
+        if *id != trompe::trace::NO_OBJECT && !reflectors.contains(id) {
+            assert_eq!(a, b, "a diffuse pixel of object {id} changed");
+            diffuse_pixels += 1;
+        }
+    }
+    assert!(diffuse_pixels > 10_000, "{diffuse_pixels}");
+    let near = metrics::compare(&trace.color, &impostor.color, None).unwrap();
+    let far = metrics::compare(&trace.color, &raster.color, None).unwrap();
+    // Not the traced image either: mirrors no longer see one another.
+    assert!(
+        near.psnr.is_finite() && near.psnr >= 35.0 && near.flip <= 0.004,
+        "{near:?}"
+    );
+    assert!(
+        near.flip * 10.0 < far.flip,
+        "{near:?} against environment mapping {far:?}"
+    );
+}
+
+#[test]
+fn a_reflector_inside_a_solid_object_has_no_impostor_of_it() {
+    // A mirror inside a big diffuse sphere: no SPOC can see the sphere from inside, and it is
+    // not flat, so the method says why instead of rendering something else.
+    let dir = common::scratch("impostor-inside");
+    let path = dir.join("inside.toml");
+    std::fs::write(
+        &path,
+        "[camera]\nposition = [0.0, 0.0, 2.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_y = 40.0\nresolution = [32, 32]\n\n[[object]]\nshape = \"sphere\"\nscale = 10.0\nmaterial = { type = \"diffuse\", color = [0.5, 0.5, 0.5] }\n\n[[object]]\nshape = \"sphere\"\nscale = 0.5\nmaterial = { type = \"mirror\", tint = [0.9, 0.9, 0.9] }\n",
+    )
+    .unwrap();
+    let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let e = render(&s, Method::Impostor(64), &())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("object 0") && e.contains("not flat"), "{e}");
 }

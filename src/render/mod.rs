@@ -1,5 +1,7 @@
 //! Ground-truth renderers (all papers): `raster` shades what the rasterizer sees, `trace` is a
 //! Whitted ray tracer over any [`RayQuery`](crate::trace::RayQuery) — the reference later methods are compared with.
+//! And the first of those methods, `impostor` (paper 1 §6): the tracer with the rays mirrors and
+//! glass send out answered by impostors.
 //!
 //! Both methods share one shading model ([`shading`]): Lambert with the sun plus the
 //! environment's diffuse irradiance, no shadows; mirrors and glass reflect and refract. The
@@ -10,12 +12,14 @@
 //! Invariants: pixel `(i, j)` is shaded at its centre; the result does not depend on the thread
 //! count; colours are linear.
 
+mod impostor;
 mod raster;
 pub mod shading;
 mod trace;
 
+pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use raster::render_raster;
-pub use trace::{Tracer, render_trace};
+pub use trace::{SecondaryRays, Tracer, render_trace};
 
 use crate::frame::{Frame, FrameError};
 use crate::scene::{Lighting, RenderSettings, Scene, View};
@@ -30,6 +34,9 @@ pub enum Method {
     Raster,
     /// Whitted ray tracing through the BVH.
     Trace,
+    /// Primary rays through the BVH; what mirrors and glass send out answered by SPOC
+    /// impostors of the diffuse objects, this many texels square (paper 1).
+    Impostor(u32),
 }
 
 impl std::fmt::Display for Method {
@@ -37,6 +44,7 @@ impl std::fmt::Display for Method {
         f.write_str(match self {
             Method::Raster => "raster",
             Method::Trace => "trace",
+            Method::Impostor(_) => "impostor",
         })
     }
 }
@@ -51,6 +59,17 @@ pub enum RenderError {
     /// The camera at the requested time is invalid.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
+    /// A mirror or glass object cannot have an impostor of an object (ids count from 0 in the
+    /// scene file's order).
+    #[error("object {object} seen from mirror/glass object {reflector}: {reason}")]
+    Impostor {
+        /// The object the impostor would replace.
+        object: usize,
+        /// The mirror or glass object.
+        reflector: usize,
+        /// Why not.
+        reason: &'static str,
+    },
 }
 
 /// Progress of long work, reported in rows; the CLI shows it as a bar.
@@ -124,8 +143,12 @@ pub fn render_view(
                 scene: &bvh,
                 lighting,
                 settings,
+                secondary: None,
             };
             timings.time("trace", || render_trace(&tracer, progress))
+        }
+        Method::Impostor(resolution) => {
+            render_impostor(view, lighting, settings, resolution, progress, timings)
         }
     }
 }

@@ -21,7 +21,15 @@ pub struct Tracer<'a, Q: RayQuery> {
     pub lighting: &'a Lighting,
     /// Depth limit and ray offset.
     pub settings: &'a RenderSettings,
+    /// When set, answers instead of `scene` every ray a mirror or glass object sends out into
+    /// the open — given that object's id — with a hit that carries its radiance (impostors of
+    /// what the object reflects, paper 1 §6); a miss takes the environment's. Rays that go
+    /// into a glass object still follow `scene`.
+    pub secondary: Option<&'a SecondaryRays<'a>>,
 }
+
+/// Answers the rays a mirror or glass object (its id) sends out: see [`Tracer::secondary`].
+pub type SecondaryRays<'a> = dyn Fn(u32, &Ray) -> Option<Hit> + Sync + 'a;
 
 impl<Q: RayQuery> Tracer<'_, Q> {
     /// Radiance arriving along `ray` after at most `max_depth − depth` more bounces.
@@ -43,12 +51,13 @@ impl<Q: RayQuery> Tracer<'_, Q> {
         let eps = self.settings.ray_epsilon;
         let env = &self.lighting.environment;
         let last = depth + 1 >= self.settings.max_depth;
-        let follow = |origin: Vec3, dir: Vec3| {
-            if last {
-                env.radiance(dir)
-            } else {
-                self.radiance(&Ray::new(origin, dir), depth + 1)
-            }
+        // `outward`: the ray leaves the object into the open (not into the glass).
+        let follow = |origin: Vec3, dir: Vec3, outward: bool| match self.secondary {
+            Some(answer) if outward => answer(hit.object, &Ray::new(origin, dir))
+                .and_then(|h| h.radiance)
+                .unwrap_or_else(|| env.radiance(dir)),
+            _ if last => env.radiance(dir),
+            _ => self.radiance(&Ray::new(origin, dir), depth + 1),
         };
         match surface {
             Surface::Diffuse(_) => lambert(
@@ -56,13 +65,15 @@ impl<Q: RayQuery> Tracer<'_, Q> {
                 n,
                 self.lighting,
             ),
-            Surface::Mirror { tint } => *tint * follow(hit.position + ng * eps, reflect(d, n)),
+            Surface::Mirror { tint } => {
+                *tint * follow(hit.position + ng * eps, reflect(d, n), true)
+            }
             Surface::Glass { ior, tint } => {
                 let eta = if front { 1.0 / ior } else { *ior };
                 let kr = fresnel((-d.dot(n)).max(0.0), eta);
-                let reflected = follow(hit.position + ng * eps, reflect(d, n));
+                let reflected = follow(hit.position + ng * eps, reflect(d, n), front);
                 let transmitted = match refract(d, n, eta) {
-                    Some(t) if kr < 1.0 => *tint * follow(hit.position - ng * eps, t),
+                    Some(t) if kr < 1.0 => *tint * follow(hit.position - ng * eps, t, !front),
                     _ => Vec3::ZERO,
                 };
                 kr * reflected + (1.0 - kr) * transmitted

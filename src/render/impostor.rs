@@ -1,0 +1,141 @@
+//! The impostor method (paper 1 §6): primary rays see the exact scene, and every ray a mirror or
+//! glass object sends out into the open is answered by impostors of the diffuse objects, built
+//! from that object's centre — a SPOC (§3) of an object it stands outside of, an orthographic
+//! depth image along the normal of a flat one it stands over (a floor; the paper's grid is a
+//! billboard) — or by the environment where it misses them. An impostor's colour is the diffuse
+//! shading the tracer computes at its texels, so where the impostors capture what a ray meets,
+//! the method agrees with `trace` to their sampling; it differs where they do not.
+//!
+//! Invariants: pixels whose primary ray meets a diffuse object are the `trace` method's, exactly;
+//! a mirror or glass object sees only diffuse objects and the environment (no inter-reflection
+//! between mirrors, as in the paper); the result does not depend on the thread count.
+
+use super::shading::{albedo, lambert};
+use super::trace::{Tracer, render_trace};
+use super::{Progress, RenderError, Timings};
+use crate::frame::Frame;
+use crate::geom::{Mesh, Ray};
+use crate::impostor::{Impostor, ImpostorCamera, SurfaceSample, ViewCamera, build};
+use crate::scene::{Lighting, RenderSettings, Surface, View};
+use crate::trace::{Bvh, Hit, RayQuery};
+use glam::Vec3;
+
+/// Impostor resolution (square) when none is asked for.
+pub const DEFAULT_IMPOSTOR_RESOLUTION: u32 = 512;
+
+/// A flat object is one whose bounding box is thinner than this fraction of its largest extent.
+const FLAT: f32 = 0.01;
+
+/// Renders `view` by the impostor method, with `resolution²` impostors.
+pub fn render_impostor(
+    view: &View,
+    lighting: &Lighting,
+    settings: &RenderSettings,
+    resolution: u32,
+    progress: &dyn Progress,
+    timings: &mut Timings,
+) -> Result<Frame, RenderError> {
+    let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+    let impostors = timings.time("build impostors", || {
+        reflector_impostors(view, lighting, resolution)
+    })?;
+    let answer = |from: u32, ray: &Ray| -> Option<Hit> {
+        impostors
+            .get(from as usize)?
+            .iter()
+            .filter_map(|imp| imp.closest_hit(ray, f32::INFINITY))
+            .min_by(|a, b| a.t.total_cmp(&b.t))
+    };
+    let tracer = Tracer {
+        view,
+        scene: &bvh,
+        lighting,
+        settings,
+        secondary: Some(&answer),
+    };
+    timings.time("trace", || render_trace(&tracer, progress))
+}
+
+/// Per object of `view`: for a mirror or glass object, an impostor of every diffuse object seen
+/// from its centre (built in parallel inside); nothing for a diffuse object.
+fn reflector_impostors(
+    view: &View,
+    lighting: &Lighting,
+    resolution: u32,
+) -> Result<Vec<Vec<Impostor>>, RenderError> {
+    let diffuse: Vec<usize> = (0..view.surfaces.len())
+        .filter(|&o| matches!(view.surfaces[o], Surface::Diffuse(_)))
+        .collect();
+    let mut out = Vec::with_capacity(view.surfaces.len());
+    for (r, surface) in view.surfaces.iter().enumerate() {
+        if matches!(surface, Surface::Diffuse(_)) {
+            out.push(Vec::new());
+            continue;
+        }
+        let reflector = view.meshes[r].bounds();
+        let (eye, region) = (reflector.center(), reflector.radius() as f64);
+        let mut seen = Vec::with_capacity(diffuse.len());
+        for &o in &diffuse {
+            let mesh = &view.meshes[o];
+            let camera = impostor_camera(mesh, eye, region, resolution).map_err(|reason| {
+                RenderError::Impostor {
+                    object: o,
+                    reflector: r,
+                    reason,
+                }
+            })?;
+            let surface = &view.surfaces[o];
+            // The tracer's diffuse shading, with the normal turned toward the reflector.
+            let color = |s: &SurfaceSample| {
+                let n = if s.normal.dot(eye - s.position) < 0.0 {
+                    -s.normal
+                } else {
+                    s.normal
+                };
+                lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
+            };
+            seen.push(build(camera, mesh, o as u32, &color)?);
+        }
+        out.push(seen);
+    }
+    Ok(out)
+}
+
+/// The camera of the impostor of `mesh` seen from `eye`, whose secondary rays come from a
+/// region of radius `region`: a SPOC framed on the mesh when the eye is outside its bounding
+/// sphere; for a flat mesh the eye stands over, a parallel projection along its normal, which
+/// captures all of it.
+fn impostor_camera(
+    mesh: &Mesh,
+    eye: Vec3,
+    region: f64,
+    resolution: u32,
+) -> Result<ImpostorCamera, &'static str> {
+    let b = mesh.bounds();
+    let (center, radius) = (b.center(), b.radius());
+    let fitted = |kind, from| {
+        ImpostorCamera::fitted(
+            kind,
+            from,
+            center,
+            radius,
+            region,
+            resolution,
+            &mesh.positions,
+        )
+    };
+    let err = |_| "its impostor camera is degenerate";
+    if eye.distance(center) > radius * 1.001 {
+        return fitted(ViewCamera::Spoc(None), eye).map_err(err);
+    }
+    let extent = b.extent();
+    let thin = extent.min_position();
+    if extent[thin] > FLAT * extent.max_element() {
+        return Err(
+            "the reflector stands inside the object's bounding sphere and the object is not flat",
+        );
+    }
+    let mut normal = Vec3::ZERO;
+    normal[thin] = if eye[thin] < center[thin] { -1.0 } else { 1.0 };
+    fitted(ViewCamera::Orthographic, center + normal * (2.0 * radius)).map_err(err)
+}
