@@ -405,7 +405,18 @@ impl<S: FragmentShader> BandPass<'_, S> {
     where
         F: Fn(FinishedBand<'_, S::Output>, &mut O),
     {
-        if self.clear {
+        // A zeroed target's rows still get written before they are drawn when the band has
+        // triangles: the depth test reads a pixel before writing it, and a fresh page that is
+        // read first maps the shared zero page, so the write after it pays a second fault and
+        // a TLB flush on every core. Writing first takes one fault; bands with no triangles
+        // are never touched.
+        if self.clear
+            || self
+                .binned
+                .chunks()
+                .iter()
+                .any(|c| c.band(index).next().is_some())
+        {
             gd.fill(0.0);
         }
         let mut band = scan::Band {
