@@ -1,10 +1,10 @@
 //! Impostor construction and ray walks (issue 3): a SPOC impostor of the bunny beside a pinhole
-//! impostor and a plain rasterization of the same mesh; walks of reflected rays per resolution.
+//! impostor, a plain rasterization and a raster-method render of the same mesh; walks of reflected rays per resolution.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use std::path::PathBuf;
-use trompe::bench::raster_once;
+use trompe::bench::{raster_once, raster_view, render_raster_once};
 use trompe::camera::Spoc;
 use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup};
 use trompe::impostor::{ImpostorCamera, albedo_of, build};
@@ -64,6 +64,11 @@ fn impostor(c: &mut Criterion) {
     group.bench_function("peer: plain rasterization (depth + ids)", |bch| {
         bch.iter(|| raster_once(spoc.pinhole(), &bunny))
     });
+    let render_peer = raster_view(spoc.pinhole(), &bunny);
+    group.bench_function(
+        "peer: raster render method (colour, distance, normals, ids)",
+        |bch| bch.iter(|| render_raster_once(&render_peer)),
+    );
     group.finish();
 
     let setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 512).expect("valid setup");
