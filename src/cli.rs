@@ -10,6 +10,10 @@ use trompe::frame::{io, metrics};
 use trompe::render::{self, Method, Progress, Timings};
 use trompe::scene::Scene;
 
+/// Largest impostor side the CLI accepts: a square image within the frame limits
+/// ([`trompe::frame::MAX_PIXELS`]).
+const MAX_IMPOSTOR_SIDE: i64 = 8192;
+
 /// Impostor-based and image-based rendering on the CPU.
 #[derive(Parser, Debug)]
 #[command(name = "trompe", version, about)]
@@ -38,7 +42,8 @@ pub enum Command {
         #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
         method: MethodArg,
         /// Impostor resolution (square), for --method impostor.
-        #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION)]
+        #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
+              value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
         impostor_resolution: u32,
         /// Time in seconds (camera path and animation); default: the scene's.
         #[arg(long)]
@@ -101,7 +106,8 @@ pub enum ImpostorCommand {
         #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
         camera: CameraArg,
         /// Impostor resolution (square).
-        #[arg(long, default_value_t = 512)]
+        #[arg(long, default_value_t = 512,
+              value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
         resolution: u32,
         /// Direction from the object's centre toward the camera, "x,y,z".
         #[arg(long, default_value = "0,0.3,1", value_parser = parse_vec3)]
@@ -128,7 +134,8 @@ pub enum ImpostorCommand {
         #[arg(long)]
         k: Option<f64>,
         /// Impostor resolution (square).
-        #[arg(long, default_value_t = 512)]
+        #[arg(long, default_value_t = 512,
+              value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
         resolution: u32,
         /// The reflector whose reflected rays are fired (default: the shipped bunny).
         #[arg(long)]

@@ -111,6 +111,27 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
     let text = std::fs::read_to_string(&missing).unwrap();
     assert!(text.contains("nowhere.obj"), "input untouched");
     fails_cleanly(&trompe(&["info", "Cargo.toml"]), "unknown extension");
+    // A cause is said once, though the library's message already holds it.
+    let gone = trompe(&["info", "nowhere.obj"]);
+    fails_cleanly(&gone, "nowhere.obj");
+    let e = stderr(&gone);
+    let os = "No such file or directory";
+    assert_eq!(e.matches(os).count(), 1, "cause repeated: {e}");
+    for bad in ["0", "100000"] {
+        fails_cleanly(
+            &trompe(&[
+                "render",
+                "scenes/reflections.toml",
+                "--method",
+                "impostor",
+                "--impostor-resolution",
+                bad,
+                "-o",
+                out,
+            ]),
+            "--impostor-resolution",
+        );
+    }
     let short = d.join("short.obj");
     std::fs::write(&short, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
     fails_cleanly(&trompe(&["info", short.to_str().unwrap()]), "line 3");

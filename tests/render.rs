@@ -135,4 +135,11 @@ fn a_reflector_inside_a_solid_object_has_no_impostor_of_it() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("object 0") && e.contains("not flat"), "{e}");
+    // A size no map can have is said as such.
+    for side in [0, 1 << 20] {
+        let e = render(&s, Method::Impostor(side), &())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("invalid image size"), "{e}");
+    }
 }

@@ -35,6 +35,8 @@ pub fn render_impostor(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
+    // A size the maps can have, said as such rather than as a degenerate camera.
+    crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
     let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
     let impostors = timings.time("build impostors", || {
         reflector_impostors(view, lighting, resolution)
