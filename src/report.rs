@@ -122,7 +122,7 @@ pub fn demo(
     for name in ["diffuse", "reflections"] {
         let path = inputs.scenes.join(format!("{name}.toml"));
         let scene = Scene::load(&path).map_err(Box::new)?;
-        let (h, _) = (scene.camera.height, ());
+        let h = scene.camera.height;
         let mut frames: Vec<(Method, Frame, Duration)> = Vec::new();
         let mut methods = vec![Method::Trace, Method::Raster];
         if name == "reflections" {
