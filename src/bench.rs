@@ -329,13 +329,14 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
             "× a plain rasterization into a reused target (goal ≤ 1.5)".into(),
         )),
     });
-    // Built on the first hierarchical walk, not by `build`: timed apart.
+    // Built on the first walk, not by `build`: timed apart.
     let t_pyramid = time_median(min, || {
         again.maps_changed();
         std::hint::black_box(again.pyramid());
     });
     out.push(Figure {
-        name: "front-bound pyramid of that impostor (first hierarchical walk)".to_string(),
+        name: "walk index of that impostor (front-bound pyramid, packed texel planes; first walk)"
+            .to_string(),
         value: t_pyramid.as_secs_f64() * 1e3,
         unit: "ms",
         versus: None,

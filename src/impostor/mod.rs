@@ -5,7 +5,9 @@
 //! world position and object id — and the bounding box of what it replaces. [`build`] makes one
 //! by rasterizing a mesh through the camera (tessellating adaptively for curved cameras, §2.2);
 //! the impostor implements [`crate::trace::RayQuery`] by walking the ray's projection across the
-//! image (§2.3, `walk`); [`file`](mod@file) saves and loads it (OpenEXR channels + JSON sidecar).
+//! image (§2.3, `walk`), over what it derives from its maps on the first walk — a pyramid of
+//! front bounds (`pyramid`, `front`) and the texels packed as the walk reads them (`planes`);
+//! [`file`](mod@file) saves and loads it (OpenEXR channels + JSON sidecar).
 //!
 //! Invariants: texel `gd` follows algorithms.md §1.2 (0 = empty, larger = nearer); every non-empty
 //! texel holds the world position of the surface point it shows, so a hit's position is exact up
@@ -16,6 +18,7 @@ mod build;
 pub mod fidelity;
 pub mod file;
 mod front;
+mod planes;
 mod pyramid;
 mod straight;
 mod walk;
@@ -23,6 +26,7 @@ mod walk;
 pub use billboard::Billboard;
 pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};
 pub use front::front_bounds;
+pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
 pub use walk::{WalkMode, WalkStats};
 
@@ -259,10 +263,18 @@ pub struct Impostor {
     pub object: Image<u32>,
     /// World box of the replaced geometry: rays are clipped to it.
     pub bounds: Aabb,
-    /// Max pyramid of the texels' front bounds (the largest `gd` of a point behind a texel's
-    /// plane, 0 where empty; `front.rs`), for the hierarchical walk: built on first use
-    /// ([`Impostor::pyramid`]); call [`Impostor::maps_changed`] after editing the maps.
-    pyramid: std::sync::OnceLock<MaxPyramid>,
+    /// What the walks derive from the maps, built on first use: the max pyramid of the
+    /// texels' front bounds (the largest `gd` of a point behind a texel's plane, 0 where empty;
+    /// `front.rs`) and the packed [`TexelPlane`]s. Call [`Impostor::maps_changed`] after
+    /// editing the maps.
+    walk_index: std::sync::OnceLock<WalkIndex>,
+}
+
+/// See [`Impostor::pyramid`] and [`Impostor::texel_planes`].
+#[derive(Clone, Debug)]
+struct WalkIndex {
+    pyramid: MaxPyramid,
+    planes: Image<TexelPlane>,
 }
 
 impl Impostor {
@@ -288,24 +300,35 @@ impl Impostor {
             position,
             object,
             bounds,
-            pyramid: std::sync::OnceLock::new(),
+            walk_index: std::sync::OnceLock::new(),
         }
     }
 
-    /// The pyramid of front bounds the hierarchical walk skips with, built on first use (so
-    /// building an impostor that is only walked linearly does not pay for it).
+    /// The pyramid of front bounds the hierarchical walk skips with, built on the first walk
+    /// (so building an impostor that is never walked does not pay for it).
     pub fn pyramid(&self) -> &MaxPyramid {
-        self.pyramid.get_or_init(|| {
+        &self.walk_index().pyramid
+    }
+
+    /// The texels as the walks read them, packed ([`TexelPlane`]), built with the pyramid.
+    pub fn texel_planes(&self) -> &Image<TexelPlane> {
+        &self.walk_index().planes
+    }
+
+    fn walk_index(&self) -> &WalkIndex {
+        self.walk_index.get_or_init(|| {
             let (w, h) = self.gd.size();
             let mut pyramid = MaxPyramid::default();
             pyramid.rebuild_with(w, h, |level0| front::front_bounds_into(self, level0));
-            pyramid
+            let planes = planes::texel_planes(self, pyramid.level(0).pixels());
+            WalkIndex { pyramid, planes }
         })
     }
 
-    /// Drops the pyramid after the maps were edited; the next hierarchical walk rebuilds it.
+    /// Drops what the walks derived from the maps after they were edited; the next walk
+    /// rebuilds it.
     pub fn maps_changed(&mut self) {
-        self.pyramid = std::sync::OnceLock::new();
+        self.walk_index = std::sync::OnceLock::new();
     }
 
     /// Stored `gd` at image point `uv` (nearest texel; 0 outside the image).

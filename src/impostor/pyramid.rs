@@ -66,6 +66,11 @@ impl MaxPyramid {
         MaxPyramid { levels }
     }
 
+    /// Level `l` (0 = the texels).
+    pub fn level(&self, l: usize) -> &Image<f32> {
+        &self.levels[l]
+    }
+
     /// Number of levels (the last is 1 × 1).
     pub fn level_count(&self) -> usize {
         self.levels.len()

@@ -124,12 +124,7 @@ impl Impostor {
         (x, y): (u32, u32),
     ) -> Option<Sample> {
         let p = camera.project(s)?;
-        let stored = self.gd.get(x, y);
-        let delta = if stored > 0.0 {
-            (s - self.position.get(x, y).as_dvec3()).dot(self.face_normal.get(x, y).as_dvec3())
-        } else {
-            f64::INFINITY
-        };
+        let (stored, delta) = self.texel_plane_side(s, x, y);
         Some(Sample {
             p,
             texel: Some((x, y)),

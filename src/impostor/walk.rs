@@ -184,12 +184,8 @@ impl Impostor {
         stats.texel_visits += 1;
         let texel = self.texel(p.uv);
         let (stored, delta) = match texel {
-            Some((x, y)) if self.gd.get(x, y) > 0.0 => {
-                let plane_point = self.position.get(x, y).as_dvec3();
-                let n = self.face_normal.get(x, y).as_dvec3();
-                (self.gd.get(x, y), (s - plane_point).dot(n))
-            }
-            _ => (0.0, f64::INFINITY),
+            Some((x, y)) => self.texel_plane_side(s, x, y),
+            None => (0.0, f64::INFINITY),
         };
         Some(Sample {
             p,
@@ -279,6 +275,17 @@ impl Impostor {
         (None, stats)
     }
 
+    /// The stored `gd` of texel `(x, y)` and the signed distance from `s` to its plane (+∞
+    /// when the texel is empty): one packed record read.
+    pub(super) fn texel_plane_side(&self, s: DVec3, x: u32, y: u32) -> (f32, f64) {
+        let t = self.texel_planes().get(x, y);
+        if t.gd > 0.0 {
+            (t.gd, (s - t.point.as_dvec3()).dot(t.normal.as_dvec3()))
+        } else {
+            (0.0, f64::INFINITY)
+        }
+    }
+
     /// Whether sample `s` lies in front of its texel's front bound (outside the image, always).
     /// The bound is part of the texel the sample already read: no extra visit.
     fn in_front_of_bound(&self, s: &Sample) -> bool {
@@ -288,7 +295,7 @@ impl Impostor {
         }
         match s.texel {
             None => true,
-            Some((x, y)) => s.p.gd > self.pyramid().node(0, x, y) as f64,
+            Some((x, y)) => s.p.gd > self.texel_planes().get(x, y).front as f64,
         }
     }
 
@@ -407,8 +414,8 @@ impl Impostor {
         // within the thickness of the point its texel stores.
         for sample in [b, a] {
             let (tx, ty) = sample.texel?;
-            let stored_point = self.position.get(tx, ty).as_dvec3();
-            let n = self.face_normal.get(tx, ty).as_dvec3();
+            let plane = self.texel_planes().get(tx, ty);
+            let (stored_point, n) = (plane.point.as_dvec3(), plane.normal.as_dvec3());
             let denom = d.dot(n);
             if denom.abs() < 1e-9 {
                 continue;
