@@ -360,3 +360,37 @@ fn fitted_cameras_frame_the_object_at_95_percent() {
         assert!((extent - 95.0).abs() < 0.01, "{kind:?}: {extent}");
     }
 }
+
+#[test]
+fn walks_from_many_threads_on_a_fresh_impostor_agree_with_one_thread() {
+    // The first walk builds the impostor's walk index, in parallel, while other workers walk
+    // the same impostor: every thread must see the same index (and none may wait inside a
+    // `OnceLock` initializer that a stolen job of its own re-enters — rayon issue #1251; that
+    // hang depends on timing, so this test exercises it rather than proving its absence).
+    use rayon::prelude::*;
+    let s = setup();
+    let rays = s.rays();
+    let camera = s.camera(CheckCamera::Spoc(None), 256).unwrap();
+    let reference = build(camera.clone(), &s.target, 0, &albedo_of(&s.target)).unwrap();
+    let one: Vec<_> = rays
+        .iter()
+        .map(|r| reference.walk(r, f32::INFINITY).0)
+        .collect();
+    for round in 0..4 {
+        let fresh = build(camera.clone(), &s.target, 0, &albedo_of(&s.target)).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(8)
+            .build()
+            .unwrap();
+        let many: Vec<_> = pool.install(|| {
+            rays.par_iter()
+                .with_max_len(1)
+                .map(|r| fresh.walk(r, f32::INFINITY).0)
+                .collect()
+        });
+        assert!(
+            one == many,
+            "round {round}: hits differ between thread counts"
+        );
+    }
+}

@@ -315,14 +315,20 @@ impl Impostor {
         &self.walk_index().planes
     }
 
+    /// Built in parallel outside the cell, then stored: a rayon worker waiting inside
+    /// `OnceLock::get_or_init` for its parallel build may steal another job that walks this
+    /// impostor and enter the same initialization again — a deadlock. Here two threads that
+    /// meet the empty cell at once both build (the same index), and one result is kept.
     fn walk_index(&self) -> &WalkIndex {
-        self.walk_index.get_or_init(|| {
-            let (w, h) = self.gd.size();
-            let mut pyramid = MaxPyramid::default();
-            pyramid.rebuild_with(w, h, |level0| front::front_bounds_into(self, level0));
-            let planes = planes::texel_planes(self, pyramid.level(0).pixels());
-            WalkIndex { pyramid, planes }
-        })
+        if let Some(index) = self.walk_index.get() {
+            return index;
+        }
+        let (w, h) = self.gd.size();
+        let mut pyramid = MaxPyramid::default();
+        pyramid.rebuild_with(w, h, |level0| front::front_bounds_into(self, level0));
+        let planes = planes::texel_planes(self, pyramid.level(0).pixels());
+        let _ = self.walk_index.set(WalkIndex { pyramid, planes });
+        self.walk_index.get().expect("the cell was just set")
     }
 
     /// Drops what the walks derived from the maps after they were edited; the next walk
