@@ -310,6 +310,13 @@ impl Impostor {
         &self.walk_index().pyramid
     }
 
+    /// Builds now what the walks derive from the maps (the pyramid and the texel planes),
+    /// rather than on the first walk: before walking from many threads at once, which would
+    /// otherwise each build it.
+    pub fn prepare_walks(&self) {
+        self.walk_index();
+    }
+
     /// The texels as the walks read them, packed ([`TexelPlane`]), built with the pyramid.
     pub fn texel_planes(&self) -> &Image<TexelPlane> {
         &self.walk_index().planes

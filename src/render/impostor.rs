@@ -96,7 +96,9 @@ fn reflector_impostors(
                 };
                 lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
             };
-            seen.push(build(camera, mesh, o as u32, &color)?);
+            let impostor = build(camera, mesh, o as u32, &color)?;
+            impostor.prepare_walks();
+            seen.push(impostor);
         }
         out.push(seen);
     }
