@@ -276,11 +276,14 @@ impl Impostor {
     }
 
     /// The stored `gd` of texel `(x, y)` and the signed distance from `s` to its plane (+∞
-    /// when the texel is empty): one packed record read.
+    /// when the texel is empty). Emptiness is read from the compact `gd` map (sixteen texels a
+    /// cache line, and most samples of a walk lie over empty texels), the plane from the
+    /// texel's packed record (one line) only when it is covered.
     pub(super) fn texel_plane_side(&self, s: DVec3, x: u32, y: u32) -> (f32, f64) {
-        let t = self.texel_planes().get(x, y);
-        if t.gd > 0.0 {
-            (t.gd, (s - t.point.as_dvec3()).dot(t.normal.as_dvec3()))
+        let gd = self.gd.get(x, y);
+        if gd > 0.0 {
+            let t = self.texel_planes().get(x, y);
+            (gd, (s - t.point.as_dvec3()).dot(t.normal.as_dvec3()))
         } else {
             (0.0, f64::INFINITY)
         }
@@ -295,7 +298,9 @@ impl Impostor {
         }
         match s.texel {
             None => true,
-            Some((x, y)) => s.p.gd > self.texel_planes().get(x, y).front as f64,
+            // An empty texel's bound is 0, below every sample's `gd`; a covered one's is in
+            // the record the sample just read.
+            Some((x, y)) => s.stored <= 0.0 || s.p.gd > self.texel_planes().get(x, y).front as f64,
         }
     }
 
