@@ -28,7 +28,7 @@ pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, 
 pub use front::front_bounds;
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
-pub use walk::{WalkMode, WalkStats};
+pub use walk::{HIERARCHICAL_MIN_SIDE, WalkMode, WalkStats};
 
 use crate::camera::{GraphCamera, ImagePoint, Orthographic, Pinhole, Projection, Spoc};
 use crate::frame::Image;
