@@ -87,6 +87,7 @@ where
         err_fp: f64,
         visits: u64,
     }
+    impostor.prepare_walks();
     let per_ray: Vec<One> = rays
         .par_iter()
         .map(|r| {
