@@ -357,8 +357,10 @@ impl Impostor {
     #[inline]
     pub fn texel(&self, uv: DVec2) -> Option<(u32, u32)> {
         let (w, h) = self.gd.size();
-        let (x, y) = (uv.x.floor(), uv.y.floor());
-        (x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64).then_some((x as u32, y as u32))
+        // Compared before truncating: for non-negative values truncation is the floor, and
+        // `f64::floor` without SSE 4.1 is a library call, once per walk sample. NaN fails here.
+        (uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64)
+            .then_some((uv.x as u32, uv.y as u32))
     }
 
     /// World size of one texel at image point `uv` and depth `gd` (its footprint). For a
