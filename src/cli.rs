@@ -55,15 +55,15 @@ pub enum Command {
         #[arg(long)]
         normals: Option<PathBuf>,
     },
-    /// Compare two images: PSNR, SSIM and FLIP, and a FLIP heat map.
+    /// Compare two images: PSNR, SSIM and FLIP, and optionally a FLIP heat map.
     Compare {
         /// Reference image (.png, .exr or .hdr).
         reference: PathBuf,
         /// Test image.
         test: PathBuf,
-        /// Where to write the FLIP heat map (PNG).
-        #[arg(long, default_value = "flip-heatmap.png")]
-        heatmap: PathBuf,
+        /// Also write the FLIP heat map here (PNG).
+        #[arg(long)]
+        heatmap: Option<PathBuf>,
         /// Only average over pixels where this image is non-black.
         #[arg(long)]
         mask: Option<PathBuf>,
@@ -324,7 +324,9 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             heatmap,
             mask,
         } => {
-            check_output(&heatmap, &[&reference, &test])?;
+            if let Some(h) = &heatmap {
+                check_output(h, &[&reference, &test])?;
+            }
             let a = io::read_color(&reference)
                 .with_context(|| format!("reading {}", reference.display()))?;
             let b = io::read_color(&test).with_context(|| format!("reading {}", test.display()))?;
@@ -340,9 +342,11 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             println!("PSNR {:.3} dB", s.psnr);
             println!("SSIM {:.5}", s.ssim);
             println!("FLIP {:.5}", s.flip);
-            let heat = metrics::heat_map(&metrics::flip_map(&a, &b)?);
-            io::write_png(&heatmap, &heat)?;
-            eprintln!("wrote {}", heatmap.display());
+            if let Some(h) = heatmap {
+                let heat = metrics::heat_map(&metrics::flip_map(&a, &b)?);
+                io::write_png(&h, &heat)?;
+                eprintln!("wrote {}", h.display());
+            }
         }
         Command::Info { mesh } => {
             let loaded = trompe::geom::io::load(&mesh)?;

@@ -61,6 +61,23 @@ fn render_then_compare() {
         "{out}"
     );
     assert!(heat.is_file());
+    // Without --heatmap nothing is written: not even in the working directory.
+    let o = Command::new(env!("CARGO_BIN_EXE_trompe"))
+        .args(["compare", png.to_str().unwrap(), png.to_str().unwrap()])
+        .current_dir(&d)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut files: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files,
+        ["heat.png", "t-depth.exr", "t.png"],
+        "only what was asked for"
+    );
 }
 
 #[test]

@@ -15,7 +15,7 @@ use super::trace::{Tracer, render_trace};
 use super::{Progress, RenderError, Timings};
 use crate::frame::Frame;
 use crate::geom::{Mesh, Ray};
-use crate::impostor::{Impostor, ImpostorCamera, SurfaceSample, ViewCamera, build};
+use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, ViewCamera};
 use crate::scene::{Lighting, RenderSettings, Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery};
 use glam::Vec3;
@@ -69,6 +69,8 @@ fn reflector_impostors(
         .filter(|&o| matches!(view.surfaces[o], Surface::Diffuse(_)))
         .collect();
     let mut out = Vec::with_capacity(view.surfaces.len());
+    // One builder for all: its working memory is allocated once, not once per impostor.
+    let mut builder = ImpostorBuilder::new();
     for (r, surface) in view.surfaces.iter().enumerate() {
         if matches!(surface, Surface::Diffuse(_)) {
             out.push(Vec::new());
@@ -96,7 +98,7 @@ fn reflector_impostors(
                 };
                 lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
             };
-            let impostor = build(camera, mesh, o as u32, &color)?;
+            let impostor = builder.build(camera, mesh, o as u32, &color)?;
             impostor.prepare_walks();
             seen.push(impostor);
         }
