@@ -7,8 +7,8 @@ use crate::camera::{ImagePoint, Projection};
 use crate::frame::{FrameError, Image};
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
-    BAND_ROWS, DepthTarget, FinishedBand, Fragment, FragmentShader, RasterMemory, RasterStats,
-    rasterize, rasterize_depth_then,
+    BAND_ROWS, DepthTarget, FinishedBand, Fragment, FragmentShader, ItemId, RasterMemory,
+    RasterStats, rasterize, rasterize_depth_then,
 };
 use crate::trace::NO_OBJECT;
 use glam::{Vec2, Vec3, Vec4};
@@ -522,10 +522,9 @@ impl ImpostorBuilder {
         };
         let (gd, runs) = impostor.gd_and_texel_runs((BAND_ROWS * w) as usize);
         let finish = |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
-            // Scratch item and attribute rows hold this band's drawing where `gd > 0`.
             resolve_run(run, &inputs, |x| {
                 let item = band.item[x];
-                (band.gd[x] > 0.0).then(|| {
+                (item != ItemId::NONE).then(|| {
                     let b = full_barycentrics(band.attributes[x]);
                     to_source(source, item.triangle, b)
                 })

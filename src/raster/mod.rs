@@ -198,18 +198,14 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
 }
 
 /// One band of rows just drawn, handed to the `finish` callback of [`rasterize_depth_then`].
-///
-/// Its item and attribute rows are scratch: they hold what was drawn only where `gd > 0` (a
-/// fragment is written only when its `gd` beats the stored one, and rows start at 0), and
-/// leftovers of earlier bands elsewhere.
 pub struct FinishedBand<'a, T> {
     /// Index of the band's first pixel in the row-major image (`first row × width`).
     pub first_pixel: usize,
-    /// The band's depth pixels, row-major.
+    /// The band's depth, item and attribute pixels, row-major.
     pub gd: &'a [f32],
-    /// Item buffer of the band (meaningful where `gd > 0`).
+    /// Item buffer of the band.
     pub item: &'a [ItemId],
-    /// Attributes of the band (meaningful where `gd > 0`).
+    /// Attributes of the band.
     pub attributes: &'a [T],
 }
 
@@ -340,8 +336,8 @@ struct BandPass<'a, S: FragmentShader> {
     shader: &'a S,
     /// The attribute of an empty pixel.
     empty: S::Output,
-    /// Whether the bands' rows of the target images are cleared before drawing (scratch item
-    /// and attribute rows never are: see [`FinishedBand`]).
+    /// Whether the bands' rows of the target images are cleared before drawing (scratch rows
+    /// always are).
     clear: bool,
     width: u32,
     binned: &'a setup::Binned,
@@ -380,10 +376,10 @@ impl<S: FragmentShader> BandPass<'_, S> {
             BandRows::Scratch(pool) => bands
                 .map(|(index, (gd, mut out))| {
                     let lock = || pool.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-                    // Not cleared: what `finish` reads of them is where `gd > 0`, all of it
-                    // drawn by this band.
                     let (mut item, mut attr) = lock().pop().unwrap_or_default();
+                    item.clear();
                     item.resize(gd.len(), ItemId::NONE);
+                    attr.clear();
                     attr.resize(gd.len(), self.empty);
                     let s = self.band(index, gd, (&mut item, &mut attr), &finish, &mut out);
                     lock().push((item, attr));

@@ -335,9 +335,8 @@ fn binning_across_chunks_and_objects_keeps_input_order() {
 #[test]
 fn each_band_is_finished_with_its_own_output() {
     // Drawing into a depth image alone, the finishing callback sees every band once, with its
-    // own output and the final pixels a whole-image rasterization holds there: wherever
-    // `gd > 0`, the scratch item and attribute rows — reused from band to band, and from one
-    // rasterization to the next, without clearing — hold what this band drew.
+    // own output and the final pixels a whole-image rasterization holds there (scratch rows
+    // reused from band to band, and from one rasterization to the next, hold nothing stale).
     let cam = ScreenSpace(64, 40);
     let m = scattered_triangles(300, 3);
     let bands = 40u32.div_ceil(BAND_ROWS) as usize;
@@ -363,11 +362,7 @@ fn each_band_is_finished_with_its_own_output() {
             |band: FinishedBand<'_, Option<Fragment>>, out: &mut &mut [_]| {
                 assert_eq!(band.first_pixel % (BAND_ROWS * 64) as usize, 0);
                 for (i, o) in out.iter_mut().enumerate() {
-                    *o = if band.gd[i] > 0.0 {
-                        (band.gd[i], band.item[i], band.attributes[i])
-                    } else {
-                        (band.gd[i], ItemId::NONE, None)
-                    };
+                    *o = (band.gd[i], band.item[i], band.attributes[i]);
                 }
             },
         )
