@@ -120,21 +120,31 @@ fn impostor_reflections_come_close_to_the_traced_ones() {
 }
 
 #[test]
-fn a_reflector_inside_a_solid_object_has_no_impostor_of_it() {
-    // A mirror inside a big diffuse sphere: no SPOC can see the sphere from inside, and it is
-    // not flat, so the method says why instead of rendering something else.
+fn a_reflector_inside_an_object_sees_it_through_a_cube_of_pinholes() {
+    // A mirror sphere inside a big diffuse sphere lit from one side: no SPOC sees the big
+    // sphere from inside and it is not flat, so its impostor is the six faces of a cube map at
+    // the mirror's centre. The mirror's pixels must then agree with the traced ones, which
+    // they would not if a face were missing, misplaced, or lost rays starting behind its
+    // near plane (the reflected rays start on the mirror, around the cube's centre).
     let dir = common::scratch("impostor-inside");
     let path = dir.join("inside.toml");
     std::fs::write(
         &path,
-        "[camera]\nposition = [0.0, 0.0, 2.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_y = 40.0\nresolution = [32, 32]\n\n[[object]]\nshape = \"sphere\"\nscale = 10.0\nmaterial = { type = \"diffuse\", color = [0.5, 0.5, 0.5] }\n\n[[object]]\nshape = \"sphere\"\nscale = 0.5\nmaterial = { type = \"mirror\", tint = [0.9, 0.9, 0.9] }\n",
+        "[light]\ndirection = [0.3, 1.0, 0.2]\n\n[camera]\nposition = [0.0, 0.0, 2.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_y = 40.0\nresolution = [96, 96]\n\n[[object]]\nshape = \"sphere\"\nscale = 10.0\nmaterial = { type = \"diffuse\", color = [0.5, 0.5, 0.5] }\n\n[[object]]\nshape = \"sphere\"\nscale = 1.0\nmaterial = { type = \"mirror\", tint = [0.9, 0.9, 0.9] }\n",
     )
     .unwrap();
     let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let e = render(&s, Method::Impostor(64), &())
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("object 0") && e.contains("not flat"), "{e}");
+    let (trace, _) = render(&s, Method::Trace, &()).unwrap();
+    let (impostor, _) = render(&s, Method::Impostor(128), &()).unwrap();
+    let mirror: Vec<bool> = trace.object_id.pixels().iter().map(|&o| o == 1).collect();
+    let n = mirror.iter().filter(|&&m| m).count();
+    assert!(n > 2000, "{n} mirror pixels");
+    let mask = trompe::frame::Image::from_vec(96, 96, mirror).unwrap();
+    let on_mirror = metrics::compare(&trace.color, &impostor.color, Some(&mask)).unwrap();
+    assert!(
+        on_mirror.psnr >= 45.0 && on_mirror.flip <= 0.008,
+        "{on_mirror:?}"
+    );
     // A size no map can have is said as such.
     for side in [0, 1 << 20] {
         let e = render(&s, Method::Impostor(side), &())

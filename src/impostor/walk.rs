@@ -219,7 +219,9 @@ impl Impostor {
             return (None, stats);
         };
         let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
-        let (c, e) = (o + d * t0 as f64, o + d * t1 as f64);
+        let Some((c, e)) = clip_to_domain(camera, o + d * t0 as f64, o + d * t1 as f64) else {
+            return (None, stats);
+        };
         let (Some(pc), Some(pe)) = (camera.project(c), camera.project(e)) else {
             return (None, stats);
         };
@@ -471,5 +473,59 @@ impl Impostor {
 impl RayQuery for Impostor {
     fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         self.walk(ray, t_max).0.filter(|h| h.t > 0.0 && h.t < t_max)
+    }
+}
+
+/// The part of the segment `[c, e]` inside the camera's domain (`clip_distance ≥ 0`, affine in
+/// the point, so cut where it crosses zero), or `None` when none of it is: a ray that starts
+/// behind a pinhole impostor's near plane — a reflector inside the panorama of pinholes around
+/// it — still meets what lies in front.
+fn clip_to_domain<P: Projection>(camera: &P, c: DVec3, e: DVec3) -> Option<(DVec3, DVec3)> {
+    let (dc, de) = (camera.clip_distance(c), camera.clip_distance(e));
+    if dc >= 0.0 && de >= 0.0 {
+        return Some((c, e));
+    }
+    if !(dc >= 0.0 || de >= 0.0) {
+        return None;
+    }
+    // A hair inside the domain, so the cut end projects.
+    let s = (dc / (dc - de)).clamp(0.0, 1.0);
+    let cut = c + (e - c) * s;
+    let inward = if dc < 0.0 { e - cut } else { c - cut };
+    let cut = cut + inward * 1e-9;
+    Some(if dc < 0.0 { (cut, e) } else { (c, cut) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Pinhole;
+    use glam::Vec3;
+
+    #[test]
+    fn segments_are_cut_where_they_enter_the_cameras_domain() {
+        let cam = Pinhole::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0, 64, 64)
+            .unwrap()
+            .with_near(0.1);
+        let front = DVec3::new(0.2, 0.1, -3.0);
+        let behind = DVec3::new(-0.1, 0.0, 2.0);
+        // Wholly in front: unchanged. Wholly behind: nothing.
+        assert_eq!(
+            clip_to_domain(&cam, front, front * 2.0),
+            Some((front, front * 2.0))
+        );
+        assert_eq!(clip_to_domain(&cam, behind, behind * 2.0), None);
+        // Across the near plane, either way round: the part in front, which projects.
+        for (a, b) in [(behind, front), (front, behind)] {
+            let (c, e) = clip_to_domain(&cam, a, b).unwrap();
+            let kept = if a == front { c } else { e };
+            assert_eq!(kept, front);
+            let cut = if a == front { e } else { c };
+            assert!(cam.clip_distance(cut) >= 0.0 && cam.clip_distance(cut) < 1e-6);
+            // On the segment.
+            let along = (cut - a).cross(b - a).length();
+            assert!(along < 1e-9, "{cut} is off the segment");
+            assert!(cam.project(c).is_some() && cam.project(e).is_some());
+        }
     }
 }

@@ -2,7 +2,9 @@
 //! glass object sends out into the open is answered by impostors of the diffuse objects, built
 //! from that object's centre — a SPOC (§3) of an object it stands outside of, an orthographic
 //! depth image along the normal of a flat one it stands over (a floor; the paper's grid is a
-//! billboard) — or by the environment where it misses them. An impostor's colour is the diffuse
+//! billboard), the six pinhole depth images of a cube map of any other object around it (a
+//! room; the paper turns to the graph camera for whole environments) — or by the environment
+//! where it misses them. An impostor's colour is the diffuse
 //! shading the tracer computes at its texels, so where the impostors capture what a ray meets,
 //! the method agrees with `trace` to their sampling; it differs where they do not.
 //!
@@ -13,6 +15,7 @@
 use super::shading::{albedo, lambert};
 use super::trace::{Tracer, render_trace};
 use super::{Progress, RenderError, Timings};
+use crate::camera::Pinhole;
 use crate::frame::Frame;
 use crate::geom::{Mesh, Ray};
 use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, ViewCamera};
@@ -81,7 +84,7 @@ fn reflector_impostors(
         let mut seen = Vec::with_capacity(diffuse.len());
         for &o in &diffuse {
             let mesh = &view.meshes[o];
-            let camera = impostor_camera(mesh, eye, region, resolution).map_err(|reason| {
+            let cameras = impostor_cameras(mesh, eye, region, resolution).map_err(|reason| {
                 RenderError::Impostor {
                     object: o,
                     reflector: r,
@@ -98,25 +101,29 @@ fn reflector_impostors(
                 };
                 lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
             };
-            let impostor = builder.build(camera, mesh, o as u32, &color)?;
-            impostor.prepare_walks();
-            seen.push(impostor);
+            for camera in cameras {
+                let impostor = builder.build(camera, mesh, o as u32, &color)?;
+                impostor.prepare_walks();
+                seen.push(impostor);
+            }
         }
         out.push(seen);
     }
     Ok(out)
 }
 
-/// The camera of the impostor of `mesh` seen from `eye`, whose secondary rays come from a
+/// The cameras of the impostors of `mesh` seen from `eye`, whose secondary rays come from a
 /// region of radius `region`: a SPOC framed on the mesh when the eye is outside its bounding
 /// sphere; for a flat mesh the eye stands over, a parallel projection along its normal, which
-/// captures all of it.
-fn impostor_camera(
+/// captures all of it; for an object around the eye (a room, or an object the reflector stands
+/// in the bounding sphere of), the six 90° pinholes of a cube map at the eye, which together
+/// see everything visible from it.
+fn impostor_cameras(
     mesh: &Mesh,
     eye: Vec3,
     region: f64,
     resolution: u32,
-) -> Result<ImpostorCamera, &'static str> {
+) -> Result<Vec<ImpostorCamera>, &'static str> {
     let b = mesh.bounds();
     let (center, radius) = (b.center(), b.radius());
     let fitted = |kind, from| {
@@ -132,16 +139,36 @@ fn impostor_camera(
     };
     let err = |_| "its impostor camera is degenerate";
     if eye.distance(center) > radius * 1.001 {
-        return fitted(ViewCamera::Spoc(None), eye).map_err(err);
+        return Ok(vec![fitted(ViewCamera::Spoc(None), eye).map_err(err)?]);
     }
     let extent = b.extent();
     let thin = extent.min_position();
     if extent[thin] > FLAT * extent.max_element() {
-        return Err(
-            "the reflector stands inside the object's bounding sphere and the object is not flat",
-        );
+        return cube_cameras(eye, radius, resolution);
     }
     let mut normal = Vec3::ZERO;
     normal[thin] = if eye[thin] < center[thin] { -1.0 } else { 1.0 };
-    fitted(ViewCamera::Orthographic, center + normal * (2.0 * radius)).map_err(err)
+    Ok(vec![
+        fitted(ViewCamera::Orthographic, center + normal * (2.0 * radius)).map_err(err)?,
+    ])
+}
+
+/// The six faces of a cube map centred on `eye` (90° square pinholes along ±x, ±y, ±z), near
+/// planes a hair in front of the eye, for an object of bounding radius `radius` around it.
+fn cube_cameras(
+    eye: Vec3,
+    radius: f32,
+    resolution: u32,
+) -> Result<Vec<ImpostorCamera>, &'static str> {
+    let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    axes.iter()
+        .map(|&a| {
+            let up = if a.y != 0.0 { Vec3::Z } else { Vec3::Y };
+            let face = Pinhole::look_at(eye, eye + a, up, 90.0, resolution, resolution)
+                .map_err(|_| "its cube-map impostor camera is degenerate")?;
+            Ok(ImpostorCamera::Pinhole(
+                face.with_near(radius.max(f32::MIN_POSITIVE) as f64 * 1e-4),
+            ))
+        })
+        .collect()
 }
