@@ -319,7 +319,7 @@ fn setup_clipped<P: Projection>(
         c.inv_w = ip.inv_w;
         c.q *= ip.inv_w;
     }
-    // 3. Guard band, in image space (gd and gd·b are affine in image space).
+    // 3. Guard band, in image space (gd, 1/w and b/w are affine in image space).
     let (wf, hf) = (w as f64, h as f64);
     let bounds = [
         (DVec2::X, GUARD),       // x ≥ −G
@@ -335,6 +335,7 @@ fn setup_clipped<P: Projection>(
                 |a, b, s| Corner {
                     uv: a.uv + (b.uv - a.uv) * s,
                     gd: a.gd + (b.gd - a.gd) * s,
+                    inv_w: a.inv_w + (b.inv_w - a.inv_w) * s,
                     q: a.q + (b.q - a.q) * s,
                     ..*a
                 },

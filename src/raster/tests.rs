@@ -215,6 +215,63 @@ fn barycentrics_are_perspective_correct() {
 }
 
 #[test]
+fn barycentrics_stay_perspective_correct_through_near_and_guard_band_clipping() {
+    // A corner behind the camera: clipped at the near plane, the triangle's new corners project
+    // millions of pixels away and are clipped again to the guard band. Every corner made on the
+    // way must carry its own 1/w, or the barycentrics — hence positions, normals and texture
+    // coordinates — go wrong while the depth stays right (an impostor of a room, seen from
+    // inside, stored its floor's points metres away).
+    struct Persp;
+    impl Projection for Persp {
+        fn resolution(&self) -> (u32, u32) {
+            (32, 32)
+        }
+        fn project(&self, p: DVec3) -> Option<ImagePoint> {
+            (p.z > 0.0).then(|| ImagePoint {
+                uv: DVec2::new(p.x / p.z, p.y / p.z),
+                gd: 1.0 / p.z,
+                inv_w: 1.0 / p.z,
+            })
+        }
+        fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+            uv.extend(1.0) / gd
+        }
+        fn clip_distance(&self, p: DVec3) -> f64 {
+            p.z - 1e-3
+        }
+    }
+    let world = vec![
+        Vec3::new(2.0, 2.0, 2.0),
+        Vec3::new(90.0, 6.0, 3.0),
+        Vec3::new(5000.0, 3000.0, -1.0),
+    ];
+    let near_corner = Persp
+        .project(DVec3::new(2.0 + 4998.0 * 0.666, 2.0 + 2998.0 * 0.666, 1e-3))
+        .unwrap();
+    assert!(
+        near_corner.uv.x > 2.0 * GUARD_PX,
+        "the test must reach the guard band"
+    );
+    let m = mesh(world.clone(), vec![[0, 1, 2]]);
+    let (t, stats) = rasterize(&Persp, &[&m], &StoreFragment, None).unwrap();
+    assert!(stats.written > 100, "{stats:?}");
+    for f in t.attributes.pixels().iter().flatten() {
+        let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
+        let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
+        let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
+        assert!(
+            (interp - exact).length() < 1e-3 * exact.length(),
+            "pixel ({}, {}): {interp} vs {exact}",
+            f.x,
+            f.y
+        );
+    }
+}
+
+/// The guard band's half-width (`setup::GUARD`), in pixels, as the tests see it.
+const GUARD_PX: f64 = (1u64 << 20) as f64;
+
+#[test]
 fn triangles_crossing_the_near_plane_are_clipped_not_dropped() {
     let cam = ScreenSpace(16, 16);
     // One corner behind the camera: the visible part still covers pixels, with positive gd.
