@@ -115,17 +115,17 @@ pub fn demo(
     html.push_str("<h1>trompe — demo report</h1>\n<p>Impostor-based and image-based rendering on the CPU. Every figure below was measured when this page was written.</p>\n");
 
     html.push_str("<h2>Foundation: ground-truth renderers</h2>\n");
-    html.push_str("<p><b>raster</b> rasterizes through the pinhole camera and shades each pixel once (mirrors and glass are looked up in the panorama); <b>trace</b> is a Whitted ray tracer through the exact BVH (mirror reflection, refraction with Fresnel). Scores compare each image with the trace image. On the diffuse scene the two must agree: they share one shading model and differ only at silhouette pixels where a different triangle is visible. On the reflection scene, <b>impostor</b> is paper 1's method: primary rays as <b>trace</b>, and what the mirrors and the glass ball send out answered by 512² impostors of the diffuse objects built from each one's centre (a SPOC of the bunny, a parallel depth image of the ground), or by the panorama (<code>trompe render scenes/reflections.toml --method impostor</code>); mirrors do not see one another.</p>\n");
+    html.push_str("<p><b>raster</b> rasterizes through the pinhole camera and shades each pixel once (mirrors and glass are looked up in the panorama); <b>trace</b> is a Whitted ray tracer through the exact BVH (mirror reflection, refraction with Fresnel). Scores compare each image with the trace image. On the diffuse scene the two must agree: they share one shading model and differ only at silhouette pixels where a different triangle is visible. On the reflection scene, <b>impostor</b> is paper 1's method: primary rays as <b>trace</b>, and what the mirrors and the glass ball send out answered by 512² impostors of the diffuse objects built from each one's centre (a SPOC of the bunny, a parallel depth image of the ground), or by the panorama (<code>trompe render scenes/reflections.toml --method impostor</code>); mirrors do not see one another. In the room scene the room is around the mirror: its impostor is a cube map of six pinhole depth images taken from the mirror's centre.</p>\n");
     let mut table = String::from(
         "<table><tr><th>scene</th><th>method</th><th>time</th><th>PSNR (dB)</th><th>SSIM</th><th>FLIP</th><th>object ids equal</th></tr>\n",
     );
-    for name in ["diffuse", "reflections"] {
+    for name in ["diffuse", "reflections", "room"] {
         let path = inputs.scenes.join(format!("{name}.toml"));
         let scene = Scene::load(&path).map_err(Box::new)?;
         let h = scene.camera.height;
         let mut frames: Vec<(Method, Frame, Duration)> = Vec::new();
         let mut methods = vec![Method::Trace, Method::Raster];
-        if name == "reflections" {
+        if name != "diffuse" {
             methods.push(Method::Impostor(crate::render::DEFAULT_IMPOSTOR_RESOLUTION));
         }
         for method in methods {

@@ -178,6 +178,7 @@ fn demo_writes_a_report() {
     let html = std::fs::read_to_string(Path::new(&d).join("index.html")).unwrap();
     assert!(html.contains("diffuse-raster.png") && html.contains("FLIP"));
     assert!(d.join("reflections-trace.png").is_file());
+    assert!(d.join("room-impostor.png").is_file());
 }
 
 #[test]

@@ -120,6 +120,26 @@ fn impostor_reflections_come_close_to_the_traced_ones() {
 }
 
 #[test]
+fn a_mirror_in_a_room_sees_the_room_and_the_bunny() {
+    // The shipped room scene: the room is around the mirror ball (a cube map of six pinhole
+    // impostors, whose big wall triangles are clipped at the near plane and the guard band),
+    // the bunny beside it (a SPOC). On the mirror's pixels the method must agree with `trace`.
+    let s = scene("room.toml");
+    let (trace, _) = render(&s, Method::Trace, &()).unwrap();
+    let (impostor, _) = render(&s, Method::Impostor(512), &()).unwrap();
+    let (w, h) = trace.color.size();
+    let mirror: Vec<bool> = trace.object_id.pixels().iter().map(|&o| o == 1).collect();
+    let n = mirror.iter().filter(|&&m| m).count();
+    assert!(n > 5000, "{n} mirror pixels");
+    let mask = trompe::frame::Image::from_vec(w, h, mirror).unwrap();
+    let on_mirror = metrics::compare(&trace.color, &impostor.color, Some(&mask)).unwrap();
+    assert!(
+        on_mirror.psnr >= 34.0 && on_mirror.flip <= 0.01,
+        "{on_mirror:?}"
+    );
+}
+
+#[test]
 fn a_reflector_inside_an_object_sees_it_through_a_cube_of_pinholes() {
     // A mirror sphere inside a big diffuse sphere lit from one side: no SPOC sees the big
     // sphere from inside and it is not flat, so its impostor is the six faces of a cube map at
