@@ -108,9 +108,10 @@ fn impostor_reflections_come_close_to_the_traced_ones() {
     assert!(diffuse_pixels > 10_000, "{diffuse_pixels}");
     let near = metrics::compare(&trace.color, &impostor.color, None).unwrap();
     let far = metrics::compare(&trace.color, &raster.color, None).unwrap();
-    // Not the traced image either: mirrors no longer see one another.
+    // Not the traced image: the diffuse objects the mirrors and the glass see are impostors
+    // (the mirrors and the glass see one another exactly; without that, 37.4 dB and 0.0019).
     assert!(
-        near.psnr.is_finite() && near.psnr >= 35.0 && near.flip <= 0.004,
+        near.psnr.is_finite() && near.psnr >= 45.0 && near.flip <= 0.001,
         "{near:?}"
     );
     assert!(

@@ -8,9 +8,12 @@
 //! shading the tracer computes at its texels, so where the impostors capture what a ray meets,
 //! the method agrees with `trace` to their sampling; it differs where they do not.
 //!
+//! Mirrors and glass objects see one another exactly, through a BVH of them alone, and the
+//! tracer shades what they see there (beyond the paper, whose reflectors see only impostors).
+//!
 //! Invariants: pixels whose primary ray meets a diffuse object are the `trace` method's, exactly;
-//! a mirror or glass object sees only diffuse objects and the environment (no inter-reflection
-//! between mirrors, as in the paper); the result does not depend on the thread count.
+//! a diffuse object is seen in a mirror or through glass only as an impostor; the result does
+//! not depend on the thread count.
 
 use super::shading::{albedo, lambert};
 use super::trace::{Tracer, render_trace};
@@ -41,15 +44,31 @@ pub fn render_impostor(
     // A size the maps can have, said as such rather than as a degenerate camera.
     crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
     let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+    // The mirrors and glass alone, exact: what they send out meets one another here.
+    let specular: Vec<u32> = (0..view.surfaces.len() as u32)
+        .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
+        .collect();
+    let specular_bvh = timings.time("specular BVH", || {
+        Bvh::build(
+            specular
+                .iter()
+                .map(|&o| view.meshes[o as usize].clone())
+                .collect(),
+        )
+    });
     let impostors = timings.time("build impostors", || {
         reflector_impostors(view, lighting, resolution)
     })?;
     let answer = |from: u32, ray: &Ray| -> Option<Hit> {
-        impostors
+        let seen = impostors
             .get(from as usize)?
             .iter()
-            .filter_map(|imp| imp.closest_hit(ray, f32::INFINITY))
-            .min_by(|a, b| a.t.total_cmp(&b.t))
+            .filter_map(|imp| imp.closest_hit(ray, f32::INFINITY));
+        let exact = specular_bvh.closest_hit(ray, f32::INFINITY).map(|h| Hit {
+            object: specular[h.object as usize],
+            ..h
+        });
+        seen.chain(exact).min_by(|a, b| a.t.total_cmp(&b.t))
     };
     let tracer = Tracer {
         view,

@@ -23,7 +23,8 @@ pub struct Tracer<'a, Q: RayQuery> {
     pub settings: &'a RenderSettings,
     /// When set, answers instead of `scene` every ray a mirror or glass object sends out into
     /// the open — given that object's id — with a hit that carries its radiance (impostors of
-    /// what the object reflects, paper 1 §6); a miss takes the environment's. Rays that go
+    /// what the object reflects, paper 1 §6), or a hit without radiance on an object the
+    /// tracer shades itself (one more bounce); a miss takes the environment's. Rays that go
     /// into a glass object still follow `scene`.
     pub secondary: Option<&'a SecondaryRays<'a>>,
 }
@@ -52,12 +53,19 @@ impl<Q: RayQuery> Tracer<'_, Q> {
         let env = &self.lighting.environment;
         let last = depth + 1 >= self.settings.max_depth;
         // `outward`: the ray leaves the object into the open (not into the glass).
-        let follow = |origin: Vec3, dir: Vec3, outward: bool| match self.secondary {
-            Some(answer) if outward => answer(hit.object, &Ray::new(origin, dir))
-                .and_then(|h| h.radiance)
-                .unwrap_or_else(|| env.radiance(dir)),
-            _ if last => env.radiance(dir),
-            _ => self.radiance(&Ray::new(origin, dir), depth + 1),
+        let follow = |origin: Vec3, dir: Vec3, outward: bool| {
+            let ray = Ray::new(origin, dir);
+            match self.secondary {
+                Some(answer) if outward => match answer(hit.object, &ray) {
+                    Some(Hit {
+                        radiance: Some(l), ..
+                    }) => l,
+                    Some(h) if !last => self.shade(&ray, &h, depth + 1),
+                    _ => env.radiance(dir),
+                },
+                _ if last => env.radiance(dir),
+                _ => self.radiance(&ray, depth + 1),
+            }
         };
         match surface {
             Surface::Diffuse(_) => lambert(
