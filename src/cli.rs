@@ -242,6 +242,21 @@ fn bar(label: &str, total: u64) -> Box<dyn Progress> {
     Box::new(Bar(pb))
 }
 
+/// Runs `work` under a spinner labelled `label` (for steps that report no progress of their
+/// own, such as writing a large file); the spinner is cleared when it ends.
+fn with_spinner<T>(label: &str, work: impl FnOnce() -> T) -> T {
+    let pb = ProgressBar::new_spinner();
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    pb.set_message(label.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    let out = work();
+    pb.finish_and_clear();
+    out
+}
+
 /// Refuses an output path that is one of the inputs: nothing a user gave is overwritten.
 fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
     let canon = |p: &Path| std::fs::canonicalize(p).ok();
@@ -610,11 +625,18 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             };
             let imp = timings
                 .time("build impostor", || {
-                    trompe::impostor::build(cam, &mesh, 0, &trompe::impostor::albedo_of(&mesh))
+                    with_spinner("building the impostor", || {
+                        let color = trompe::impostor::albedo_of(&mesh);
+                        trompe::impostor::build(cam, &mesh, 0, &color)
+                    })
                 })
                 .context("building the impostor")?;
             timings
-                .time("save", || trompe::impostor::file::save(&imp, &output))
+                .time("save", || {
+                    with_spinner("saving the impostor", || {
+                        trompe::impostor::file::save(&imp, &output)
+                    })
+                })
                 .context("saving the impostor")?;
             io::write_png(&preview, &imp.color)?;
             println!(

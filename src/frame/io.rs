@@ -89,12 +89,32 @@ pub fn write_exr_channels(
     size: (u32, u32),
     channels: Vec<(&str, Vec<f32>)>,
 ) -> Result<(), FrameError> {
+    write_exr_channels_encoded(path, size, channels, exr::prelude::Encoding::FAST_LOSSLESS)
+}
+
+/// [`write_exr_channels`] with ZIP compression (lossless, in blocks of 16 rows): slower to
+/// write, several times smaller for images that are mostly empty or smooth, such as impostors.
+pub fn write_exr_channels_small(
+    path: &Path,
+    size: (u32, u32),
+    channels: Vec<(&str, Vec<f32>)>,
+) -> Result<(), FrameError> {
+    write_exr_channels_encoded(path, size, channels, exr::prelude::Encoding::SMALL_LOSSLESS)
+}
+
+fn write_exr_channels_encoded(
+    path: &Path,
+    size: (u32, u32),
+    channels: Vec<(&str, Vec<f32>)>,
+    encoding: exr::prelude::Encoding,
+) -> Result<(), FrameError> {
     let list = channels
         .into_iter()
         .map(|(name, data)| AnyChannel::new(name, FlatSamples::F32(data)))
         .collect();
-    let image = exr::prelude::Image::from_channels(
+    let image = exr::prelude::Image::from_encoded_channels(
         (size.0 as usize, size.1 as usize),
+        encoding,
         AnyChannels::sort(list),
     );
     image.write().to_file(path).map_err(|e| codec(path, e))

@@ -15,16 +15,17 @@
 //! `{ "parent": i, "apex": [..], "face": [[..], ..] }` — its entry face; the matrices are
 //! recomputed on load, algorithms.md §4.4).
 //!
-//! `NAME.exr` channels (32-bit float): `R G B A` colour, `gd`, `N.X N.Y N.Z` shading normal,
-//! `Ng.X Ng.Y Ng.Z` face normal (toward the camera), `P.X P.Y P.Z` world position, `id` = object
-//! id + 1 (0 where empty; ids below 2^24 are exact).
+//! `NAME.exr` channels (32-bit float, lossless ZIP compression in blocks of 16 rows): `R G B A`
+//! colour, `gd`, `N.X N.Y N.Z` shading normal, `Ng.X Ng.Y Ng.Z` face normal (toward the
+//! camera), `P.X P.Y P.Z` world position, `id` = object id + 1 (0 where empty; ids below 2^24
+//! are exact). Files written with another lossless encoding load the same.
 //!
 //! Loading validates everything: sizes against the camera, finite values, a sidecar of at most
 //! 1 MiB; a corrupted file is an error naming the file and what is wrong.
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{GraphCamera, Orthographic, Pinhole, Spoc};
-use crate::frame::io::{read_exr_channels, write_exr_channels};
+use crate::frame::io::{read_exr_channels, write_exr_channels_small};
 use crate::frame::{FrameError, Image};
 use crate::geom::Aabb;
 use crate::trace::NO_OBJECT;
@@ -332,7 +333,7 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
                 .collect(),
         ),
     ];
-    write_exr_channels(&exr_path, (w, h), channels)?;
+    write_exr_channels_small(&exr_path, (w, h), channels)?;
     let sidecar = Sidecar {
         format: FORMAT.into(),
         version: VERSION,
