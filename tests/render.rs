@@ -120,20 +120,36 @@ fn impostor_reflections_come_close_to_the_traced_ones() {
     );
 }
 
+/// Renders `scene` by `trace` and by the impostor method with `resolution²` impostors, and
+/// scores the impostor image on the pixels where `trace` sees `object`: how many, and how well.
+fn impostor_against_trace_on(
+    scene: &Scene,
+    resolution: u32,
+    object: u32,
+) -> (usize, metrics::Scores) {
+    let (trace, _) = render(scene, Method::Trace, &()).unwrap();
+    let (impostor, _) = render(scene, Method::Impostor(resolution), &()).unwrap();
+    let (w, h) = trace.color.size();
+    let on: Vec<bool> = trace
+        .object_id
+        .pixels()
+        .iter()
+        .map(|&o| o == object)
+        .collect();
+    let pixels = on.iter().filter(|&&m| m).count();
+    let mask = trompe::frame::Image::from_vec(w, h, on).unwrap();
+    let scores = metrics::compare(&trace.color, &impostor.color, Some(&mask)).unwrap();
+    (pixels, scores)
+}
+
 #[test]
 fn a_mirror_in_a_room_sees_the_room_and_the_bunny() {
     // The shipped room scene: the room is around the mirror ball (a cube map of six pinhole
     // impostors, whose big wall triangles are clipped at the near plane and the guard band),
     // the bunny beside it (a SPOC). On the mirror's pixels the method must agree with `trace`.
     let s = scene("room.toml");
-    let (trace, _) = render(&s, Method::Trace, &()).unwrap();
-    let (impostor, _) = render(&s, Method::Impostor(512), &()).unwrap();
-    let (w, h) = trace.color.size();
-    let mirror: Vec<bool> = trace.object_id.pixels().iter().map(|&o| o == 1).collect();
-    let n = mirror.iter().filter(|&&m| m).count();
-    assert!(n > 5000, "{n} mirror pixels");
-    let mask = trompe::frame::Image::from_vec(w, h, mirror).unwrap();
-    let on_mirror = metrics::compare(&trace.color, &impostor.color, Some(&mask)).unwrap();
+    let (pixels, on_mirror) = impostor_against_trace_on(&s, 512, 1);
+    assert!(pixels > 5000, "{pixels} mirror pixels");
     assert!(
         on_mirror.psnr >= 34.0 && on_mirror.flip <= 0.01,
         "{on_mirror:?}"
@@ -155,13 +171,8 @@ fn a_reflector_inside_an_object_sees_it_through_a_cube_of_pinholes() {
     )
     .unwrap();
     let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let (trace, _) = render(&s, Method::Trace, &()).unwrap();
-    let (impostor, _) = render(&s, Method::Impostor(128), &()).unwrap();
-    let mirror: Vec<bool> = trace.object_id.pixels().iter().map(|&o| o == 1).collect();
-    let n = mirror.iter().filter(|&&m| m).count();
-    assert!(n > 2000, "{n} mirror pixels");
-    let mask = trompe::frame::Image::from_vec(96, 96, mirror).unwrap();
-    let on_mirror = metrics::compare(&trace.color, &impostor.color, Some(&mask)).unwrap();
+    let (pixels, on_mirror) = impostor_against_trace_on(&s, 128, 1);
+    assert!(pixels > 2000, "{pixels} mirror pixels");
     assert!(
         on_mirror.psnr >= 45.0 && on_mirror.flip <= 0.008,
         "{on_mirror:?}"

@@ -14,7 +14,7 @@ pub(super) const SUBPIXEL_BITS: u32 = 8;
 pub(super) const ONE: i64 = 1 << SUBPIXEL_BITS;
 /// Half the guard band, in pixels: vertices are clipped to `[-GUARD, size + GUARD]` so the
 /// integer edge functions (products of two coordinate differences) stay below 2^62.
-const GUARD: f64 = (1u64 << 20) as f64;
+pub(super) const GUARD: f64 = (1u64 << 20) as f64;
 
 /// An affine function of image position: `f(x, y) = f0 + dfdx·(x − x0) + dfdy·(y − y0)`.
 #[derive(Clone, Copy, Debug)]

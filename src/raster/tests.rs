@@ -165,6 +165,29 @@ fn depth_test_keeps_the_nearer_triangle_and_ties_keep_the_first() {
     assert_eq!(t.gd.get(15, 15), 0.0);
 }
 
+/// A 32 × 32 perspective camera at the origin looking along +z, with unit focal length and no
+/// image offset (a world point (x, y, z) images at (x/z, y/z)), its near plane at z = 10⁻³.
+struct Persp;
+
+impl Projection for Persp {
+    fn resolution(&self) -> (u32, u32) {
+        (32, 32)
+    }
+    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+        (p.z > 0.0).then(|| ImagePoint {
+            uv: DVec2::new(p.x / p.z, p.y / p.z),
+            gd: 1.0 / p.z,
+            inv_w: 1.0 / p.z,
+        })
+    }
+    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+        uv.extend(1.0) / gd
+    }
+    fn clip_distance(&self, p: DVec3) -> f64 {
+        p.z - 1e-3
+    }
+}
+
 #[test]
 fn barycentrics_are_perspective_correct() {
     // A tilted triangle: interpolating world positions with the fragment barycentrics must land
@@ -180,38 +203,31 @@ fn barycentrics_are_perspective_correct() {
         .iter()
         .map(|v| Vec3::new(v.x * v.z, v.y * v.z, v.z))
         .collect();
-    struct Persp;
-    impl Projection for Persp {
-        fn resolution(&self) -> (u32, u32) {
-            (32, 32)
-        }
-        fn project(&self, p: DVec3) -> Option<ImagePoint> {
-            (p.z > 0.0).then(|| ImagePoint {
-                uv: DVec2::new(p.x / p.z, p.y / p.z),
-                gd: 1.0 / p.z,
-                inv_w: 1.0 / p.z,
-            })
-        }
-        fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
-            uv.extend(1.0) / gd
-        }
-        fn clip_distance(&self, p: DVec3) -> f64 {
-            p.z - 1e-3
-        }
-    }
     let m = mesh(world.clone(), vec![[0, 1, 2]]);
     let (t, stats) = rasterize(&Persp, &[&m], &StoreFragment, None).unwrap();
     assert!(stats.written > 100);
+    let error = largest_position_error(&world, &t.attributes);
+    assert!(error < 1e-4, "{error}");
     for f in t.attributes.pixels().iter().flatten() {
-        let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
-        let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
-        let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
-        assert!(
-            (interp - exact).length() < 1e-4 * exact.length(),
-            "{interp} vs {exact}"
-        );
         assert!((f.bary.element_sum() - 1.0).abs() < 1e-5);
     }
+}
+
+/// The largest distance, relative to the point's distance from the camera, between a stored
+/// fragment's barycentric blend of `world` (the drawn triangle's corners) and the point its
+/// pixel's ray meets at its `gd` through [`Persp`].
+fn largest_position_error(world: &[Vec3], fragments: &Image<Option<Fragment>>) -> f32 {
+    fragments
+        .pixels()
+        .iter()
+        .flatten()
+        .map(|f| {
+            let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
+            let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
+            let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
+            (interp - exact).length() / exact.length()
+        })
+        .fold(0.0, f32::max)
 }
 
 #[test]
@@ -221,25 +237,6 @@ fn barycentrics_stay_perspective_correct_through_near_and_guard_band_clipping() 
     // way must carry its own 1/w, or the barycentrics — hence positions, normals and texture
     // coordinates — go wrong while the depth stays right (an impostor of a room, seen from
     // inside, stored its floor's points metres away).
-    struct Persp;
-    impl Projection for Persp {
-        fn resolution(&self) -> (u32, u32) {
-            (32, 32)
-        }
-        fn project(&self, p: DVec3) -> Option<ImagePoint> {
-            (p.z > 0.0).then(|| ImagePoint {
-                uv: DVec2::new(p.x / p.z, p.y / p.z),
-                gd: 1.0 / p.z,
-                inv_w: 1.0 / p.z,
-            })
-        }
-        fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
-            uv.extend(1.0) / gd
-        }
-        fn clip_distance(&self, p: DVec3) -> f64 {
-            p.z - 1e-3
-        }
-    }
     let world = vec![
         Vec3::new(2.0, 2.0, 2.0),
         Vec3::new(90.0, 6.0, 3.0),
@@ -249,27 +246,15 @@ fn barycentrics_stay_perspective_correct_through_near_and_guard_band_clipping() 
         .project(DVec3::new(2.0 + 4998.0 * 0.666, 2.0 + 2998.0 * 0.666, 1e-3))
         .unwrap();
     assert!(
-        near_corner.uv.x > 2.0 * GUARD_PX,
+        near_corner.uv.x > 2.0 * setup::GUARD,
         "the test must reach the guard band"
     );
     let m = mesh(world.clone(), vec![[0, 1, 2]]);
     let (t, stats) = rasterize(&Persp, &[&m], &StoreFragment, None).unwrap();
     assert!(stats.written > 100, "{stats:?}");
-    for f in t.attributes.pixels().iter().flatten() {
-        let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
-        let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
-        let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
-        assert!(
-            (interp - exact).length() < 1e-3 * exact.length(),
-            "pixel ({}, {}): {interp} vs {exact}",
-            f.x,
-            f.y
-        );
-    }
+    let error = largest_position_error(&world, &t.attributes);
+    assert!(error < 1e-3, "{error}");
 }
-
-/// The guard band's half-width (`setup::GUARD`), in pixels, as the tests see it.
-const GUARD_PX: f64 = (1u64 << 20) as f64;
 
 #[test]
 fn triangles_crossing_the_near_plane_are_clipped_not_dropped() {
