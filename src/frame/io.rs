@@ -93,7 +93,7 @@ pub fn write_exr_channels(
 }
 
 /// [`write_exr_channels`] with ZIP compression (lossless, in blocks of 16 rows): slower to
-/// write, several times smaller for images that are mostly empty or smooth, such as impostors.
+/// write, smaller for images that are mostly empty or smooth (an impostor: about half the size).
 pub fn write_exr_channels_small(
     path: &Path,
     size: (u32, u32),

@@ -4,9 +4,9 @@
 //! depth image along the normal of a flat one it stands over (a floor; the paper's grid is a
 //! billboard), the six pinhole depth images of a cube map of any other object around it (a
 //! room; the paper turns to the graph camera for whole environments) — or by the environment
-//! where it misses them. An impostor's colour is the diffuse
-//! shading the tracer computes at its texels, so where the impostors capture what a ray meets,
-//! the method agrees with `trace` to their sampling; it differs where they do not.
+//! where it misses them. An impostor's colour is the diffuse shading the tracer computes at its
+//! texels, so where the impostors capture what a ray meets, the method agrees with `trace` to
+//! their sampling; it differs where they do not.
 //!
 //! Mirrors and glass objects see one another exactly, through a BVH of them alone, and the
 //! tracer shades what they see there (beyond the paper, whose reflectors see only impostors).
