@@ -394,3 +394,78 @@ fn walks_from_many_threads_on_a_fresh_impostor_agree_with_one_thread() {
         );
     }
 }
+
+#[test]
+fn a_cube_map_of_a_room_answers_rays_that_meet_it_next_to_its_edges() {
+    // A room seen from inside by six 90° pinholes. Rays aimed within a texel of the room's
+    // twelve edges meet one wall where the texel may store the other: the crossing that stands
+    // for the hit then lies just outside the room's box, and an impostor whose box was cut
+    // tight there missed it (116 of 200 000 random rays from a mirror in `scenes/room.toml`).
+    use glam::{Mat4, Vec3};
+    use trompe::camera::Pinhole;
+    use trompe::geom::Ray;
+    use trompe::trace::RayQuery;
+    let (lo, hi) = (Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 2.4, 2.0));
+    let room = std::sync::Arc::new(
+        trompe::geom::cube()
+            .transformed(&(Mat4::from_translation((lo + hi) * 0.5) * Mat4::from_scale(hi - lo))),
+    );
+    let eye = Vec3::new(-0.35, 0.3, -0.2);
+    let size = 256;
+    let faces: Vec<_> = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z]
+        .iter()
+        .map(|&a| {
+            let up = if a.y != 0.0 { Vec3::Z } else { Vec3::Y };
+            let face = Pinhole::look_at(eye, eye + a, up, 90.0, size, size)
+                .unwrap()
+                .with_near(1e-4);
+            build(ImpostorCamera::Pinhole(face), &room, 0, &albedo_of(&room)).unwrap()
+        })
+        .collect();
+    let bvh = Bvh::build(vec![room.clone()]);
+    // Footprint of a texel at the room's farthest corner: 2·distance/size.
+    let footprint = 2.0 * (hi - eye).length().max((lo - eye).length()) / size as f32;
+    let mut state = 0x9e37_79b9_u32;
+    let mut random = move || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32
+    };
+    let (mut rays, mut missed, mut worst) = (0, 0, 0.0f32);
+    for edge in 0..12 {
+        // Edge `edge`: along axis `edge / 4`, at the other two axes' low or high ends.
+        let along = edge / 4;
+        let (i, j) = ((along + 1) % 3, (along + 2) % 3);
+        for _ in 0..400 {
+            let mut target = lo;
+            target[along] = lo[along] + (hi[along] - lo[along]) * (0.05 + 0.9 * random());
+            target[i] = if edge & 1 == 0 { lo[i] } else { hi[i] };
+            target[j] = if edge & 2 == 0 { lo[j] } else { hi[j] };
+            // Within a texel of the edge, on one wall or the other.
+            let k = if random() < 0.5 { i } else { j };
+            let inward = if target[k] == lo[k] { 1.0 } else { -1.0 };
+            target[k] += inward * footprint * random();
+            let from = eye + (Vec3::new(random(), random(), random()) - 0.5) * 0.3;
+            let ray = Ray::new(from, (target - from).normalize());
+            let Some(exact) = bvh.closest_hit(&ray, f32::INFINITY) else {
+                continue;
+            };
+            rays += 1;
+            let got = faces
+                .iter()
+                .filter_map(|f| f.closest_hit(&ray, f32::INFINITY))
+                .min_by(|a, b| a.t.total_cmp(&b.t));
+            match got {
+                Some(hit) => worst = worst.max((hit.position - exact.position).length()),
+                None => missed += 1,
+            }
+        }
+    }
+    assert!(rays > 4000, "{rays}");
+    assert_eq!(missed, 0, "{missed} of {rays} rays missed the room");
+    assert!(
+        worst <= 3.0 * footprint,
+        "worst position error {worst} > 3 footprints ({footprint})"
+    );
+}

@@ -261,7 +261,8 @@ pub struct Impostor {
     pub position: Image<Vec3>,
     /// Object id ([`crate::trace::NO_OBJECT`] where empty).
     pub object: Image<u32>,
-    /// World box of the replaced geometry: rays are clipped to it.
+    /// World box of the replaced geometry, grown by the few texel footprints a walk may place
+    /// a hit away from the surface a texel stores (`build.rs`): rays are clipped to it.
     pub bounds: Aabb,
     /// What the walks derive from the maps, built on first use: the max pyramid of the
     /// texels' front bounds (the largest `gd` of a point behind a texel's plane, 0 where empty;

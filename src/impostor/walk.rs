@@ -25,6 +25,10 @@ const THICKNESS_FOOTPRINTS: f64 = 2.0;
 /// footprint (at most 3.3×): enough for corridor walls seen from the corridor's end, small
 /// enough not to bridge silhouettes (measured on the maze and the teapot).
 const MIN_COS: f64 = 0.3;
+/// The farthest, in footprints, a walk ever places a hit from the stored point of its texel (the
+/// thickness, stretched by the largest slant): how far the stored surface may reach past the
+/// replaced geometry, so the margin an impostor's box keeps around the geometry's (`build.rs`).
+pub(super) const REACH_FOOTPRINTS: f64 = THICKNESS_FOOTPRINTS / MIN_COS;
 /// Samples per pixel of image path in the graph camera's algorithm 1.
 const GRAPH_UNIFORM_DENSITY: f64 = 4.0;
 /// The hierarchical walk tries to skip only while more samples than this remain: over a short
