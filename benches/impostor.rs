@@ -4,7 +4,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use std::path::PathBuf;
-use trompe::bench::{raster_once, raster_view, render_raster_once};
+use trompe::bench::{framed_pinhole, raster_once, raster_view, render_raster_once};
 use trompe::camera::Spoc;
 use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup};
 use trompe::impostor::{ImpostorCamera, albedo_of, build};
@@ -64,6 +64,14 @@ fn impostor(c: &mut Criterion) {
     group.bench_function("peer: plain rasterization (depth + ids)", |bch| {
         bch.iter(|| raster_once(spoc.pinhole(), &bunny))
     });
+    // The SPOC's reference pinhole is wider by (1 + k)·1.05 than one framing the bunny's
+    // bounding sphere, as a pinhole impostor's camera does: the bunny is smaller there.
+    if let Some(framed) = framed_pinhole(eye, b.center(), b.radius(), 512) {
+        group.bench_function(
+            "peer: plain rasterization through a pinhole framing the sphere",
+            |bch| bch.iter(|| raster_once(&framed, &bunny)),
+        );
+    }
     let render_peer = raster_view(spoc.pinhole(), &bunny);
     group.bench_function(
         "peer: raster render method (colour, distance, normals, ids)",

@@ -399,8 +399,9 @@ fn walks_from_many_threads_on_a_fresh_impostor_agree_with_one_thread() {
 fn a_cube_map_of_a_room_answers_rays_that_meet_it_next_to_its_edges() {
     // A room seen from inside by six 90° pinholes. Rays aimed within a texel of the room's
     // twelve edges meet one wall where the texel may store the other: the crossing that stands
-    // for the hit then lies just outside the room's box, and an impostor whose box was cut
-    // tight there missed it (116 of 200 000 random rays from a mirror in `scenes/room.toml`).
+    // for the hit then lies just outside the room's box, and a walk that stopped at the box
+    // missed it (348 of these rays; 116 of 200 000 random rays from the mirror of
+    // `scenes/room.toml`).
     use glam::{Mat4, Vec3};
     use trompe::camera::Pinhole;
     use trompe::geom::Ray;

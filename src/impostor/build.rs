@@ -2,7 +2,6 @@
 //! camera, keeping the largest `gd`; through a curved camera, triangles the rasterizer reports
 //! as curved beyond half a pixel are tessellated adaptively and the mesh drawn again.
 
-use super::walk::REACH_FOOTPRINTS;
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
 use crate::frame::{FrameError, Image};
@@ -351,30 +350,11 @@ fn resolve<F, V>(
     finish_resolve(impostor, mesh);
 }
 
-/// Sets the bounds of a freshly resolved impostor and drops what was derived from its old maps.
-/// The bounds are the mesh's box grown by [`REACH_FOOTPRINTS`] texel footprints, the farthest a
-/// walk places a hit from its texel's stored point: where the mesh's surface is its box (the
-/// walls of a room), a ray meeting one wall within a texel of an edge may cross the plane of the
-/// texel there — the other wall's — just outside the box, and a box cut tight there lost that
-/// hit (348 of 4 800 rays aimed next to a room's edges; 17 with a margin of 2 footprints).
+/// Sets the bounds of a freshly resolved impostor (the mesh's box, padded) and drops what was
+/// derived from its old maps.
 fn finish_resolve(impostor: &mut Impostor, mesh: &Mesh) {
     let b = mesh.bounds();
-    // Footprints grow with depth: the largest is at a corner of the box (or the camera does
-    // not see that corner, and its texels lie nearer).
-    let largest_footprint = (0..8)
-        .map(|i| {
-            Vec3::select(
-                glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0),
-                b.max,
-                b.min,
-            )
-        })
-        .filter_map(|corner| impostor.camera.project(corner.as_dvec3()))
-        .map(|q| impostor.footprint(q.uv, q.gd))
-        .filter(|f| f.is_finite())
-        .fold(0.0f64, f64::max);
-    let margin = REACH_FOOTPRINTS * largest_footprint;
-    let pad = (b.extent().max_element() * 1e-4).max(margin as f32);
+    let pad = b.extent().max_element() * 1e-4;
     impostor.bounds = Aabb {
         min: b.min - Vec3::splat(pad),
         max: b.max + Vec3::splat(pad),

@@ -261,8 +261,7 @@ pub struct Impostor {
     pub position: Image<Vec3>,
     /// Object id ([`crate::trace::NO_OBJECT`] where empty).
     pub object: Image<u32>,
-    /// World box of the replaced geometry, grown by the few texel footprints a walk may place
-    /// a hit away from the surface a texel stores (`build.rs`): rays are clipped to it.
+    /// World box of the replaced geometry: rays are clipped to it.
     pub bounds: Aabb,
     /// What the walks derive from the maps, built on first use: the max pyramid of the
     /// texels' front bounds (the largest `gd` of a point behind a texel's plane, 0 where empty;
@@ -271,11 +270,12 @@ pub struct Impostor {
     walk_index: std::sync::OnceLock<WalkIndex>,
 }
 
-/// See [`Impostor::pyramid`] and [`Impostor::texel_planes`].
+/// See [`Impostor::pyramid`], [`Impostor::texel_planes`] and [`Impostor::exit_margin`].
 #[derive(Clone, Debug)]
 struct WalkIndex {
     pyramid: MaxPyramid,
     planes: Image<TexelPlane>,
+    exit_margin: f32,
 }
 
 impl Impostor {
@@ -335,8 +335,19 @@ impl Impostor {
         let mut pyramid = MaxPyramid::default();
         pyramid.rebuild_with(w, h, |level0| front::front_bounds_into(self, level0));
         let planes = planes::texel_planes(self, pyramid.level(0).pixels());
-        let _ = self.walk_index.set(WalkIndex { pyramid, planes });
+        let exit_margin = walk::exit_margin(self);
+        let _ = self.walk_index.set(WalkIndex {
+            pyramid,
+            planes,
+            exit_margin,
+        });
         self.walk_index.get().expect("the cell was just set")
+    }
+
+    /// How far past [`Impostor::bounds`] a walk goes on before it gives up on a ray (see
+    /// `walk::exit_margin`), derived with the pyramid.
+    pub fn exit_margin(&self) -> f32 {
+        self.walk_index().exit_margin
     }
 
     /// Drops what the walks derived from the maps after they were edited; the next walk
