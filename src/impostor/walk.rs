@@ -1,5 +1,6 @@
 //! Ray–impostor intersection (paper 1 §3.2; algorithms.md §2.3): clip the ray to the bounding
-//! box, cut the clipped segment into sub-segments of about one pixel of image path (interpolated
+//! box (its exit grown by the farthest a hit is placed from a stored point, `exit_margin`: the
+//! surface a texel stores may reach that far past the geometry's box), cut the clipped segment into sub-segments of about one pixel of image path (interpolated
 //! in 3-D, then projected, so the path may curve; twice as dense for the SPOC, §3.4), and stop at
 //! the first sub-segment where the ray passes from in front of the stored surface to behind it.
 //!
