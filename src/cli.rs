@@ -510,7 +510,13 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 "          {:.3} % of the rays that either method says hit",
                 r.hit_agreement() * 100.0
             );
-            println!("missed    {}   spurious {}", r.missed, r.spurious);
+            println!(
+                "missed    {} ({} on surface the impostor does not hold, {} by the walk)   spurious {}",
+                r.missed,
+                r.missed_unheld,
+                r.missed - r.missed_unheld,
+                r.spurious
+            );
             println!(
                 "position  mean error {:.3e} world units = {:.3} texel footprints (median {:.2e})",
                 r.mean_position_error, r.mean_error_footprints, r.median_error_footprints

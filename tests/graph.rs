@@ -230,6 +230,8 @@ fn the_maze_impostor_agrees_with_the_bvh_on_reflected_rays() {
     let r = check(&imp, &exact, &rays);
     assert!(r.exact_hits > rays.len() / 2, "{} hits", r.exact_hits);
     assert!(r.agreement() >= 0.99, "algorithm 2: {:.4}", r.agreement());
+    // The exact walk loses no hit the image holds: what it misses, the camera did not capture.
+    assert_eq!(r.missed, r.missed_unheld, "algorithm 2: {r:?}");
     // Algorithm 1 samples the bent image path uniformly in 3-D.
     let r1 = check_with(&imp, &exact, &rays, WalkMode::Linear);
     assert!(r1.agreement() >= 0.99, "algorithm 1: {:.4}", r1.agreement());

@@ -29,6 +29,10 @@ pub struct FidelityReport {
     pub agreeing: usize,
     /// Rays the BVH hits that the impostor misses.
     pub missed: usize,
+    /// Of those, the rays whose exact hit the impostor does not hold ([`holds`] is false: its
+    /// texel stores another surface, or none, or the point is outside the image) — a limit of
+    /// the camera; the others are misses of the walk.
+    pub missed_unheld: usize,
     /// Rays the impostor hits that the BVH misses.
     pub spurious: usize,
     /// Mean distance between impostor and exact hit points, over rays both hit (world units).
@@ -86,6 +90,7 @@ where
         err: f64,
         err_fp: f64,
         visits: u64,
+        unheld: bool,
     }
     impostor.prepare_walks();
     let per_ray: Vec<One> = rays
@@ -111,7 +116,8 @@ where
                     one.err_fp = err / fp;
                     one.agree = err <= AGREEMENT_FOOTPRINTS * fp;
                 }
-                _ => {}
+                (Some(e), None) => one.unheld = !holds(impostor, e.position).0,
+                (None, Some(_)) => {}
             }
             one
         })
@@ -125,6 +131,7 @@ where
         impostor_hits: per_ray.iter().filter(|o| o.imp).count(),
         agreeing: per_ray.iter().filter(|o| o.agree).count(),
         missed: per_ray.iter().filter(|o| o.exact && !o.imp).count(),
+        missed_unheld: per_ray.iter().filter(|o| o.unheld).count(),
         spurious: per_ray.iter().filter(|o| !o.exact && o.imp).count(),
         mean_position_error: both.iter().map(|o| o.err).sum::<f64>() / both.len().max(1) as f64,
         mean_error_footprints: errors_fp.iter().sum::<f64>() / both.len().max(1) as f64,
@@ -193,6 +200,34 @@ pub struct SurfaceCapture {
     pub within_texel: f64,
 }
 
+/// Whether the impostor holds the surface point `p`: whether the texel `p` projects to stores
+/// a point within 1.5 footprints of it (the footprint across the line of sight), and within 1.5
+/// times the texel's extent on the stored surface (see [`SurfaceCapture`]).
+pub fn holds(impostor: &Impostor, p: Vec3) -> (bool, bool) {
+    let Some(q) = impostor.camera.project(p.as_dvec3()) else {
+        return (false, false);
+    };
+    let Some((x, y)) = impostor.texel(q.uv) else {
+        return (false, false);
+    };
+    if impostor.gd.get(x, y) <= 0.0 {
+        return (false, false);
+    }
+    let stored = impostor.position.get(x, y);
+    let distance = stored.distance(p) as f64;
+    let footprint = impostor.footprint(q.uv, q.gd);
+    let n = impostor.face_normal.get(x, y).as_dvec3();
+    let view = impostor
+        .camera
+        .toward_camera(stored.as_dvec3())
+        .normalize_or_zero();
+    let cos = n.dot(view).abs().max(0.05);
+    (
+        distance <= AGREEMENT_FOOTPRINTS * footprint,
+        distance <= AGREEMENT_FOOTPRINTS * footprint / cos,
+    )
+}
+
 /// How much of `mesh`'s surface the impostor stores ([`SurfaceCapture`]), from `samples`
 /// area-weighted points.
 pub fn surface_captured(
@@ -202,34 +237,7 @@ pub fn surface_captured(
     seed: u64,
 ) -> SurfaceCapture {
     let points = crate::geom::sample_surface(mesh, samples, seed);
-    // Per sample: (within the footprint, within the texel's extent on its surface).
-    let per_point: Vec<(bool, bool)> = points
-        .par_iter()
-        .map(|p| {
-            let Some(q) = impostor.camera.project(p.as_dvec3()) else {
-                return (false, false);
-            };
-            let Some((x, y)) = impostor.texel(q.uv) else {
-                return (false, false);
-            };
-            if impostor.gd.get(x, y) <= 0.0 {
-                return (false, false);
-            }
-            let stored = impostor.position.get(x, y);
-            let distance = stored.distance(*p) as f64;
-            let footprint = impostor.footprint(q.uv, q.gd);
-            let n = impostor.face_normal.get(x, y).as_dvec3();
-            let view = impostor
-                .camera
-                .toward_camera(stored.as_dvec3())
-                .normalize_or_zero();
-            let cos = n.dot(view).abs().max(0.05);
-            (
-                distance <= AGREEMENT_FOOTPRINTS * footprint,
-                distance <= AGREEMENT_FOOTPRINTS * footprint / cos,
-            )
-        })
-        .collect();
+    let per_point: Vec<(bool, bool)> = points.par_iter().map(|p| holds(impostor, *p)).collect();
     let total = points.len().max(1) as f64;
     SurfaceCapture {
         within_footprint: per_point.iter().filter(|c| c.0).count() as f64 / total,
