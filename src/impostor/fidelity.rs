@@ -116,7 +116,7 @@ where
                     one.err_fp = err / fp;
                     one.agree = err <= AGREEMENT_FOOTPRINTS * fp;
                 }
-                (Some(e), None) => one.unheld = !holds(impostor, e.position).0,
+                (Some(e), None) => one.unheld = !holds(impostor, e.position).within_footprint,
                 (None, Some(_)) => {}
             }
             one
@@ -200,18 +200,27 @@ pub struct SurfaceCapture {
     pub within_texel: f64,
 }
 
-/// Whether the impostor holds the surface point `p`: whether the texel `p` projects to stores
-/// a point within 1.5 footprints of it (the footprint across the line of sight), and within 1.5
-/// times the texel's extent on the stored surface (see [`SurfaceCapture`]).
-pub fn holds(impostor: &Impostor, p: Vec3) -> (bool, bool) {
+/// Whether an impostor holds one surface point, by the two measures of [`SurfaceCapture`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Held {
+    /// The texel the point projects to stores a point within 1.5 footprints of it (the
+    /// footprint across the line of sight).
+    pub within_footprint: bool,
+    /// … within 1.5 times the texel's extent on the stored surface.
+    pub within_texel: bool,
+}
+
+/// Whether the impostor holds the surface point `p` ([`Held`]; neither when `p` is outside the
+/// camera's image or its texel is empty).
+pub fn holds(impostor: &Impostor, p: Vec3) -> Held {
     let Some(q) = impostor.camera.project(p.as_dvec3()) else {
-        return (false, false);
+        return Held::default();
     };
     let Some((x, y)) = impostor.texel(q.uv) else {
-        return (false, false);
+        return Held::default();
     };
     if impostor.gd.get(x, y) <= 0.0 {
-        return (false, false);
+        return Held::default();
     }
     let stored = impostor.position.get(x, y);
     let distance = stored.distance(p) as f64;
@@ -222,10 +231,10 @@ pub fn holds(impostor: &Impostor, p: Vec3) -> (bool, bool) {
         .toward_camera(stored.as_dvec3())
         .normalize_or_zero();
     let cos = n.dot(view).abs().max(0.05);
-    (
-        distance <= AGREEMENT_FOOTPRINTS * footprint,
-        distance <= AGREEMENT_FOOTPRINTS * footprint / cos,
-    )
+    Held {
+        within_footprint: distance <= AGREEMENT_FOOTPRINTS * footprint,
+        within_texel: distance <= AGREEMENT_FOOTPRINTS * footprint / cos,
+    }
 }
 
 /// How much of `mesh`'s surface the impostor stores ([`SurfaceCapture`]), from `samples`
@@ -237,11 +246,11 @@ pub fn surface_captured(
     seed: u64,
 ) -> SurfaceCapture {
     let points = crate::geom::sample_surface(mesh, samples, seed);
-    let per_point: Vec<(bool, bool)> = points.par_iter().map(|p| holds(impostor, *p)).collect();
+    let per_point: Vec<Held> = points.par_iter().map(|p| holds(impostor, *p)).collect();
     let total = points.len().max(1) as f64;
     SurfaceCapture {
-        within_footprint: per_point.iter().filter(|c| c.0).count() as f64 / total,
-        within_texel: per_point.iter().filter(|c| c.1).count() as f64 / total,
+        within_footprint: per_point.iter().filter(|h| h.within_footprint).count() as f64 / total,
+        within_texel: per_point.iter().filter(|h| h.within_texel).count() as f64 / total,
     }
 }
 
