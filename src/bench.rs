@@ -257,28 +257,20 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         .expect("eye outside the sphere");
     let plain = spoc.pinhole().clone();
     let color = albedo_of(mesh);
-    let (t_spoc, t_plain) = time_pair_median(
-        min * 2,
-        || {
-            build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-        },
-        || {
-            raster_once(&plain, mesh);
-        },
-    );
+    // The workload of the first three pairs below: a fresh SPOC impostor.
+    let fresh_spoc_build = || {
+        build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
+    };
+    let (t_spoc, t_plain) = time_pair_median(min * 2, fresh_spoc_build, || {
+        raster_once(&plain, mesh);
+    });
     // The same rasterization through the pinhole a pinhole impostor of the object would have:
     // framing its bounding sphere. The SPOC's reference pinhole above is wider by (1 + k)·1.05,
     // to hold the pushed-out silhouette, so the object is smaller there than in either image.
     let framed = framed_pinhole(eye, b.center(), radius, size).unwrap_or_else(|| plain.clone());
-    let (t_spoc_framed, t_framed) = time_pair_median(
-        min * 2,
-        || {
-            build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-        },
-        || {
-            raster_once(&framed, mesh);
-        },
-    );
+    let (t_spoc_framed, t_framed) = time_pair_median(min * 2, fresh_spoc_build, || {
+        raster_once(&framed, mesh);
+    });
     let (spoc_fragments, plain_fragments, framed_fragments) = (
         fragments_through(&spoc, mesh),
         fragments_through(&plain, mesh),
@@ -286,15 +278,9 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     );
     // The object's image rendered by the raster method (colour, distance, normals, ids).
     let render_peer = raster_view(&plain, mesh);
-    let (t_spoc_again, t_render) = time_pair_median(
-        min * 2,
-        || {
-            build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-        },
-        || {
-            render_raster_once(&render_peer);
-        },
-    );
+    let (t_spoc_again, t_render) = time_pair_median(min * 2, fresh_spoc_build, || {
+        render_raster_once(&render_peer);
+    });
     // The steady state of a dynamic scene: the same impostor rebuilt every frame, its memory
     // reused, beside a plain rasterization into a reused target.
     let mut builder = crate::impostor::ImpostorBuilder::new();
