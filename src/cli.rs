@@ -7,12 +7,15 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use trompe::frame::{io, metrics};
+use trompe::impostor::fidelity;
 use trompe::render::{self, Method, Progress, Timings};
 use trompe::scene::Scene;
 
 /// Largest impostor side the CLI accepts: a square image within the frame limits
 /// ([`trompe::frame::MAX_PIXELS`]).
 const MAX_IMPOSTOR_SIDE: i64 = 8192;
+/// The most rays `impostor check` fires from one source (bounds its memory: 32 bytes a ray).
+const MAX_CHECK_RAYS: i64 = 10_000_000;
 
 /// Impostor-based and image-based rendering on the CPU.
 #[derive(Parser, Debug)]
@@ -68,9 +71,10 @@ pub enum Command {
         #[arg(long)]
         mask: Option<PathBuf>,
     },
-    /// Describe a mesh file: counts, bounds, materials, textures.
+    /// Describe a mesh file (counts, bounds, materials, textures) or a baked impostor (its
+    /// camera, size, coverage and box).
     Info {
-        /// .obj, .ply, .gltf or .glb.
+        /// .obj, .ply, .gltf or .glb; or an impostor's .json sidecar.
         mesh: PathBuf,
     },
     /// Render the demo scenes and write an HTML report.
@@ -147,11 +151,26 @@ pub enum ImpostorCommand {
         #[arg(long, default_value_t = 1024)]
         view: u32,
         /// Also fire this many rays from a sphere around the object, aimed at it.
-        #[arg(long, default_value_t = 0)]
-        sphere_rays: usize,
+        #[arg(long, default_value_t = 0,
+              value_parser = clap::value_parser!(u32).range(0..=MAX_CHECK_RAYS))]
+        sphere_rays: u32,
         /// Save the impostor (JSON sidecar; the EXR goes beside it).
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Check this baked impostor (its JSON sidecar, from `impostor bake`) rather than
+        /// building one. MESH is then the object it was baked from, in its own coordinates,
+        /// and the rays come from around the impostor's viewpoint (`--region`) — for a graph
+        /// camera, from the reflector in the maze's first corridor.
+        #[arg(long, conflicts_with_all = ["camera", "k", "resolution", "output", "distance"])]
+        impostor: Option<PathBuf>,
+        /// With --impostor: radius of the region around its viewpoint the rays come from, in
+        /// bounding radii of the object (`bake` chooses the SPOC strength for 1).
+        #[arg(long, default_value_t = 1.0, requires = "impostor")]
+        region: f32,
+        /// With --impostor: how many rays come from that region.
+        #[arg(long, default_value_t = 20_000, requires = "impostor",
+              value_parser = clap::value_parser!(u32).range(1..=MAX_CHECK_RAYS))]
+        rays: u32,
     },
 }
 
@@ -195,8 +214,13 @@ fn parse_vec3(text: &str) -> Result<glam::Vec3, String> {
 
 /// Whether `path` names a maze floor plan.
 fn is_maze(path: &Path) -> bool {
+    has_extension(path, "maze")
+}
+
+/// Whether `path` ends in `.ext` (any case).
+fn has_extension(path: &Path, ext: &str) -> bool {
     path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("maze"))
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext))
 }
 
 /// `--method`.
@@ -268,6 +292,253 @@ fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Where `impostor check` takes its rays from.
+enum RaySource {
+    /// The reflected rays of a reflector beside the object (a mesh's is placed `distance`
+    /// away; in a maze it stands in the first corridor), seen by a `view²` viewer.
+    Reflector {
+        path: PathBuf,
+        distance: f32,
+        view: u32,
+    },
+    /// For a baked impostor: `rays` rays from the sphere of `region` bounding radii around its
+    /// viewpoint; for a graph camera, the reflector's rays in the maze as above.
+    Viewpoint {
+        reflector: PathBuf,
+        view: u32,
+        region: f32,
+        rays: u32,
+    },
+}
+
+/// An impostor to check, the object it replaces, the rays to fire, and the camera of a pinhole
+/// depth image from the same point to set beside it (for a SPOC).
+struct Checked {
+    impostor: trompe::impostor::Impostor,
+    target: std::sync::Arc<trompe::geom::Mesh>,
+    rays: Vec<trompe::geom::Ray>,
+    pinhole_beside: Option<trompe::impostor::ImpostorCamera>,
+}
+
+/// Places the object (scaled to largest extent 1) and a reflector beside it — or the reflector
+/// in a maze — and builds the impostor through a camera at the reflector.
+fn build_checked(
+    input: &Path,
+    kind: Option<trompe::impostor::ViewCamera>,
+    resolution: u32,
+    source: RaySource,
+    timings: &mut Timings,
+) -> Result<Checked> {
+    use trompe::impostor::ImpostorCamera;
+    use trompe::impostor::fidelity::ReflectorSetup;
+    let RaySource::Reflector {
+        path,
+        distance,
+        view,
+    } = source
+    else {
+        bail!("a built impostor is checked with a reflector's rays");
+    };
+    let refl = trompe::geom::io::load(&path)?.mesh;
+    let (setup, cam) = match (kind, is_maze(input)) {
+        (None, true) => {
+            let maze = trompe::scene::maze::Maze::load(input)?;
+            let setup =
+                ReflectorSetup::in_maze(&maze, &refl, view).context("placing the reflector")?;
+            let g = maze.graph_camera(resolution, input)?;
+            println!("graph camera: {} frusta", g.frusta().len());
+            (setup, ImpostorCamera::Graph(g))
+        }
+        (Some(kind), false) => {
+            let target = trompe::geom::io::load(input)?.mesh;
+            let setup = ReflectorSetup::new(&target, &refl, distance, view)
+                .context("placing the reflector")?;
+            let cam = setup
+                .camera(kind, resolution)
+                .context("building the impostor camera")?;
+            (setup, cam)
+        }
+        (None, false) => bail!(
+            "{}: --camera graph is built from a maze floor plan (.maze)",
+            input.display()
+        ),
+        (Some(_), true) => bail!(
+            "{}: a maze floor plan needs --camera graph",
+            input.display()
+        ),
+    };
+    let impostor = timings
+        .time("build impostor", || {
+            let color = trompe::impostor::albedo_of(&setup.target);
+            trompe::impostor::build(cam, &setup.target, 0, &color)
+        })
+        .context("building the impostor")?;
+    let pinhole_beside = match &impostor.camera {
+        ImpostorCamera::Spoc(_) => Some(
+            setup
+                .camera(trompe::impostor::ViewCamera::Pinhole, resolution)
+                .context("building the pinhole camera")?,
+        ),
+        _ => None,
+    };
+    let rays = timings.time("reflected rays", || setup.rays());
+    Ok(Checked {
+        impostor,
+        target: setup.target,
+        rays,
+        pinhole_beside,
+    })
+}
+
+/// Loads a baked impostor and the object it was baked from (in its own coordinates, as `bake`
+/// reads it), and makes sure they go together.
+fn load_checked(
+    input: &Path,
+    sidecar: &Path,
+    source: RaySource,
+    timings: &mut Timings,
+) -> Result<Checked> {
+    use trompe::impostor::ImpostorCamera;
+    let RaySource::Viewpoint {
+        reflector,
+        view,
+        region,
+        rays,
+    } = source
+    else {
+        bail!("a baked impostor is checked with rays from around its viewpoint");
+    };
+    let impostor = timings
+        .time("load impostor", || trompe::impostor::file::load(sidecar))
+        .context("loading the impostor")?;
+    let graph = matches!(impostor.camera, ImpostorCamera::Graph(_));
+    let (target, setup) = match (graph, is_maze(input)) {
+        (true, true) => {
+            let maze = trompe::scene::maze::Maze::load(input)?;
+            let refl = trompe::geom::io::load(&reflector)?.mesh;
+            let setup = trompe::impostor::fidelity::ReflectorSetup::in_maze(&maze, &refl, view)
+                .context("placing the reflector")?;
+            (setup.target.clone(), Some(setup))
+        }
+        (false, false) => (
+            std::sync::Arc::new(trompe::geom::io::load(input)?.mesh),
+            None,
+        ),
+        (true, false) => bail!(
+            "{}: holds a graph-camera impostor, which is checked against its maze floor plan (.maze), not {}",
+            sidecar.display(),
+            input.display()
+        ),
+        (false, true) => bail!(
+            "{}: holds a {} impostor; a maze floor plan goes with a graph-camera one",
+            sidecar.display(),
+            impostor.camera.kind()
+        ),
+    };
+    if !impostor.was_built_from(&target) {
+        let (ib, tb) = (impostor.bounds, target.bounds());
+        bail!(
+            "{}: was not baked from {} as it is (the impostor's box {:?} .. {:?} is not the object's {:?} .. {:?}, padded by 10⁻⁴ of its extent)",
+            sidecar.display(),
+            input.display(),
+            ib.min.to_array(),
+            ib.max.to_array(),
+            tb.min.to_array(),
+            tb.max.to_array()
+        );
+    }
+    let b = target.bounds();
+    let (rays, pinhole_beside) = match setup {
+        Some(setup) => (timings.time("reflected rays", || setup.rays()), None),
+        None => {
+            let rays =
+                fidelity::viewpoint_rays(&impostor, region * b.radius(), b, rays as usize, 1);
+            let pinhole = match &impostor.camera {
+                ImpostorCamera::Spoc(_) => Some(
+                    ImpostorCamera::fitted(
+                        trompe::impostor::ViewCamera::Pinhole,
+                        impostor.camera.viewpoint().as_vec3(),
+                        b.center(),
+                        b.radius(),
+                        f64::from(region * b.radius()),
+                        impostor.gd.size().0,
+                        &target.positions,
+                    )
+                    .context("building the pinhole camera")?,
+                ),
+                _ => None,
+            };
+            (rays, pinhole)
+        }
+    };
+    Ok(Checked {
+        impostor,
+        target,
+        rays,
+        pinhole_beside,
+    })
+}
+
+/// Prints what `info` says of a baked impostor.
+fn print_impostor_info(path: &Path, imp: &trompe::impostor::Impostor) {
+    use trompe::impostor::ImpostorCamera;
+    let (w, h) = imp.gd.size();
+    let v = imp.camera.viewpoint();
+    println!("{}", path.display());
+    println!("  impostor   {} camera, {w}×{h} texels", imp.camera.kind());
+    println!("  viewpoint  [{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z);
+    match &imp.camera {
+        ImpostorCamera::Spoc(s) => {
+            let (near, far) = s.depth_range();
+            println!(
+                "  SPOC       strength k = {:.4}, depth ramp from {near:.4} to {far:.4}",
+                s.strength()
+            );
+        }
+        ImpostorCamera::Graph(g) => println!("  frusta     {}", g.frusta().len()),
+        ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {}
+    }
+    println!("  covered    {:.1} % of texels", imp.coverage() * 100.0);
+    let b = imp.bounds;
+    println!(
+        "  bounds     [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+    );
+}
+
+/// Prints what `impostor check` measured.
+fn print_fidelity(r: &fidelity::FidelityReport, captured: &fidelity::SurfaceCapture) {
+    println!("rays      {} ({} hit the object)", r.rays, r.exact_hits);
+    println!(
+        "agreement {:.3} % of rays (hit/miss and position within 1.5 texels)",
+        r.agreement() * 100.0
+    );
+    println!(
+        "          {:.3} % of the rays that either method says hit",
+        r.hit_agreement() * 100.0
+    );
+    println!(
+        "missed    {} ({} on surface the impostor does not hold, {} by the walk)   spurious {}",
+        r.missed,
+        r.missed_unheld,
+        r.missed - r.missed_unheld,
+        r.spurious
+    );
+    println!(
+        "position  mean error {:.3e} world units = {:.3} texel footprints (median {:.2e})",
+        r.mean_position_error, r.mean_error_footprints, r.median_error_footprints
+    );
+    println!(
+        "surface   {:.1} % captured within 1.5 footprints, {:.1} % within 1.5 texel extents on the surface",
+        captured.within_footprint * 100.0,
+        captured.within_texel * 100.0
+    );
+    println!(
+        "walk      {:.1} texel visits per ray",
+        r.texel_visits_per_ray
+    );
 }
 
 fn print_timings(t: &Timings) {
@@ -363,6 +634,10 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 eprintln!("wrote {}", h.display());
             }
         }
+        Command::Info { mesh } if has_extension(&mesh, "json") => {
+            let imp = trompe::impostor::file::load(&mesh).context("loading the impostor")?;
+            print_impostor_info(&mesh, &imp);
+        }
         Command::Info { mesh } => {
             let loaded = trompe::geom::io::load(&mesh)?;
             let m = &loaded.mesh;
@@ -430,123 +705,80 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             view,
             sphere_rays,
             output,
+            impostor,
+            region,
+            rays,
         }) => {
-            use trompe::impostor::fidelity::{self, ReflectorSetup};
-            use trompe::scene::maze::Maze;
             if let Some(o) = &output {
                 check_output(o, &[&mesh])?;
             }
-            let reflector_path = reflector.unwrap_or_else(|| {
+            let reflector = reflector.unwrap_or_else(|| {
                 trompe::report::DemoInputs::locate()
                     .assets
                     .join("meshes/bunny.obj")
             });
-            let refl = trompe::geom::io::load(&reflector_path)?.mesh;
             let mut timings = Timings::default();
-            let (setup, cam) = match (camera.view(k), is_maze(&mesh)) {
-                (None, true) => {
-                    let maze = Maze::load(&mesh)?;
-                    let setup = ReflectorSetup::in_maze(&maze, &refl, view)
-                        .context("placing the reflector")?;
-                    let g = maze.graph_camera(resolution, &mesh)?;
-                    println!("graph camera: {} frusta", g.frusta().len());
-                    (setup, trompe::impostor::ImpostorCamera::Graph(g))
+            let checked = match &impostor {
+                None => {
+                    let source = RaySource::Reflector {
+                        path: reflector,
+                        distance,
+                        view,
+                    };
+                    build_checked(&mesh, camera.view(k), resolution, source, &mut timings)?
                 }
-                (Some(kind), false) => {
-                    let target = trompe::geom::io::load(&mesh)?.mesh;
-                    let setup = ReflectorSetup::new(&target, &refl, distance, view)
-                        .context("placing the reflector")?;
-                    let cam = setup
-                        .camera(kind, resolution)
-                        .context("building the impostor camera")?;
-                    (setup, cam)
-                }
-                (None, false) => bail!(
-                    "{}: --camera graph is built from a maze floor plan (.maze)",
-                    mesh.display()
-                ),
-                (Some(_), true) => {
-                    bail!("{}: a maze floor plan needs --camera graph", mesh.display())
+                Some(path) => {
+                    if !(region.is_finite() && region > 0.0) {
+                        bail!("--region {region}: must be a positive number of radii");
+                    }
+                    let source = RaySource::Viewpoint {
+                        reflector,
+                        view,
+                        region,
+                        rays,
+                    };
+                    load_checked(&mesh, path, source, &mut timings)?
                 }
             };
-            if let trompe::impostor::ImpostorCamera::Spoc(s) = &cam {
+            let Checked {
+                impostor: imp,
+                target,
+                mut rays,
+                pinhole_beside,
+            } = checked;
+            if let trompe::impostor::ImpostorCamera::Spoc(s) = &imp.camera {
                 println!("SPOC strength k = {:.3}", s.strength());
             }
-            let imp = timings
-                .time("build impostor", || {
-                    trompe::impostor::build(
-                        cam,
-                        &setup.target,
-                        0,
-                        &trompe::impostor::albedo_of(&setup.target),
-                    )
-                })
-                .context("building the impostor")?;
             let exact = timings.time("build BVH", || {
-                trompe::trace::Bvh::build(vec![setup.target.clone()])
+                trompe::trace::Bvh::build(vec![target.clone()])
             });
-            let mut rays = timings.time("reflected rays", || setup.rays());
-            let b = setup.target.bounds();
+            let b = target.bounds();
             rays.extend(fidelity::sphere_rays(
                 b.center(),
                 b.radius() * 3.0,
                 b,
-                sphere_rays,
+                sphere_rays as usize,
                 1,
             ));
             let r = timings.time("check", || fidelity::check(&imp, &exact, &rays));
-            let captured = fidelity::surface_captured(&imp, &setup.target, 50_000, 1);
+            let captured = fidelity::surface_captured(&imp, &target, 50_000, 1);
+            let (w, h) = imp.gd.size();
             println!(
-                "impostor  {} {resolution}², {:.1} % of texels covered",
+                "impostor  {} {w}×{h}, {:.1} % of texels covered",
                 imp.camera.kind(),
                 imp.coverage() * 100.0
             );
-            println!("rays      {} ({} hit the object)", r.rays, r.exact_hits);
-            println!(
-                "agreement {:.3} % of rays (hit/miss and position within 1.5 texels)",
-                r.agreement() * 100.0
-            );
-            println!(
-                "          {:.3} % of the rays that either method says hit",
-                r.hit_agreement() * 100.0
-            );
-            println!(
-                "missed    {} ({} on surface the impostor does not hold, {} by the walk)   spurious {}",
-                r.missed,
-                r.missed_unheld,
-                r.missed - r.missed_unheld,
-                r.spurious
-            );
-            println!(
-                "position  mean error {:.3e} world units = {:.3} texel footprints (median {:.2e})",
-                r.mean_position_error, r.mean_error_footprints, r.median_error_footprints
-            );
-            println!(
-                "surface   {:.1} % captured within 1.5 footprints, {:.1} % within 1.5 texel extents on the surface",
-                captured.within_footprint * 100.0,
-                captured.within_texel * 100.0
-            );
-            println!(
-                "walk      {:.1} texel visits per ray",
-                r.texel_visits_per_ray
-            );
-            if matches!(imp.camera, trompe::impostor::ImpostorCamera::Spoc(_)) {
+            print_fidelity(&r, &captured);
+            if let Some(pinhole) = pinhole_beside {
                 // Paper 1 Fig. 6–7: the pinhole depth image from the same point, beside it.
-                let pinhole = setup
-                    .camera(trompe::impostor::ViewCamera::Pinhole, resolution)
-                    .context("building the pinhole camera")?;
                 let p = timings
                     .time("build pinhole impostor", || {
-                        trompe::impostor::build(
-                            pinhole,
-                            &setup.target,
-                            0,
-                            &trompe::impostor::albedo_of(&setup.target),
-                        )
+                        let color = trompe::impostor::albedo_of(&target);
+                        trompe::impostor::build(pinhole, &target, 0, &color)
                     })
                     .context("building the pinhole impostor")?;
                 let rp = fidelity::check(&p, &exact, &rays);
-                let cp = fidelity::surface_captured(&p, &setup.target, 50_000, 1);
+                let cp = fidelity::surface_captured(&p, &target, 50_000, 1);
                 println!(
                     "beside it, the pinhole depth image from the same point: agreement {:.3} %, on hits {:.3} %, missed {}, surface {:.1} % / {:.1} %",
                     rp.agreement() * 100.0,

@@ -263,3 +263,104 @@ fn impostors_bake_to_files_that_load_back() {
         "three finite numbers",
     );
 }
+
+#[test]
+fn a_baked_impostor_is_checked_against_the_mesh_it_was_baked_from() {
+    let d = scratch("cli_check_baked");
+    let json = d.join("teapot.json");
+    let json = json.to_str().unwrap();
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/meshes/teapot.obj",
+        "--resolution",
+        "128",
+        "-o",
+        json,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = trompe(&["info", json]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("spoc camera, 128×128 texels"), "{out}");
+    let o = trompe(&[
+        "impostor",
+        "check",
+        "assets/meshes/teapot.obj",
+        "--impostor",
+        json,
+        "--rays",
+        "2000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("rays      2000 ("), "{out}");
+    assert!(out.contains("beside it, the pinhole depth image"), "{out}");
+    // The percentage of agreeing rays, read back: most rays from the baked-for region agree.
+    let agreement: f64 = out
+        .lines()
+        .find_map(|l| l.strip_prefix("agreement "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no agreement in {out}"));
+    assert!(agreement > 95.0, "{out}");
+    // Another mesh, a maze, options that only apply to a build or only to a baked impostor.
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            "assets/meshes/bunny.obj",
+            "--impostor",
+            json,
+        ]),
+        "was not baked from",
+    );
+    fails_cleanly(
+        &trompe(&["impostor", "check", "scenes/maze.maze", "--impostor", json]),
+        "goes with a graph-camera one",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            "assets/meshes/teapot.obj",
+            "--impostor",
+            json,
+            "--camera",
+            "pinhole",
+        ]),
+        "cannot be used with",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            "assets/meshes/teapot.obj",
+            "--region",
+            "2",
+        ]),
+        "--impostor",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            "assets/meshes/teapot.obj",
+            "--impostor",
+            json,
+            "--region",
+            "0",
+        ]),
+        "must be a positive number",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            "assets/meshes/teapot.obj",
+            "--sphere-rays",
+            "100000000000",
+        ]),
+        "100000000000",
+    );
+}

@@ -353,13 +353,18 @@ fn resolve<F, V>(
 /// Sets the bounds of a freshly resolved impostor (the mesh's box, padded) and drops what was
 /// derived from its old maps.
 fn finish_resolve(impostor: &mut Impostor, mesh: &Mesh) {
+    impostor.bounds = impostor_bounds(mesh);
+    impostor.maps_changed();
+}
+
+/// The bounds of an impostor of `mesh`: the mesh's box padded by 10⁻⁴ of its largest extent.
+pub(super) fn impostor_bounds(mesh: &Mesh) -> Aabb {
     let b = mesh.bounds();
     let pad = b.extent().max_element() * 1e-4;
-    impostor.bounds = Aabb {
+    Aabb {
         min: b.min - Vec3::splat(pad),
         max: b.max + Vec3::splat(pad),
-    };
-    impostor.maps_changed();
+    }
 }
 
 /// An impostor sized for its camera whose maps are all zeros — object 0 everywhere, so not yet

@@ -2,6 +2,9 @@
 //! of rays at an object, compare every impostor answer with the BVH's, and measure how much of
 //! the surface the impostor captured.
 //!
+//! The rays: a reflector's reflected rays (paper 1's setting), rays from a sphere around the
+//! object, or — for an impostor baked earlier — rays from the region around its viewpoint.
+//!
 //! Agreement of one ray: both miss, or both hit with positions within 1.5 texel footprints (the
 //! footprint of the impostor texel at the exact hit).
 
@@ -186,6 +189,21 @@ pub fn sphere_rays(
             Ray::new(o, (aim - o).normalize_or(Vec3::Y))
         })
         .collect()
+}
+
+/// Rays from the region an impostor serves: `count` rays from points spread over the sphere of
+/// radius `region` around its camera's viewpoint ([`super::ImpostorCamera::viewpoint`]), each
+/// aimed at a point of `target` (the object's box). These are the rays a baked impostor was
+/// built to answer: the SPOC's strength is chosen for secondary rays from such a region (§3.2).
+pub fn viewpoint_rays(
+    impostor: &Impostor,
+    region: f32,
+    target: crate::geom::Aabb,
+    count: usize,
+    seed: u64,
+) -> Vec<Ray> {
+    let eye = impostor.camera.viewpoint().as_vec3();
+    sphere_rays(eye, region, target, count, seed)
 }
 
 /// How much of a mesh's surface an impostor stores (fractions of area-weighted samples).

@@ -152,6 +152,23 @@ impl ImpostorCamera {
         })
     }
 
+    /// The point the camera sees from: its centre of projection (a pinhole's, the SPOC's
+    /// reference pinhole's, the graph camera's root apex), or for a parallel projection the
+    /// centre of its image plane. The rays an impostor answers come from around it (the region
+    /// its SPOC strength is chosen for, §3.2).
+    pub fn viewpoint(&self) -> DVec3 {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.position(),
+            ImpostorCamera::Orthographic(c) => {
+                let (corner, a, b, _, _) = c.parameters();
+                let (w, h) = c.resolution();
+                corner + a * (w as f64 * 0.5) + b * (h as f64 * 0.5)
+            }
+            ImpostorCamera::Spoc(c) => c.pinhole().position(),
+            ImpostorCamera::Graph(g) => g.root().position(),
+        }
+    }
+
     /// True when straight world segments project to curves, so triangles must be tessellated
     /// and ray walks must sample the curve.
     pub fn is_curved(&self) -> bool {
@@ -392,6 +409,15 @@ impl Impostor {
             }
             camera => size(camera, uv, gd),
         }
+    }
+
+    /// Whether building an impostor of `mesh` as it is now gives this one's box — the check that
+    /// a loaded impostor goes with a mesh, in the same coordinates (to 10⁻⁵ of its extent).
+    pub fn was_built_from(&self, mesh: &crate::geom::Mesh) -> bool {
+        let expected = build::impostor_bounds(mesh);
+        let tolerance = expected.extent().max_element() * 1e-5;
+        (self.bounds.min - expected.min).abs().max_element() <= tolerance
+            && (self.bounds.max - expected.max).abs().max_element() <= tolerance
     }
 
     /// Fraction of texels that are covered.
