@@ -760,8 +760,13 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 sphere_rays as usize,
                 1,
             ));
-            let r = timings.time("check", || fidelity::check(&imp, &exact, &rays));
-            let captured = fidelity::surface_captured(&imp, &target, 50_000, 1);
+            let label = format!("checking {} rays", rays.len());
+            let r = timings.time("check", || {
+                with_spinner(&label, || fidelity::check(&imp, &exact, &rays))
+            });
+            let captured = timings.time("surface captured", || {
+                fidelity::surface_captured(&imp, &target, 50_000, 1)
+            });
             let (w, h) = imp.gd.size();
             println!(
                 "impostor  {} {w}×{h}, {:.1} % of texels covered",
@@ -777,7 +782,11 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                         trompe::impostor::build(pinhole, &target, 0, &color)
                     })
                     .context("building the pinhole impostor")?;
-                let rp = fidelity::check(&p, &exact, &rays);
+                let rp = timings.time("check pinhole", || {
+                    with_spinner("checking the pinhole depth image", || {
+                        fidelity::check(&p, &exact, &rays)
+                    })
+                });
                 let cp = fidelity::surface_captured(&p, &target, 50_000, 1);
                 println!(
                     "beside it, the pinhole depth image from the same point: agreement {:.3} %, on hits {:.3} %, missed {}, surface {:.1} % / {:.1} %",
