@@ -1,5 +1,7 @@
 //! Impostor construction and ray walks (issue 3): a SPOC impostor of the bunny beside a pinhole
-//! impostor, a plain rasterization and a raster-method render of the same mesh; walks of reflected rays per resolution.
+//! impostor, a plain rasterization and a raster-method render of the same mesh; walks of reflected rays per resolution;
+//! the graph-camera impostor of the demo maze with four bunnies beside a rasterization through
+//! its root.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
@@ -99,6 +101,22 @@ fn impostor(c: &mut Criterion) {
             })
         });
     }
+    group.finish();
+
+    // Paper 1 §4.5 / §6: the maze with four bunnies, through its graph camera.
+    let maze_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/maze.maze");
+    let maze = trompe::scene::maze::Maze::load(&maze_path).expect("shipped maze");
+    let graph = maze.graph_camera(512, &maze_path).expect("maze camera");
+    let scene = trompe::bench::maze_with_objects(&maze, &bunny, 4);
+    let color = albedo_of(&scene);
+    let mut group = c.benchmark_group("graph-camera impostor, maze + 4 bunnies 512²");
+    group.bench_function("graph impostor", |bch| {
+        bch.iter(|| build(ImpostorCamera::Graph(graph.clone()), &scene, 0, &color).expect("valid"))
+    });
+    group.bench_function(
+        "peer: depth + id rasterization through its root pinhole",
+        |bch| bch.iter(|| raster_once(graph.root(), &scene)),
+    );
     group.finish();
 }
 

@@ -917,9 +917,16 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let assets = trompe::report::DemoInputs::locate().assets;
             let teapot = trompe::geom::io::load(&assets.join("meshes/teapot.obj"))?.mesh;
             let bunny = trompe::geom::io::load(&assets.join("meshes/bunny.obj"))?.mesh;
+            let maze_path = trompe::report::DemoInputs::locate()
+                .scenes
+                .join("maze.maze");
+            let maze = trompe::scene::maze::Maze::load(&maze_path)?;
             let figures = trompe::bench::foundation(&m, quick)
                 .into_iter()
-                .chain(trompe::bench::impostors(&m, &teapot, &bunny, quick));
+                .chain(trompe::bench::impostors(&m, &teapot, &bunny, quick))
+                .chain(trompe::bench::graph_impostors(
+                    &maze, &maze_path, &bunny, quick,
+                ));
             for f in figures {
                 let versus = f
                     .versus

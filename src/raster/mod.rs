@@ -175,7 +175,13 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
     let (w, h) = camera.resolution();
     let mut target = RasterTarget::new(w, h, empty)?;
     // New, so already clear.
-    let stats = draw_target(camera, objects, (shader, empty), &mut target, false);
+    let stats = draw_target(
+        camera,
+        objects,
+        (shader, empty),
+        &mut target,
+        RowsHold::Empty,
+    );
     Ok((target, stats))
 }
 
@@ -190,11 +196,45 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
     target: &mut RasterTarget<S::Output>,
 ) -> Result<RasterStats, FrameError> {
     let (w, h) = camera.resolution();
-    let clear = target.gd.size() == (w, h) && target.attributes.size() == (w, h);
-    if !clear {
+    let rows = if target.gd.size() == (w, h) && target.attributes.size() == (w, h) {
+        RowsHold::Old
+    } else {
         *target = RasterTarget::new(w, h, empty)?;
+        RowsHold::Empty
+    };
+    Ok(draw_target(camera, objects, (shader, empty), target, rows))
+}
+
+/// Rasterizes `objects` into `target` as it is, without clearing it: the depth test compares
+/// with what it already holds, so draws through several cameras of one image compose — a
+/// graph camera's frusta, each drawing the triangles clipped to it (paper 1 §4.5). A fragment
+/// replaces a pixel only when strictly nearer, so ties keep the earlier draw.
+///
+/// # Errors
+/// When `target` is not of the camera's size.
+pub fn rasterize_over<P: Projection, S: FragmentShader>(
+    camera: &P,
+    objects: &[&Mesh],
+    shader: &S,
+    empty: S::Output,
+    target: &mut RasterTarget<S::Output>,
+) -> Result<RasterStats, FrameError> {
+    let (w, h) = camera.resolution();
+    if target.gd.size() != (w, h) || target.attributes.size() != (w, h) {
+        let (tw, th) = target.gd.size();
+        return Err(FrameError::InvalidSize {
+            width: tw as u64,
+            height: th as u64,
+            reason: "the target is not of the camera's size",
+        });
     }
-    Ok(draw_target(camera, objects, (shader, empty), target, clear))
+    Ok(draw_target(
+        camera,
+        objects,
+        (shader, empty),
+        target,
+        RowsHold::Drawn,
+    ))
 }
 
 /// One band of rows just drawn, handed to the `finish` callback of [`rasterize_depth_then`].
@@ -281,7 +321,11 @@ where
     let pass = BandPass {
         shader,
         empty,
-        clear: !target.zeroed,
+        rows: if target.zeroed {
+            RowsHold::Empty
+        } else {
+            RowsHold::Old
+        },
         width: w,
         binned,
     };
@@ -303,13 +347,13 @@ enum BandRows<'a, T> {
 }
 
 /// Bins the triangles of `objects` and draws the bands of `target` (of the camera's size) in
-/// parallel, clearing each band's rows first when `clear` is set.
+/// parallel; what their rows hold says whether they are cleared first.
 fn draw_target<P: Projection, S: FragmentShader>(
     camera: &P,
     objects: &[&Mesh],
     (shader, empty): (&S, S::Output),
     target: &mut RasterTarget<S::Output>,
-    clear: bool,
+    rows: RowsHold,
 ) -> RasterStats {
     let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
     let RasterTarget {
@@ -321,14 +365,26 @@ fn draw_target<P: Projection, S: FragmentShader>(
     let pass = BandPass {
         shader,
         empty,
-        clear,
+        rows,
         width: gd.size().0,
         binned,
     };
     let bands = gd.size().1.div_ceil(BAND_ROWS) as usize;
-    let rows = BandRows::Images(item.pixels_mut(), attributes.pixels_mut());
+    let images = BandRows::Images(item.pixels_mut(), attributes.pixels_mut());
     let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
-    pass.draw(stats, gd.pixels_mut(), rows, vec![(); bands], no_finish)
+    pass.draw(stats, gd.pixels_mut(), images, vec![(); bands], no_finish)
+}
+
+/// What the rows of a target hold before a rasterization, so what it does to them first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RowsHold {
+    /// Nothing yet (zeros, or freshly filled with empties): not cleared. A band with
+    /// triangles still writes its `gd` zeros before drawing (see [`BandPass::band`]).
+    Empty,
+    /// An earlier image this one replaces: every row is cleared first.
+    Old,
+    /// An image this one is drawn over: left as it is.
+    Drawn,
 }
 
 /// What every band of one rasterization shares.
@@ -336,9 +392,8 @@ struct BandPass<'a, S: FragmentShader> {
     shader: &'a S,
     /// The attribute of an empty pixel.
     empty: S::Output,
-    /// Whether the bands' rows of the target images are cleared before drawing (scratch rows
-    /// always are).
-    clear: bool,
+    /// What the target images' rows hold (scratch rows are always cleared).
+    rows: RowsHold,
     width: u32,
     binned: &'a setup::Binned,
 }
@@ -366,7 +421,7 @@ impl<S: FragmentShader> BandPass<'_, S> {
             BandRows::Images(item, attributes) => bands
                 .zip(item.par_chunks_mut(n).zip(attributes.par_chunks_mut(n)))
                 .map(|((index, (gd, mut out)), (item, attr))| {
-                    if self.clear {
+                    if self.rows == RowsHold::Old {
                         item.fill(ItemId::NONE);
                         attr.fill(self.empty);
                     }
@@ -410,13 +465,16 @@ impl<S: FragmentShader> BandPass<'_, S> {
         // read first maps the shared zero page, so the write after it pays a second fault and
         // a TLB flush on every core. Writing first takes one fault; bands with no triangles
         // are never touched.
-        if self.clear
-            || self
+        let clear_gd = match self.rows {
+            RowsHold::Old => true,
+            RowsHold::Empty => self
                 .binned
                 .chunks()
                 .iter()
-                .any(|c| c.band(index).next().is_some())
-        {
+                .any(|c| c.band(index).next().is_some()),
+            RowsHold::Drawn => false,
+        };
+        if clear_gd {
             gd.fill(0.0);
         }
         let mut band = scan::Band {

@@ -152,6 +152,14 @@ impl Maze {
         self.walls.len()
     }
 
+    /// The floor cells `(col, row)`, row by row.
+    pub fn floor_cells(&self) -> Vec<(usize, usize)> {
+        (0..self.height())
+            .flat_map(|r| (0..self.width()).map(move |c| (c, r)))
+            .filter(|&(c, r)| !self.walls[r][c])
+            .collect()
+    }
+
     fn floor(&self, col: i64, row: i64) -> bool {
         col >= 0
             && row >= 0
