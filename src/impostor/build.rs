@@ -1,6 +1,8 @@
 //! Impostor construction (paper 1 §3.1; algorithms.md §2.2): rasterize the mesh through the
 //! camera, keeping the largest `gd`; through a curved camera, triangles the rasterizer reports
-//! as curved beyond half a pixel are tessellated adaptively and the mesh drawn again.
+//! as curved beyond half a pixel are tessellated adaptively and the mesh drawn again. Through
+//! a graph camera (§4.5), each frustum draws the pieces of the triangles clipped to it, over one
+//! image.
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};

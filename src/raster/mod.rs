@@ -5,9 +5,10 @@
 //! `clip_distance` is negative (in world space), clips to a guard band, snaps the corners to
 //! 1/256 pixel and bins the screen triangles into bands of [`BAND_ROWS`] rows; bands are
 //! rasterized in parallel by `scan`, each owning its rows of every buffer. A [`RasterTarget`]
-//! keeps the set-up triangles' memory, so drawing into it again allocates nothing. Or only a
-//! depth image is kept ([`rasterize_depth_then`]): each band's item and attribute rows are
-//! scratch, finished by a caller's pass as soon as the band is drawn.
+//! keeps the set-up triangles' memory, so drawing into it again allocates nothing; drawing over
+//! it ([`rasterize_over`]) composes the images of several cameras (a graph camera's frusta).
+//! Or only a depth image is kept ([`rasterize_depth_then`]): each band's item and attribute
+//! rows are scratch, finished by a caller's pass as soon as the band is drawn.
 //!
 //! Invariants:
 //! - **Watertight, top-left rule**: coverage uses exact integer edge functions on snapped
