@@ -279,3 +279,32 @@ fn the_maze_graph_camera_shows_every_floor_cell() {
     let most = floor_texels.iter().max().copied().unwrap_or(0);
     assert_eq!(floor_texels[r0 * w + c0], most);
 }
+
+/// A graph-camera impostor rebuilt in place (a dynamic scene: objects come and go in the
+/// maze) equals a fresh build of the scene as it now is, map for map.
+#[test]
+fn a_rebuilt_graph_impostor_equals_a_fresh_build() {
+    use trompe::impostor::ImpostorBuilder;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/maze.maze");
+    let maze = trompe::scene::maze::Maze::load(&path).unwrap();
+    let g = maze.graph_camera(128, &path).unwrap();
+    let with = trompe::bench::maze_with_objects(&maze, &trompe::geom::icosphere(2), 4);
+    let without = maze.mesh();
+    let camera = ImpostorCamera::Graph(g);
+    let mut builder = ImpostorBuilder::new();
+    let mut imp = builder
+        .build(camera.clone(), &with, 1, &albedo_of(&with))
+        .unwrap();
+    for scene in [&without, &with] {
+        builder
+            .rebuild(&mut imp, scene, 1, &albedo_of(scene))
+            .unwrap();
+        let fresh = build(camera.clone(), scene, 1, &albedo_of(scene)).unwrap();
+        assert!(imp.gd == fresh.gd && imp.color == fresh.color && imp.position == fresh.position);
+        assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);
+        assert!(imp.object == fresh.object && imp.bounds == fresh.bounds);
+    }
+    // The spheres show, so the rebuilds had texels to clear and to fill again.
+    let bare = build(camera, &without, 1, &albedo_of(&without)).unwrap();
+    assert!(imp.gd != bare.gd, "the spheres are not seen");
+}

@@ -442,6 +442,8 @@ pub fn build<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
 pub struct ImpostorBuilder {
     raster: RasterMemory<Vec2>,
     tessellation: TessellationScratch,
+    /// A graph camera's visibility image, which every frustum draws over (§4.5).
+    graph_target: Option<RasterTarget<Option<Visible>>>,
 }
 
 impl ImpostorBuilder {
@@ -458,9 +460,6 @@ impl ImpostorBuilder {
         object: u32,
         color: &F,
     ) -> Result<Impostor, FrameError> {
-        if let ImpostorCamera::Graph(g) = &camera {
-            return build_graph(g.clone(), mesh, object, color);
-        }
         let mut impostor = zeroed_impostor(camera)?;
         self.build_into(&mut impostor, (mesh, object), color, MapsBefore::Zeroed)?;
         Ok(impostor)
@@ -475,15 +474,11 @@ impl ImpostorBuilder {
         object: u32,
         color: &F,
     ) -> Result<(), FrameError> {
-        if let ImpostorCamera::Graph(g) = &impostor.camera {
-            *impostor = build_graph(g.clone(), mesh, object, color)?;
-            return Ok(());
-        }
         self.build_into(impostor, (mesh, object), color, MapsBefore::Resolved)
     }
 
-    /// Draws `mesh` through the camera of `impostor` (not a graph camera) and resolves it into
-    /// its maps, which hold `before`.
+    /// Draws `mesh` through the camera of `impostor` and resolves it into its maps, which hold
+    /// `before`.
     fn build_into<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         &mut self,
         impostor: &mut Impostor,
@@ -491,6 +486,9 @@ impl ImpostorBuilder {
         color: &F,
         before: MapsBefore,
     ) -> Result<(), FrameError> {
+        if matches!(impostor.camera, ImpostorCamera::Graph(_)) {
+            return self.build_graph_into(impostor, (mesh, object), color, before);
+        }
         // Detailed meshes rarely need splitting (paper 1 §3.1): draw the mesh as it is, and
         // tessellate only when the rasterizer reports triangles the camera may curve by more
         // than the tolerance, or that it had to clip — then draw the tessellation instead.
@@ -503,6 +501,58 @@ impl ImpostorBuilder {
             }
         }
         finish_resolve(impostor, mesh);
+        Ok(())
+    }
+
+    /// Graph-camera construction (§4.5): every frustum rasterizes the triangles clipped to it
+    /// with its own matrix, over one visibility image (kept between builds); the largest `gd`
+    /// wins (frusta in order, so ties keep the earlier one). Then resolved into the maps of
+    /// `impostor`, which hold `before`.
+    fn build_graph_into<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        impostor: &mut Impostor,
+        (mesh, object): (&Mesh, u32),
+        color: &F,
+        before: MapsBefore,
+    ) -> Result<(), FrameError> {
+        let ImpostorCamera::Graph(g) = &impostor.camera else {
+            unreachable!("called for graph cameras only")
+        };
+        let (w, h) = g.resolution();
+        let groups = group_bounds(mesh);
+        let pieces: Vec<Tessellation> = (0..g.frusta().len())
+            .into_par_iter()
+            .map(|j| clip_to_frustum(g, j, mesh, &groups))
+            .collect();
+        let target = match &mut self.graph_target {
+            Some(t) if t.gd.size() == (w, h) => {
+                t.gd.pixels_mut().par_iter_mut().for_each(|v| *v = 0.0);
+                t.item
+                    .pixels_mut()
+                    .par_iter_mut()
+                    .for_each(|v| *v = ItemId::NONE);
+                t.attributes
+                    .pixels_mut()
+                    .par_iter_mut()
+                    .for_each(|v| *v = None);
+                t
+            }
+            slot => slot.insert(RasterTarget::new(w, h, None)?),
+        };
+        for (j, piece) in pieces.iter().enumerate() {
+            if !piece.source.is_empty() {
+                let shader = SourcePoint {
+                    source: &piece.source,
+                };
+                rasterize_over(&g.frustum(j), &[&piece.mesh], &shader, None, target)?;
+            }
+        }
+        // The drawn depth becomes the impostor's; its old one is cleared next time.
+        std::mem::swap(&mut impostor.gd, &mut target.gd);
+        let visible = &target.attributes;
+        resolve(impostor, (mesh, object), color, before, |i| {
+            visible.pixels()[i]
+        });
         Ok(())
     }
 
@@ -707,44 +757,6 @@ impl FragmentShader for SourcePoint<'_> {
         let b = full_barycentrics(Vec2::new(f.bary.y, f.bary.z));
         Some(to_source(Some(self.source), f.item.triangle, b))
     }
-}
-
-/// Graph-camera construction (§4.5): every frustum rasterizes the triangles clipped to it with
-/// its own matrix, over one image; the largest `gd` wins (frusta in order, so ties keep the
-/// earlier one).
-fn build_graph<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
-    g: crate::camera::GraphCamera,
-    mesh: &Mesh,
-    object: u32,
-    color: &F,
-) -> Result<Impostor, FrameError> {
-    let camera = ImpostorCamera::Graph(g);
-    let ImpostorCamera::Graph(g) = &camera else {
-        unreachable!("just built")
-    };
-    let (w, h) = g.resolution();
-    let groups = group_bounds(mesh);
-    let pieces: Vec<Tessellation> = (0..g.frusta().len())
-        .into_par_iter()
-        .map(|j| clip_to_frustum(g, j, mesh, &groups))
-        .collect();
-    let mut target = RasterTarget::new(w, h, None)?;
-    for (j, piece) in pieces.iter().enumerate() {
-        if !piece.source.is_empty() {
-            let shader = SourcePoint {
-                source: &piece.source,
-            };
-            rasterize_over(&g.frustum(j), &[&piece.mesh], &shader, None, &mut target)?;
-        }
-    }
-    let mut impostor = zeroed_impostor(camera)?;
-    let visible = target.attributes;
-    impostor.gd = target.gd;
-    let before = MapsBefore::Zeroed;
-    resolve(&mut impostor, (mesh, object), color, before, |i| {
-        visible.pixels()[i]
-    });
-    Ok(impostor)
 }
 
 /// A colour function that returns the mesh's albedo (material colour × texture), unlit.
