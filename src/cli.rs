@@ -843,20 +843,14 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 }
                 (Some(kind), false) => {
                     let mesh = trompe::geom::io::load(&input)?.mesh;
-                    let b = mesh.bounds();
-                    let (center, radius) = (b.center(), b.radius());
-                    let dir = from.try_normalize().context("--from must not be zero")?;
+                    if from.length_squared() == 0.0 {
+                        bail!("--from must not be zero");
+                    }
                     if !(distance.is_finite() && distance > 1.0) {
                         bail!("--distance {distance}: must be more than 1 radius");
                     }
-                    let cam = trompe::impostor::ImpostorCamera::fitted(
-                        kind,
-                        center + dir * radius * distance,
-                        center,
-                        radius,
-                        radius as f64,
-                        resolution,
-                        &mesh.positions,
+                    let cam = trompe::impostor::ImpostorCamera::facing_mesh(
+                        kind, &mesh, from, distance, resolution,
                     )
                     .with_context(|| format!("{}: placing the camera", input.display()))?;
                     (mesh, cam)

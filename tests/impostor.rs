@@ -480,21 +480,9 @@ fn a_cube_map_of_a_room_answers_rays_that_meet_it_next_to_its_edges() {
 }
 
 /// The camera `trompe impostor bake` places by default: 3 bounding radii from the centre along
-/// (0, 0.3, 1), its SPOC strength chosen for rays from within one radius of it.
+/// (0, 0.3, 1).
 fn baked_camera(mesh: &trompe::geom::Mesh, kind: CheckCamera, size: u32) -> ImpostorCamera {
-    let b = mesh.bounds();
-    let (center, radius) = (b.center(), b.radius());
-    let eye = center + glam::Vec3::new(0.0, 0.3, 1.0).normalize() * radius * 3.0;
-    ImpostorCamera::fitted(
-        kind,
-        eye,
-        center,
-        radius,
-        radius as f64,
-        size,
-        &mesh.positions,
-    )
-    .unwrap()
+    ImpostorCamera::facing_mesh(kind, mesh, glam::Vec3::new(0.0, 0.3, 1.0), 3.0, size).unwrap()
 }
 
 #[test]

@@ -74,6 +74,36 @@ impl ImpostorCamera {
         Self::around_framed(kind, eye, center, radius, region, size, 1.0)
     }
 
+    /// The camera `trompe impostor bake` places for `mesh`: its viewpoint `distance` bounding
+    /// radii from the mesh's centre along `from`, framed tightly on the mesh
+    /// ([`ImpostorCamera::fitted`]), a SPOC's strength chosen for rays from within one radius of
+    /// the viewpoint.
+    pub fn facing_mesh(
+        kind: ViewCamera,
+        mesh: &crate::geom::Mesh,
+        from: Vec3,
+        distance: f32,
+        size: u32,
+    ) -> Result<ImpostorCamera, crate::camera::CameraError> {
+        let b = mesh.bounds();
+        let (center, radius) = (b.center(), b.radius());
+        let dir = from
+            .try_normalize()
+            .ok_or(crate::camera::CameraError::Degenerate(
+                "the direction to the camera is zero",
+            ))?;
+        let eye = center + dir * radius * distance;
+        Self::fitted(
+            kind,
+            eye,
+            center,
+            radius,
+            radius as f64,
+            size,
+            &mesh.positions,
+        )
+    }
+
     /// [`ImpostorCamera::around`], then framed tightly on `points` (the object's vertices):
     /// the view is narrowed until their image fills 95 % of the half-width, so no texel is
     /// spent on the empty corners of the bounding sphere's image. If a point does not project,
