@@ -6,8 +6,9 @@
 //! the shipped models' counts; rasterized depth against BVH depth on the bunny.
 //!
 //! Section "Non-pinhole impostors" (issue 3): pinhole and SPOC impostors of the teapot (colour and
-//! gd false colour), their fidelity against the BVH, and a mirror bunny whose reflected rays are
-//! answered by the BVH, each impostor, or the environment alone.
+//! gd false colour), their fidelity against the BVH — on a reflector's rays, and baked as
+//! `impostor bake` does, on rays from around the viewpoint — and a mirror bunny whose reflected
+//! rays are answered by the BVH, each impostor, or the environment alone.
 
 use crate::frame::metrics::{self, Scores};
 use crate::frame::{Frame, FrameError, io};
