@@ -724,13 +724,23 @@ fn clip_to_frustum(
     let planes = frustum_planes(g, j);
     let mut out = (Vec::new(), Vec::new());
     for (k, b) in groups.iter().enumerate() {
-        let sides: Vec<Side> = planes.iter().map(|p| box_side(p, b)).collect();
-        if sides.contains(&Side::Outside) {
+        let (mut outside, mut inside_all) = (false, true);
+        for plane in &planes {
+            match box_side(plane, b) {
+                Side::Outside => {
+                    outside = true;
+                    break;
+                }
+                Side::Across => inside_all = false,
+                Side::Inside => {}
+            }
+        }
+        if outside {
             continue;
         }
         let first = k * CLIP_GROUP;
         let triangles = first..(first + CLIP_GROUP).min(mesh.triangles.len());
-        if sides.iter().all(|&s| s == Side::Inside) {
+        if inside_all {
             for t in triangles {
                 out.0.extend_from_slice(&mesh.corners(t));
                 out.1.push((t as u32, [Vec3::X, Vec3::Y, Vec3::Z]));
