@@ -6,7 +6,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use std::path::PathBuf;
-use trompe::bench::{framed_pinhole, raster_once, raster_view, render_raster_once};
+use trompe::bench::{framed_pinhole, plain_raster, raster_view, render_raster_once};
 use trompe::camera::Spoc;
 use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup};
 use trompe::impostor::{ImpostorCamera, albedo_of, build};
@@ -26,10 +26,12 @@ fn impostor(c: &mut Criterion) {
     let color = albedo_of(&bunny);
     let mut group = c.benchmark_group("impostor build, bunny 512²");
     group.bench_function("SPOC impostor", |bch| {
-        bch.iter(|| build(ImpostorCamera::Spoc(spoc.clone()), &bunny, 0, &color).expect("valid"))
+        bch.iter_with_large_drop(|| {
+            build(ImpostorCamera::Spoc(spoc.clone()), &bunny, 0, &color).expect("valid")
+        })
     });
     group.bench_function("peer: pinhole impostor (same maps)", |bch| {
-        bch.iter(|| {
+        bch.iter_with_large_drop(|| {
             build(
                 ImpostorCamera::Pinhole(spoc.pinhole().clone()),
                 &bunny,
@@ -64,20 +66,20 @@ fn impostor(c: &mut Criterion) {
         })
     });
     group.bench_function("peer: plain rasterization (depth + ids)", |bch| {
-        bch.iter(|| raster_once(spoc.pinhole(), &bunny))
+        bch.iter_with_large_drop(|| plain_raster(spoc.pinhole(), &bunny))
     });
     // The SPOC's reference pinhole is wider by (1 + k)·1.05 than one framing the bunny's
     // bounding sphere, as a pinhole impostor's camera does: the bunny is smaller there.
     if let Some(framed) = framed_pinhole(eye, b.center(), b.radius(), 512) {
         group.bench_function(
             "peer: plain rasterization through a pinhole framing the sphere",
-            |bch| bch.iter(|| raster_once(&framed, &bunny)),
+            |bch| bch.iter_with_large_drop(|| plain_raster(&framed, &bunny)),
         );
     }
     let render_peer = raster_view(spoc.pinhole(), &bunny);
     group.bench_function(
         "peer: raster render method (colour, distance, normals, ids)",
-        |bch| bch.iter(|| render_raster_once(&render_peer)),
+        |bch| bch.iter_with_large_drop(|| render_raster_once(&render_peer)),
     );
     group.finish();
 
@@ -111,11 +113,13 @@ fn impostor(c: &mut Criterion) {
     let color = albedo_of(&scene);
     let mut group = c.benchmark_group("graph-camera impostor, maze + 4 bunnies 512²");
     group.bench_function("graph impostor", |bch| {
-        bch.iter(|| build(ImpostorCamera::Graph(graph.clone()), &scene, 0, &color).expect("valid"))
+        bch.iter_with_large_drop(|| {
+            build(ImpostorCamera::Graph(graph.clone()), &scene, 0, &color).expect("valid")
+        })
     });
     group.bench_function(
         "peer: depth + id rasterization through its root pinhole",
-        |bch| bch.iter(|| raster_once(graph.root(), &scene)),
+        |bch| bch.iter_with_large_drop(|| plain_raster(graph.root(), &scene)),
     );
     group.finish();
 }

@@ -10,9 +10,10 @@
 //! in its corridors beside a rasterization through the camera's root.
 
 use crate::camera::Pinhole;
+use crate::frame::Frame;
 use crate::frame::envmap::EnvMap;
 use crate::geom::{Mesh, Ray};
-use crate::raster::{ItemId, NoAttributes, rasterize};
+use crate::raster::{ItemId, NoAttributes, RasterStats, RasterTarget, rasterize};
 use crate::render::{Timings, render_raster};
 use crate::scene::{Light, Lighting, Surface, View};
 use crate::trace::{BruteForce, Bvh, RayQuery};
@@ -33,13 +34,16 @@ pub fn framing_camera(mesh: &Mesh, size: u32) -> Pinhole {
 }
 
 /// Runs `f` repeatedly for at least `min_time` (and at least once); returns the median duration.
-pub fn time_median(min_time: Duration, mut f: impl FnMut()) -> Duration {
+/// What `f` returns is dropped after its clock stops: a build is timed, not the freeing of what
+/// it built (criterion's `iter_with_large_drop`).
+pub fn time_median<T>(min_time: Duration, mut f: impl FnMut() -> T) -> Duration {
     let mut samples = Vec::new();
     let start = Instant::now();
     while samples.is_empty() || (start.elapsed() < min_time && samples.len() < 1000) {
         let t = Instant::now();
-        f();
+        let output = f();
         samples.push(t.elapsed());
+        drop(output);
     }
     samples.sort();
     samples[samples.len() / 2]
@@ -47,21 +51,24 @@ pub fn time_median(min_time: Duration, mut f: impl FnMut()) -> Duration {
 
 /// Median times of `a` and `b`, run alternately (`a`, `b`, `a`, `b` …) for at least `min_time`
 /// in all: a workload and its peer see the same machine, so their ratio holds steady on a
-/// noisy one where two separate medians drift apart.
-pub fn time_pair_median(
+/// noisy one where two separate medians drift apart. As in [`time_median`], what each returns
+/// is dropped after its clock stops.
+pub fn time_pair_median<A, B>(
     min_time: Duration,
-    mut a: impl FnMut(),
-    mut b: impl FnMut(),
+    mut a: impl FnMut() -> A,
+    mut b: impl FnMut() -> B,
 ) -> (Duration, Duration) {
     let mut samples = (Vec::new(), Vec::new());
     let start = Instant::now();
     while samples.0.is_empty() || (start.elapsed() < min_time && samples.0.len() < 1000) {
         let t = Instant::now();
-        a();
+        let output = a();
         samples.0.push(t.elapsed());
+        drop(output);
         let t = Instant::now();
-        b();
+        let output = b();
         samples.1.push(t.elapsed());
+        drop(output);
     }
     samples.0.sort();
     samples.1.sort();
@@ -86,8 +93,13 @@ pub fn fragments_through<P: crate::camera::Projection>(camera: &P, mesh: &Mesh) 
 
 /// Rasterizes `mesh` through `camera` into depth and item buffers; returns pixels written.
 pub fn raster_once(camera: &Pinhole, mesh: &Mesh) -> u64 {
-    let (_, stats) = rasterize(camera, &[mesh], &NoAttributes, ()).expect("camera size is valid");
-    stats.written
+    plain_raster(camera, mesh).1.written
+}
+
+/// Rasterizes `mesh` through `camera` into depth and item buffers (the plain rasterization
+/// peers), returning them, so a timer can leave their freeing out as it does a build's.
+pub fn plain_raster(camera: &Pinhole, mesh: &Mesh) -> (RasterTarget<()>, RasterStats) {
+    rasterize(camera, &[mesh], &NoAttributes, ()).expect("camera size is valid")
 }
 
 /// The raster render method's view of `mesh` alone (diffuse, its own materials) through
@@ -109,11 +121,10 @@ pub fn raster_view(camera: &Pinhole, mesh: &Mesh) -> (View, Lighting) {
     (view, lighting)
 }
 
-/// Renders a [`raster_view`] by the raster method; returns its width.
-pub fn render_raster_once((view, lighting): &(View, Lighting)) -> u32 {
+/// Renders a [`raster_view`] by the raster method.
+pub fn render_raster_once((view, lighting): &(View, Lighting)) -> Frame {
     let mut timings = Timings::default();
-    let frame = render_raster(view, lighting, &(), &mut timings).expect("camera size is valid");
-    frame.color.size().0
+    render_raster(view, lighting, &(), &mut timings).expect("camera size is valid")
 }
 
 /// The bytes a depth + item rasterization writes, copied once (the raster peer).
@@ -262,19 +273,16 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     let plain = spoc.pinhole().clone();
     let color = albedo_of(mesh);
     // The workload of the first three pairs below: a fresh SPOC impostor.
-    let fresh_spoc_build = || {
-        build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-    };
-    let (t_spoc, t_plain) = time_pair_median(min * 2, fresh_spoc_build, || {
-        raster_once(&plain, mesh);
-    });
+    let fresh_spoc_build =
+        || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
+    let (t_spoc, t_plain) =
+        time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&plain, mesh));
     // The same rasterization through the pinhole a pinhole impostor of the object would have:
     // framing its bounding sphere. The SPOC's reference pinhole above is wider by (1 + k)·1.05,
     // to hold the pushed-out silhouette, so the object is smaller there than in either image.
     let framed = framed_pinhole(eye, b.center(), radius, size).unwrap_or_else(|| plain.clone());
-    let (t_spoc_framed, t_framed) = time_pair_median(min * 2, fresh_spoc_build, || {
-        raster_once(&framed, mesh);
-    });
+    let (t_spoc_framed, t_framed) =
+        time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&framed, mesh));
     let (spoc_fragments, plain_fragments, framed_fragments) = (
         fragments_through(&spoc, mesh),
         fragments_through(&plain, mesh),
@@ -283,12 +291,12 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     // The object's image rendered by the raster method (colour, distance, normals, ids).
     let render_peer = raster_view(&plain, mesh);
     let (t_spoc_again, t_render) = time_pair_median(min * 2, fresh_spoc_build, || {
-        render_raster_once(&render_peer);
+        render_raster_once(&render_peer)
     });
     // What the SPOC itself costs in a fresh build: the same maps through its reference pinhole.
     let pinhole_camera = ImpostorCamera::Pinhole(plain.clone());
     let (t_spoc_vs_pinhole, t_pinhole_fresh) = time_pair_median(min * 2, fresh_spoc_build, || {
-        build(pinhole_camera.clone(), mesh, 0, &color).expect("valid size");
+        build(pinhole_camera.clone(), mesh, 0, &color).expect("valid size")
     });
     // The steady state of a dynamic scene: the same impostor rebuilt every frame, its memory
     // reused, beside a plain rasterization into a reused target.
@@ -512,12 +520,8 @@ pub fn graph_impostors(
     let camera = ImpostorCamera::Graph(g.clone());
     let (t_graph, t_root) = time_pair_median(
         min * 2,
-        || {
-            build(camera.clone(), &mesh, 0, &color).expect("valid size");
-        },
-        || {
-            raster_once(g.root(), &mesh);
-        },
+        || build(camera.clone(), &mesh, 0, &color).expect("valid size"),
+        || plain_raster(g.root(), &mesh),
     );
     // Rebuilt every frame, its memory reused, beside the root rasterization into a reused target.
     let mut builder = crate::impostor::ImpostorBuilder::new();
