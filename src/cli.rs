@@ -281,6 +281,17 @@ fn with_spinner<T>(label: &str, work: impl FnOnce() -> T) -> T {
     out
 }
 
+/// Loads a mesh under a spinner (a large scan takes seconds to parse) and prints what the loader
+/// survived (dropped degenerate triangles, skipped elements) as warnings.
+fn load_mesh(path: &Path) -> Result<trompe::Mesh> {
+    let label = format!("loading {}", path.display());
+    let loaded = with_spinner(&label, || trompe::geom::io::load(path))?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(loaded.mesh)
+}
+
 /// Refuses an output path that is one of the inputs: nothing a user gave is overwritten.
 fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
     let canon = |p: &Path| std::fs::canonicalize(p).ok();
@@ -341,7 +352,7 @@ fn build_checked(
     else {
         bail!("a built impostor is checked with a reflector's rays");
     };
-    let refl = trompe::geom::io::load(&path)?.mesh;
+    let refl = timings.time("load reflector", || load_mesh(&path))?;
     let (setup, cam) = match (kind, is_maze(input)) {
         (None, true) => {
             let maze = trompe::scene::maze::Maze::load(input)?;
@@ -352,7 +363,7 @@ fn build_checked(
             (setup, ImpostorCamera::Graph(g))
         }
         (Some(kind), false) => {
-            let target = trompe::geom::io::load(input)?.mesh;
+            let target = timings.time("load mesh", || load_mesh(input))?;
             let setup = ReflectorSetup::new(&target, &refl, distance, view)
                 .context("placing the reflector")?;
             let cam = setup
@@ -417,13 +428,13 @@ fn load_checked(
     let (target, setup) = match (graph, is_maze(input)) {
         (true, true) => {
             let maze = trompe::scene::maze::Maze::load(input)?;
-            let refl = trompe::geom::io::load(&reflector)?.mesh;
+            let refl = timings.time("load reflector", || load_mesh(&reflector))?;
             let setup = trompe::impostor::fidelity::ReflectorSetup::in_maze(&maze, &refl, view)
                 .context("placing the reflector")?;
             (setup.target.clone(), Some(setup))
         }
         (false, false) => (
-            std::sync::Arc::new(trompe::geom::io::load(input)?.mesh),
+            std::sync::Arc::new(timings.time("load mesh", || load_mesh(input))?),
             None,
         ),
         (true, false) => bail!(
@@ -842,7 +853,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                     (maze.mesh(), trompe::impostor::ImpostorCamera::Graph(g))
                 }
                 (Some(kind), false) => {
-                    let mesh = trompe::geom::io::load(&input)?.mesh;
+                    let mesh = timings.time("load mesh", || load_mesh(&input))?;
                     if from.length_squared() == 0.0 {
                         bail!("--from must not be zero");
                     }
@@ -879,7 +890,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                     })
                 })
                 .context("saving the impostor")?;
-            io::write_png(&preview, &imp.color)?;
+            timings.time("write preview", || io::write_png(&preview, &imp.color))?;
             println!(
                 "{} impostor {resolution}², {:.1} % of texels covered",
                 imp.camera.kind(),
@@ -901,7 +912,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                     .assets
                     .join("meshes/bunny.obj")
             });
-            let m = trompe::geom::io::load(&path)?.mesh;
+            let m = load_mesh(&path)?;
             println!(
                 "trompe bench on {} ({} triangles), {} threads",
                 path.display(),

@@ -364,3 +364,33 @@ fn a_baked_impostor_is_checked_against_the_mesh_it_was_baked_from() {
         "100000000000",
     );
 }
+
+/// What the loader survived reaches the user of every command that reads a mesh, not only
+/// `info`: baking a mesh with a degenerate triangle warns of it, and still bakes the rest.
+#[test]
+fn baking_a_mesh_with_a_degenerate_triangle_warns_of_it() {
+    let d = scratch("cli_bake_warning");
+    let obj = d.join("degenerate.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\nf 1 2 3\nf 1 1 2\nf 1 2 4\n",
+    )
+    .unwrap();
+    let json = d.join("degenerate.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        obj.to_str().unwrap(),
+        "--resolution",
+        "32",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("degenerate.obj") && e.contains("dropped 1 degenerate triangle"),
+        "{e}"
+    );
+    assert!(json.is_file());
+}
