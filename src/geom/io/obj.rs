@@ -25,6 +25,8 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
 
     // Unified vertices: (v, vt, vn) → index.
     let mut unify: HashMap<(u32, u32, u32), u32> = HashMap::new();
+    // Unified vertices of corners with a position only: `bare[v]` (`u32::MAX` until seen).
+    let mut bare: Vec<u32> = Vec::new();
     let mut corners: Vec<(u32, u32, u32)> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut face_material: Vec<u32> = Vec::new();
@@ -32,19 +34,23 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let mut any_vt = false;
 
     for (line_no, line) in text.lines().enumerate() {
-        let element = || format!("line {}", line_no + 1);
+        let at = Line {
+            path,
+            number: line_no + 1,
+        };
+        let element = || at.element();
         let line = line.split('#').next().unwrap_or("").trim();
         let mut tokens = line.split_whitespace();
         let Some(keyword) = tokens.next() else {
             continue;
         };
         match keyword {
-            "v" => v.push(parse_vec3(path, &element(), &mut tokens)?),
-            "vn" => vn.push(parse_vec3(path, &element(), &mut tokens)?),
+            "v" => v.push(parse_vec3(&at, &mut tokens)?),
+            "vn" => vn.push(parse_vec3(&at, &mut tokens)?),
             "vt" => {
-                let u = parse_f32(path, &element(), tokens.next())?;
+                let u = parse_f32(&at, tokens.next())?;
                 let t = match tokens.next() {
-                    Some(s) => parse_f32(path, &element(), Some(s))?,
+                    Some(s) => parse_f32(&at, Some(s))?,
                     None => 0.0,
                 };
                 vt.push(Vec2::new(u, 1.0 - t));
@@ -53,24 +59,35 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 let mut poly: Vec<u32> = Vec::with_capacity(4);
                 for tok in tokens {
                     let mut parts = tok.split('/');
-                    let iv =
-                        resolve(path, &element(), parts.next(), v.len())?.ok_or_else(|| {
-                            malformed(
-                                path,
-                                element(),
-                                format!("face corner {tok:?} has no vertex index"),
-                            )
-                        })?;
-                    let it = resolve(path, &element(), parts.next(), vt.len())?;
-                    let inn = resolve(path, &element(), parts.next(), vn.len())?;
+                    let iv = resolve(&at, parts.next(), v.len())?.ok_or_else(|| {
+                        malformed(
+                            path,
+                            element(),
+                            format!("face corner {tok:?} has no vertex index"),
+                        )
+                    })?;
+                    let it = resolve(&at, parts.next(), vt.len())?;
+                    let inn = resolve(&at, parts.next(), vn.len())?;
                     any_vt |= it.is_some();
                     all_have_vn &= inn.is_some();
                     let key = (iv, it.map_or(u32::MAX, |x| x), inn.map_or(u32::MAX, |x| x));
                     let next = corners.len() as u32;
-                    let idx = *unify.entry(key).or_insert_with(|| {
+                    let slot = if it.is_none() && inn.is_none() {
+                        // A bare `v` corner (scans often have nothing else): indexed directly,
+                        // no hashing. `iv < v.len()`, so this grows with the file.
+                        let i = iv as usize;
+                        if i >= bare.len() {
+                            bare.resize(v.len(), u32::MAX);
+                        }
+                        &mut bare[i]
+                    } else {
+                        unify.entry(key).or_insert(u32::MAX)
+                    };
+                    if *slot == u32::MAX {
+                        *slot = next;
                         corners.push(key);
-                        next
-                    });
+                    }
+                    let idx = *slot;
                     poly.push(idx);
                 }
                 if poly.len() < 3 {
@@ -145,50 +162,61 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     })
 }
 
-fn parse_f32(path: &Path, element: &str, tok: Option<&str>) -> Result<f32, MeshError> {
-    let tok = tok.ok_or_else(|| malformed(path, element, "missing number"))?;
+/// Where in an OBJ file a value is read: errors name the line, formatted only when one occurs
+/// (formatting it for every value read took a quarter of a large file's load).
+struct Line<'a> {
+    path: &'a Path,
+    number: usize,
+}
+
+impl Line<'_> {
+    fn element(&self) -> String {
+        format!("line {}", self.number)
+    }
+
+    fn malformed(&self, reason: impl Into<String>) -> MeshError {
+        malformed(self.path, self.element(), reason)
+    }
+}
+
+fn parse_f32(at: &Line<'_>, tok: Option<&str>) -> Result<f32, MeshError> {
+    let tok = tok.ok_or_else(|| at.malformed("missing number"))?;
     let x: f32 = tok
         .parse()
-        .map_err(|_| malformed(path, element, format!("{tok:?} is not a number")))?;
+        .map_err(|_| at.malformed(format!("{tok:?} is not a number")))?;
     if !x.is_finite() {
         return Err(MeshError::NonFinite {
-            path: path.to_path_buf(),
-            element: element.to_string(),
+            path: at.path.to_path_buf(),
+            element: at.element(),
         });
     }
     Ok(x)
 }
 
 fn parse_vec3<'a>(
-    path: &Path,
-    element: &str,
+    at: &Line<'_>,
     tokens: &mut impl Iterator<Item = &'a str>,
 ) -> Result<Vec3, MeshError> {
     Ok(Vec3::new(
-        parse_f32(path, element, tokens.next())?,
-        parse_f32(path, element, tokens.next())?,
-        parse_f32(path, element, tokens.next())?,
+        parse_f32(at, tokens.next())?,
+        parse_f32(at, tokens.next())?,
+        parse_f32(at, tokens.next())?,
     ))
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index; `None` for an empty field.
-fn resolve(
-    path: &Path,
-    element: &str,
-    field: Option<&str>,
-    count: usize,
-) -> Result<Option<u32>, MeshError> {
+fn resolve(at: &Line<'_>, field: Option<&str>, count: usize) -> Result<Option<u32>, MeshError> {
     let Some(field) = field.filter(|f| !f.is_empty()) else {
         return Ok(None);
     };
     let i: i64 = field
         .parse()
-        .map_err(|_| malformed(path, element, format!("{field:?} is not an index")))?;
+        .map_err(|_| at.malformed(format!("{field:?} is not an index")))?;
     let resolved = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || resolved < 0 || resolved >= count as i64 {
         return Err(MeshError::IndexOutOfRange {
-            path: path.to_path_buf(),
-            element: element.to_string(),
+            path: at.path.to_path_buf(),
+            element: at.element(),
             index: i,
             count,
         });
@@ -205,7 +233,10 @@ fn load_mtl(
     let text = String::from_utf8_lossy(bytes);
     let mut current: Option<usize> = None;
     for (line_no, line) in text.lines().enumerate() {
-        let element = format!("line {}", line_no + 1);
+        let at = Line {
+            path,
+            number: line_no + 1,
+        };
         let line = line.split('#').next().unwrap_or("").trim();
         let mut tokens = line.split_whitespace();
         let Some(keyword) = tokens.next() else {
@@ -228,7 +259,7 @@ fn load_mtl(
                 current = Some(i);
             }
             "Kd" => {
-                let kd = parse_vec3(path, &element, &mut tokens)?;
+                let kd = parse_vec3(&at, &mut tokens)?;
                 if let Some(m) = current.and_then(|i| materials.get_mut(i)) {
                     m.base_color = kd;
                 }
@@ -237,7 +268,7 @@ fn load_mtl(
                 // Options (-s, -o …) precede the file name; the name is the last token.
                 let name = tokens
                     .last()
-                    .ok_or_else(|| malformed(path, &element, "map_Kd names no file"))?;
+                    .ok_or_else(|| at.malformed("map_Kd names no file"))?;
                 let tex = load_texture(path, name)?;
                 if let Some(m) = current.and_then(|i| materials.get_mut(i)) {
                     m.texture = Some(tex);
@@ -252,4 +283,42 @@ fn load_mtl(
         m.base_color = Vec3::ONE;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load_text(name: &str, text: &str) -> Result<LoadedMesh, MeshError> {
+        let dir = std::env::temp_dir().join(format!("trompe-obj-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = dir.join(name);
+        std::fs::write(&path, text).expect("write");
+        load(&path)
+    }
+
+    /// A corner with a position only and one with a texture coordinate are different vertices,
+    /// even at the same position; a repeated corner of either kind is one vertex.
+    #[test]
+    fn corners_unify_by_position_texture_and_normal_together() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 0.5\n\
+                    f 1 2 3\nf 1 3 2\nf 1/1 2/1 3/1\nf 3/1 2/1 1/1\n";
+        let m = load_text("mixed.obj", text).expect("valid").mesh;
+        assert_eq!(m.positions.len(), 6);
+        assert_eq!(
+            m.triangles,
+            vec![[0, 1, 2], [0, 2, 1], [3, 4, 5], [5, 4, 3]]
+        );
+    }
+
+    /// Errors name the line they come from (formatted only when one occurs).
+    #[test]
+    fn a_bad_value_is_reported_with_its_line() {
+        let e = load_text("bad_value.obj", "v 0 0 0\nv 1 0 0\nv 0 x 0\nf 1 2 3\n")
+            .expect_err("a bad number");
+        assert!(e.to_string().contains("line 3"), "{e}");
+        let e = load_text("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 9\n")
+            .expect_err("an index out of range");
+        assert!(e.to_string().contains("line 5"), "{e}");
+    }
 }
