@@ -97,16 +97,26 @@ struct Body<'a> {
     format: Format,
     bytes: &'a [u8],
     pos: usize,
-    element: String,
+    /// The kind of element being read (`vertex`, `face` …) and its index: named in errors,
+    /// formatted only when one occurs.
+    kind: String,
+    index: usize,
 }
 
 impl Body<'_> {
+    /// The element being read, as errors name it (`vertex 12`).
+    fn element(&self) -> String {
+        format!("{} {}", self.kind, self.index)
+    }
+
+    /// Starts reading the elements of one kind.
+    fn start(&mut self, kind: &str) {
+        self.kind = kind.to_string();
+        self.index = 0;
+    }
+
     fn truncated(&self) -> MeshError {
-        malformed(
-            self.path,
-            self.element.clone(),
-            "file ends early (truncated)",
-        )
+        malformed(self.path, self.element(), "file ends early (truncated)")
     }
 
     fn read(&mut self, ty: Scalar) -> Result<f64, MeshError> {
@@ -126,7 +136,7 @@ impl Body<'_> {
                 tok.parse::<f64>().map_err(|_| {
                     malformed(
                         self.path,
-                        self.element.clone(),
+                        self.element(),
                         format!("{tok:?} is not a number"),
                     )
                 })
@@ -169,7 +179,8 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         format,
         bytes: &bytes,
         pos: body_start,
-        element: String::new(),
+        kind: String::new(),
+        index: 0,
     };
     let mut warnings = Vec::new();
     let mut positions: Vec<Vec3> = Vec::new();
@@ -214,8 +225,9 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 has_uvs = uv.iter().all(Option::is_some);
                 positions.reserve(el.count);
                 let mut values = vec![0.0f64; el.properties.len()];
+                body.start("vertex");
                 for i in 0..el.count {
-                    body.element = format!("vertex {i}");
+                    body.index = i;
                     for (k, p) in el.properties.iter().enumerate() {
                         values[k] = read_property(&mut body, p)?;
                     }
@@ -223,7 +235,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     if !p.is_finite() {
                         return Err(MeshError::NonFinite {
                             path: path.to_path_buf(),
-                            element: body.element.clone(),
+                            element: body.element(),
                         });
                     }
                     positions.push(p);
@@ -251,8 +263,9 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     ));
                 };
                 triangles.reserve(el.count);
+                body.start("face");
                 for f in 0..el.count {
-                    body.element = format!("face {f}");
+                    body.index = f;
                     for (k, p) in el.properties.iter().enumerate() {
                         if k != list {
                             read_property(&mut body, p)?;
@@ -265,7 +278,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                         if !(3.0..=MAX_FACE_VERTICES as f64).contains(&n) {
                             return Err(malformed(
                                 path,
-                                body.element.clone(),
+                                body.element(),
                                 format!("a face with {n} vertices"),
                             ));
                         }
@@ -275,7 +288,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                             if i < 0.0 || i >= vertex_count as f64 || i.fract() != 0.0 {
                                 return Err(MeshError::IndexOutOfRange {
                                     path: path.to_path_buf(),
-                                    element: body.element.clone(),
+                                    element: body.element(),
                                     index: i as i64,
                                     count: vertex_count,
                                 });
@@ -293,8 +306,9 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     path: path.to_path_buf(),
                     what: format!("element {other:?} ({} items)", el.count),
                 });
+                body.start(other);
                 for i in 0..el.count {
-                    body.element = format!("{other} {i}");
+                    body.index = i;
                     for p in &el.properties {
                         read_property(&mut body, p)?;
                     }
@@ -332,7 +346,7 @@ fn read_property(body: &mut Body, p: &Property) -> Result<f64, MeshError> {
             if !(0.0..=MAX_FACE_VERTICES as f64).contains(&n) {
                 return Err(malformed(
                     body.path,
-                    body.element.clone(),
+                    body.element(),
                     format!("a list of {n} items"),
                 ));
             }
