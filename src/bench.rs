@@ -8,6 +8,9 @@
 //! Workloads (issue 3): SPOC impostor construction beside pinhole rasterizations of the same
 //! mesh; SPOC walks per resolution; graph-camera impostor construction of a maze with bunnies
 //! in its corridors beside a rasterization through the camera's root.
+//!
+//! Invariant: a timer stops before what it timed is freed, for a workload and its peer alike
+//! (a fresh impostor's maps are 15 MB, and returning them to the system is not building them).
 
 use crate::camera::Pinhole;
 use crate::frame::Frame;
