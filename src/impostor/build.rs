@@ -215,8 +215,16 @@ fn full_barycentrics(b: Vec2) -> Vec3 {
     Vec3::new(1.0 - b.x - b.y, b.x, b.y)
 }
 
-/// A visible point of the source mesh: triangle and barycentrics.
-type Visible = (u32, Vec3);
+/// A visible point of the source mesh: its triangle and barycentrics, and through a graph
+/// camera the frustum that drew it — the view its face normal is turned toward. (Finding that
+/// frustum again with `locate` cost 5 % of a graph build, and a point on a face two frusta
+/// share may be outside both by a rounding error.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Visible {
+    triangle: u32,
+    bary: Vec3,
+    frustum: Option<u32>,
+}
 
 /// A run of texels of every map of an impostor (the same texels of each), row-major.
 struct TexelMaps<'a> {
@@ -289,7 +297,12 @@ where
         before,
     } = inputs;
     for x in 0..run.color.len() {
-        let Some((t, b)) = visible(x) else {
+        let Some(Visible {
+            triangle: t,
+            bary: b,
+            frustum,
+        }) = visible(x)
+        else {
             match before {
                 // Written, not read first: reading a fresh page maps the shared zero page,
                 // and the write after it then pays a second fault.
@@ -311,7 +324,7 @@ where
         run.color[x] = color(&s).extend(1.0);
         run.normal[x] = s.normal;
         // The face normal, turned toward the camera.
-        let toward = camera.toward_camera(s.position.as_dvec3());
+        let toward = toward_viewer(camera, s.position.as_dvec3(), frustum);
         run.face_normal[x] = if face.as_dvec3().dot(toward) < 0.0 {
             -face
         } else {
@@ -411,15 +424,29 @@ fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3) {
     (sample, face)
 }
 
+/// The direction from `p` toward the camera that sees it: through a graph camera, toward the
+/// apex of the frustum that drew it when known.
+fn toward_viewer(camera: &ImpostorCamera, p: glam::DVec3, frustum: Option<u32>) -> glam::DVec3 {
+    match (camera, frustum) {
+        (ImpostorCamera::Graph(g), Some(j)) => g.frusta()[j as usize].apex - p,
+        _ => camera.toward_camera(p),
+    }
+}
+
 /// The source triangle and barycentrics of a fragment of sub-triangle `t` (or of `t` itself
 /// when the mesh was not tessellated).
 fn to_source(source: Option<&[SourceTriangle]>, t: u32, bary: Vec3) -> Visible {
-    match source {
+    let (triangle, bary) = match source {
         Some(src) => {
             let (s, c) = src[t as usize];
             (s, c[0] * bary.x + c[1] * bary.y + c[2] * bary.z)
         }
         None => (t, bary),
+    };
+    Visible {
+        triangle,
+        bary,
+        frustum: None,
     }
 }
 
@@ -543,6 +570,7 @@ impl ImpostorBuilder {
             if !piece.source.is_empty() {
                 let shader = SourcePoint {
                     source: &piece.source,
+                    frustum: j as u32,
                 };
                 rasterize_over(&g.frustum(j), &[&piece.mesh], &shader, None, target)?;
             }
@@ -759,13 +787,18 @@ fn clip_to_frustum(
 struct SourcePoint<'a> {
     /// Source triangle and corner barycentrics of each piece.
     source: &'a [SourceTriangle],
+    /// The frustum drawing them.
+    frustum: u32,
 }
 
 impl FragmentShader for SourcePoint<'_> {
     type Output = Option<Visible>;
     fn shade(&self, f: &Fragment) -> Option<Visible> {
         let b = full_barycentrics(Vec2::new(f.bary.y, f.bary.z));
-        Some(to_source(Some(self.source), f.item.triangle, b))
+        Some(Visible {
+            frustum: Some(self.frustum),
+            ..to_source(Some(self.source), f.item.triangle, b)
+        })
     }
 }
 
@@ -835,7 +868,10 @@ mod tests {
                     gd.pixels_mut()[i] = g_new;
                     let b = full_barycentrics(t.attributes.pixels()[i]);
                     let tri = t.item.pixels()[i].triangle;
-                    visible[i] = Some(to_source(Some(&piece.source), tri, b));
+                    visible[i] = Some(Visible {
+                        frustum: Some(j as u32),
+                        ..to_source(Some(&piece.source), tri, b)
+                    });
                 }
             }
         }
