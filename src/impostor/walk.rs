@@ -81,6 +81,35 @@ pub(super) struct Sample {
     pub delta: f64,
 }
 
+/// Where a skipped run's image must stay (see `Impostor::front_run`): inside one pyramid node,
+/// or wholly on one outer side of the image, where everything is empty.
+#[derive(Clone, Copy, Debug)]
+enum SkipRegion {
+    /// The node's image box `[lo, hi)`.
+    Node { lo: DVec2, hi: DVec2 },
+    /// Left of the column `x`.
+    LeftOf(f64),
+    /// At or right of the column `x`.
+    RightOf(f64),
+    /// Above the row `y`.
+    Above(f64),
+    /// At or below the row `y`.
+    Below(f64),
+}
+
+impl SkipRegion {
+    /// Whether the image box `[min, max]` lies in the region.
+    fn holds(&self, min: DVec2, max: DVec2) -> bool {
+        match *self {
+            SkipRegion::Node { lo, hi } => min.cmpge(lo).all() && max.cmplt(hi).all(),
+            SkipRegion::LeftOf(x) => max.x < x,
+            SkipRegion::RightOf(x) => min.x >= x,
+            SkipRegion::Above(y) => max.y < y,
+            SkipRegion::Below(y) => min.y >= y,
+        }
+    }
+}
+
 impl Impostor {
     /// The first hit of `ray` with `0 < t < t_max`, and the work it took: the exact straight
     /// walk for projective cameras; for the SPOC the hierarchical walk from
@@ -360,16 +389,16 @@ impl Impostor {
         let (wf, hf) = (w as f64, h as f64);
         let uv = at_k.p.uv;
         // The region around sample k, as a test on an image box, and the bound over it.
-        let (inside, bound): (Box<dyn Fn(DVec2, DVec2) -> bool>, f64) = match at_k.texel {
+        let (region, bound) = match at_k.texel {
             None => {
-                let side: Box<dyn Fn(DVec2, DVec2) -> bool> = if uv.x < 0.0 {
-                    Box::new(|_, max: DVec2| max.x < 0.0)
+                let side = if uv.x < 0.0 {
+                    SkipRegion::LeftOf(0.0)
                 } else if uv.x >= wf {
-                    Box::new(move |min: DVec2, _| min.x >= wf)
+                    SkipRegion::RightOf(wf)
                 } else if uv.y < 0.0 {
-                    Box::new(|_, max: DVec2| max.y < 0.0)
+                    SkipRegion::Above(0.0)
                 } else {
-                    Box::new(move |min: DVec2, _| min.y >= hf)
+                    SkipRegion::Below(hf)
                 };
                 (side, 0.0)
             }
@@ -411,11 +440,11 @@ impl Impostor {
                     ((x >> level) << level) as f64,
                     ((y >> level) << level) as f64,
                 );
-                let hi = lo + DVec2::splat(size);
                 (
-                    Box::new(move |min: DVec2, max: DVec2| {
-                        min.cmpge(lo).all() && max.cmplt(hi).all()
-                    }),
+                    SkipRegion::Node {
+                        lo,
+                        hi: lo + DVec2::splat(size),
+                    },
                     bound,
                 )
             }
@@ -423,7 +452,7 @@ impl Impostor {
         let fits = |from: usize, to: usize| {
             self.camera
                 .segment_image_bounds(at(from), at(to))
-                .is_some_and(|(min, max)| inside(min, max))
+                .is_some_and(|(min, max)| region.holds(min, max))
                 && camera.project(at(to)).is_some_and(|p| p.gd > bound)
         };
         let (mut run, mut step) = (0usize, 1usize);
