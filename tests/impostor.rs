@@ -533,3 +533,44 @@ fn a_baked_spoc_answers_rays_from_around_its_viewpoint_better_than_a_pinhole() {
     let walk_misses = rs.missed - rs.missed_unheld;
     assert!(walk_misses * 1000 <= 3 * rs.exact_hits, "{rs:?}");
 }
+
+/// A SPOC's rays curve (§3.2): the direction a walk takes a texel's surface to be seen along is
+/// the tangent of the camera's ray through it — a point moved a little along it keeps its image
+/// point and comes nearer (larger `gd`) — and off the pole it is not the eye's direction. A
+/// pinhole's is the eye's.
+#[test]
+fn the_direction_toward_a_spoc_follows_its_curved_ray() {
+    let teapot = load(&shared("meshes/teapot.obj")).unwrap().mesh;
+    let eps = teapot.bounds().radius() as f64 * 1e-4;
+    let (mut points, mut bent) = (0, 0);
+    for kind in [CheckCamera::Spoc(None), CheckCamera::Pinhole] {
+        let cam = baked_camera(&teapot, kind, 256);
+        for p in teapot.positions.iter().step_by(5) {
+            let p = p.as_dvec3();
+            let q = cam.project(p).unwrap();
+            let along = cam.toward_camera_along_ray(q.uv, q.gd, p);
+            assert!((along.length() - 1.0).abs() < 1e-9, "{along}");
+            let moved = cam.project(p + along * eps).unwrap();
+            let across = along.any_orthonormal_vector();
+            let aside = cam.project(p + across * eps).unwrap();
+            assert!(
+                (moved.uv - q.uv).length() < 1e-3 * (aside.uv - q.uv).length(),
+                "{kind:?} at {p}: moving along the ray moves its image by {} px (across: {})",
+                (moved.uv - q.uv).length(),
+                (aside.uv - q.uv).length()
+            );
+            assert!(moved.gd > q.gd, "{kind:?} at {p}");
+            let eye = cam.toward_camera(p).normalize();
+            match kind {
+                CheckCamera::Pinhole => assert!(along.dot(eye) > 1.0 - 1e-9, "{p}"),
+                _ => {
+                    points += 1;
+                    bent += usize::from(along.dot(eye) < 1.0f64.to_radians().cos());
+                }
+            }
+        }
+    }
+    // Most of the teapot lies off the SPOC's pole, where its rays leave the eye's direction
+    // by more than a degree.
+    assert!(bent * 2 > points, "{bent} of {points}");
+}

@@ -246,8 +246,7 @@ pub fn holds(impostor: &Impostor, p: Vec3) -> Held {
     let n = impostor.face_normal.get(x, y).as_dvec3();
     let view = impostor
         .camera
-        .toward_camera(stored.as_dvec3())
-        .normalize_or_zero();
+        .toward_camera_along_ray(q.uv, q.gd, stored.as_dvec3());
     let cos = n.dot(view).abs().max(0.05);
     Held {
         within_footprint: distance <= AGREEMENT_FOOTPRINTS * footprint,

@@ -219,6 +219,22 @@ impl ImpostorCamera {
         }
     }
 
+    /// The unit direction toward the camera along its ray through image point `(uv, gd)`, at
+    /// the point `p` there: how a surface at `p` is seen, for the slant of a texel's footprint
+    /// on it. [`ImpostorCamera::toward_camera`], except for the SPOC, whose rays curve (§3.2):
+    /// deeper than `z_n` they leave the direction of its eye, and a surface the eye sees
+    /// edge-on is seen more squarely along them — which is what the SPOC is for. Its direction
+    /// is then the ray's tangent, toward larger `gd`.
+    pub fn toward_camera_along_ray(&self, uv: DVec2, gd: f64, p: DVec3) -> DVec3 {
+        match self {
+            ImpostorCamera::Spoc(c) if gd > 0.0 => {
+                let h = gd * 1e-4;
+                (c.unproject(uv, gd + h) - c.unproject(uv, gd - h)).normalize_or_zero()
+            }
+            _ => self.toward_camera(p).normalize_or_zero(),
+        }
+    }
+
     /// A box holding the image of every point of the world segment `[a, b]` (`None` if an end
     /// is outside the camera's domain). Pinhole and orthographic images of a segment are the
     /// segment between the ends' images; the SPOC's lies in the trapezoid spanned by the pinhole

@@ -490,7 +490,11 @@ impl Impostor {
             let x = o + d * ((stored_point - o).dot(n) / denom);
             // The texel covers its footprint stretched by 1/cos θ on a plane seen at θ from
             // its normal (grazing walls of a corridor seen from its end).
-            let view = self.camera.toward_camera(stored_point).normalize_or_zero();
+            let view = self.camera.toward_camera_along_ray(
+                sample.p.uv,
+                sample.stored as f64,
+                stored_point,
+            );
             let cos = n.dot(view).abs().max(MIN_COS);
             let footprint = self.footprint(sample.p.uv, sample.stored as f64) / cos;
             if (x - stored_point).length() <= THICKNESS_FOOTPRINTS * footprint {
