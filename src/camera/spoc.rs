@@ -142,7 +142,12 @@ impl Spoc {
     /// `z_a` and `z_b`, so each image point `p0 + (1 + κ(z))(q − p0)` lies in the trapezoid whose
     /// corners scale `q_a`, `q_b` about the pole by the smallest and largest `1 + κ`.
     pub fn segment_image_bounds(&self, a: DVec3, b: DVec3) -> Option<(DVec2, DVec2)> {
-        let (qa, qb) = (self.ppc.project(a)?, self.ppc.project(b)?);
+        Some(self.pinhole_segment_bounds(self.ppc.project(a)?, self.ppc.project(b)?))
+    }
+
+    /// [`Spoc::segment_image_bounds`] from the images `qa`, `qb` of the segment's ends through
+    /// the reference pinhole ([`Spoc::pinhole`]), for a caller that projects each point once.
+    pub fn pinhole_segment_bounds(&self, qa: ImagePoint, qb: ImagePoint) -> (DVec2, DVec2) {
         let f = self.focal;
         let (sa, sb) = (1.0 + self.kappa(f / qa.gd), 1.0 + self.kappa(f / qb.gd));
         let (s0, s1) = (sa.min(sb), sa.max(sb));
@@ -150,7 +155,7 @@ impl Spoc {
         let all = corners.iter().flatten();
         let min = all.clone().fold(DVec2::INFINITY, |m, p| m.min(*p));
         let max = all.fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
-        Some((min, max))
+        (min, max)
     }
 
     /// The depth ramp `κ(z)`.

@@ -449,11 +449,36 @@ impl Impostor {
                 )
             }
         };
-        let fits = |from: usize, to: usize| {
-            self.camera
-                .segment_image_bounds(at(from), at(to))
-                .is_some_and(|(min, max)| region.holds(min, max))
-                && camera.project(at(to)).is_some_and(|p| p.gd > bound)
+        // Through a SPOC, a run's image box and its end's `gd` both come from the images of its
+        // ends through the reference pinhole (the SPOC's `gd` is the pinhole's), and each end
+        // was usually the other end of the attempt before: the last two are kept.
+        let spoc = match &self.camera {
+            ImpostorCamera::Spoc(s) => Some(s),
+            _ => None,
+        };
+        let mut recent: [Option<(usize, ImagePoint)>; 2] = [None, None];
+        let mut pinhole_image = |i: usize, spoc: &crate::camera::Spoc| {
+            if let Some((_, q)) = recent.iter().flatten().find(|(j, _)| *j == i) {
+                return Some(*q);
+            }
+            let q = spoc.pinhole().project(at(i))?;
+            recent = [Some((i, q)), recent[0]];
+            Some(q)
+        };
+        let mut fits = |from: usize, to: usize| match spoc {
+            Some(s) => match (pinhole_image(from, s), pinhole_image(to, s)) {
+                (Some(qa), Some(qb)) => {
+                    let (min, max) = s.pinhole_segment_bounds(qa, qb);
+                    region.holds(min, max) && qb.gd > bound
+                }
+                _ => false,
+            },
+            None => {
+                self.camera
+                    .segment_image_bounds(at(from), at(to))
+                    .is_some_and(|(min, max)| region.holds(min, max))
+                    && camera.project(at(to)).is_some_and(|p| p.gd > bound)
+            }
         };
         let (mut run, mut step) = (0usize, 1usize);
         // Double while the run fits, then halve back down to single samples.
