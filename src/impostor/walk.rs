@@ -38,9 +38,8 @@ const MIN_SKIP_REMAINING: usize = 4;
 /// Smallest impostor side at which [`Impostor::walk`] walks a SPOC hierarchically. Over
 /// shorter image paths a skip attempt's projections cost more than the texel reads it saves,
 /// an empty texel costing the linear walk a read of the compact `gd` map: `trompe bench`
-/// measured the hierarchical walk at 1.38 – 1.39 × the linear one's time at 128², 1.08 – 1.09 ×
-/// at 256², 0.72 – 1.16 × at 512² (the spread is between builds of the same code) and
-/// 0.53 – 0.73 × at 1024².
+/// measured the hierarchical walk at 1.20 – 1.21 × the linear one's time at 128², 0.96 – 1.01 ×
+/// at 256² (break-even), 0.72 × at 512² and 0.55 – 0.57 × at 1024².
 pub const HIERARCHICAL_MIN_SIDE: u32 = 512;
 /// Upper bound on sub-segments per ray (bounds the work on degenerate input).
 const MAX_STEPS: usize = 1 << 16;
