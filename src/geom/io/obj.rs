@@ -38,7 +38,6 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
             path,
             number: line_no + 1,
         };
-        let element = || at.element();
         let line = line.split('#').next().unwrap_or("").trim();
         let mut tokens = line.split_whitespace();
         let Some(keyword) = tokens.next() else {
@@ -60,11 +59,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 for tok in tokens {
                     let mut parts = tok.split('/');
                     let iv = resolve(&at, parts.next(), v.len())?.ok_or_else(|| {
-                        malformed(
-                            path,
-                            element(),
-                            format!("face corner {tok:?} has no vertex index"),
-                        )
+                        at.malformed(format!("face corner {tok:?} has no vertex index"))
                     })?;
                     let it = resolve(&at, parts.next(), vt.len())?;
                     let inn = resolve(&at, parts.next(), vn.len())?;
@@ -91,11 +86,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     poly.push(idx);
                 }
                 if poly.len() < 3 {
-                    return Err(malformed(
-                        path,
-                        element(),
-                        "a face needs at least 3 vertices",
-                    ));
+                    return Err(at.malformed("a face needs at least 3 vertices"));
                 }
                 for k in 1..poly.len() - 1 {
                     triangles.push([poly[0], poly[k], poly[k + 1]]);
