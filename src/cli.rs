@@ -890,7 +890,9 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                     })
                 })
                 .context("saving the impostor")?;
-            timings.time("write preview", || io::write_png(&preview, &imp.color))?;
+            timings.time("write preview", || {
+                io::write_png(&preview, &imp.color_image())
+            })?;
             println!(
                 "{} impostor {resolution}², {:.1} % of texels covered",
                 imp.camera.kind(),

@@ -338,7 +338,10 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
         };
         let imp = build(cam, &setup.target, 0, &color)?;
         let name = imp.camera.kind();
-        io::write_png(&out.join(format!("impostor-{name}-color.png")), &imp.color)?;
+        io::write_png(
+            &out.join(format!("impostor-{name}-color.png")),
+            &imp.color_image(),
+        )?;
         io::write_png(
             &out.join(format!("impostor-{name}-gd.png")),
             &gd_false_color(&imp.gd),
@@ -518,7 +521,7 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
         albedo(s) * lit * if odd { 0.82 } else { 1.0 }
     };
     let imp = build(ImpostorCamera::Graph(g.clone()), &mesh, 0, &color)?;
-    io::write_png(&out.join("maze-graph-camera.png"), &imp.color)?;
+    io::write_png(&out.join("maze-graph-camera.png"), &imp.color_image())?;
     let splits = g.frusta().iter().filter(|f| f.children.len() >= 2).count();
 
     // Fidelity in the paper's Fig. 5 setting: a mirror bunny in the first corridor.

@@ -76,7 +76,7 @@ fn the_graph_impostor_sees_around_the_corner_and_is_self_consistent() {
     .unwrap();
     let pinhole = build(ImpostorCamera::Pinhole(root), &mesh, 0, &albedo_of(&mesh)).unwrap();
     let sees_target = |imp: &trompe::impostor::Impostor| {
-        imp.position
+        imp.position_image()
             .pixels()
             .iter()
             .zip(imp.gd.pixels())
@@ -95,7 +95,7 @@ fn the_graph_impostor_sees_around_the_corner_and_is_self_consistent() {
             if gd <= 0.0 {
                 continue;
             }
-            let p = graph.position.get(x, y).as_dvec3();
+            let p = graph.position_at(x, y).as_dvec3();
             let q = g
                 .project(p)
                 .unwrap_or_else(|| panic!("texel ({x}, {y}) stores an unprojectable point"));
@@ -173,7 +173,11 @@ fn graph_impostors_save_and_load_exactly() {
     for (fa, fb) in a.frusta().iter().zip(b.frusta()) {
         assert!(fa.matrix.abs_diff_eq(fb.matrix, 1e-9));
     }
-    assert!(back.gd == imp.gd && back.color == imp.color && back.position == imp.position);
+    assert!(
+        back.gd == imp.gd
+            && back.color == imp.color
+            && back.position_image() == imp.position_image()
+    );
     // The reloaded impostor answers rays as the original does, with both algorithms.
     let mut rng = SplitMix64::new(5);
     for _ in 0..500 {
@@ -251,11 +255,11 @@ fn the_maze_graph_camera_shows_every_floor_cell() {
     let imp = build(ImpostorCamera::Graph(g), &mesh, 0, &albedo_of(&mesh)).unwrap();
     let (w, h) = (maze.width(), maze.height());
     let mut floor_texels = vec![0usize; w * h];
-    for ((p, n), &gd) in imp
-        .position
+    let (position, normal) = (imp.position_image(), imp.normal_image());
+    for ((p, n), &gd) in position
         .pixels()
         .iter()
-        .zip(imp.normal.pixels())
+        .zip(normal.pixels())
         .zip(imp.gd.pixels())
     {
         let (c, r) = (p.x.floor(), p.z.floor());
@@ -300,7 +304,11 @@ fn a_rebuilt_graph_impostor_equals_a_fresh_build() {
             .rebuild(&mut imp, scene, 1, &albedo_of(scene))
             .unwrap();
         let fresh = build(camera.clone(), scene, 1, &albedo_of(scene)).unwrap();
-        assert!(imp.gd == fresh.gd && imp.color == fresh.color && imp.position == fresh.position);
+        assert!(
+            imp.gd == fresh.gd
+                && imp.color == fresh.color
+                && imp.position_image() == fresh.position_image()
+        );
         assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);
         assert!(imp.object == fresh.object && imp.bounds == fresh.bounds);
     }

@@ -162,6 +162,51 @@ impl Spoc {
     pub fn kappa(&self, z: f64) -> f64 {
         self.slope * (z - self.z_near).max(0.0)
     }
+
+    /// The `gd` at which the SPOC's ray through image point `uv` meets the plane through
+    /// `point` with normal `normal`, searched near `gd_guess`; `None` when there is no such
+    /// crossing within 10 % of the guess's distance (a plane seen edge-on).
+    ///
+    /// Along the ray `X(t) = C + t·M·(q(t), 1)`, with `q(t) = p0 + (uv − p0)/s(t)` and
+    /// `s(t) = 1 + κ(f·t)`, the plane's equation `n·(X − C) = h` reads
+    /// `g(t) = t·(A + B/s(t)) − h = 0` with `A = n·M(p0, 1)` and `B = n·M(uv − p0, 0)`: solved by
+    /// Newton's method from `t = 1/gd_guess` (`g` is piecewise a quadratic over `s(t)`, and a
+    /// rasterized `gd` starts it within a fraction of a texel).
+    pub fn gd_on_plane(
+        &self,
+        uv: DVec2,
+        normal: DVec3,
+        point: DVec3,
+        gd_guess: f64,
+    ) -> Option<f64> {
+        let c = self.ppc.position();
+        let at_pole = self.ppc.unproject(self.pole, 1.0);
+        let a = normal.dot(at_pole - c);
+        let b = normal.dot(self.ppc.unproject(uv, 1.0) - at_pole);
+        let h = normal.dot(point - c);
+        let t0 = 1.0 / gd_guess;
+        let mut t = t0;
+        for _ in 0..6 {
+            let z = self.focal * t;
+            let s = 1.0 + self.kappa(z);
+            let ds = if z > self.z_near {
+                self.slope * self.focal
+            } else {
+                0.0
+            };
+            let g = t * (a + b / s) - h;
+            let dg = a + b / s - t * b * ds / (s * s);
+            let step = g / dg;
+            if !step.is_finite() {
+                return None;
+            }
+            t -= step;
+            if step.abs() <= 1e-12 * t.abs() {
+                break;
+            }
+        }
+        (t > 0.0 && (t - t0).abs() <= 0.1 * t0).then(|| 1.0 / t)
+    }
 }
 
 impl Projection for Spoc {

@@ -10,6 +10,7 @@
 pub mod envmap;
 pub mod io;
 pub mod metrics;
+pub mod packed;
 
 use glam::{Vec2, Vec3, Vec4};
 use std::ops::{Add, Mul};

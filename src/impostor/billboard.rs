@@ -52,7 +52,7 @@ impl Billboard {
             center: c.as_vec3(),
             right,
             up,
-            image: Arc::new(impostor.color.clone()),
+            image: Arc::new(impostor.color_image()),
             alpha_cutoff: 0.5,
             object,
         })

@@ -5,7 +5,9 @@
 //! image.
 
 use super::{Impostor, ImpostorCamera};
+use crate::camera::Spoc;
 use crate::camera::{ImagePoint, Projection};
+use crate::frame::packed::{HalfRgba, OctUnit, pack_rgba, pack_unit};
 use crate::frame::{FrameError, Image};
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
@@ -13,7 +15,7 @@ use crate::raster::{
     RasterStats, RasterTarget, rasterize_depth_then, rasterize_over,
 };
 use crate::trace::NO_OBJECT;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{DVec2, Vec2, Vec3};
 use rayon::prelude::*;
 
 /// A surface point the impostor stores: what a colour function is given.
@@ -228,10 +230,11 @@ struct Visible {
 
 /// A run of texels of every map of an impostor (the same texels of each), row-major.
 struct TexelMaps<'a> {
-    color: &'a mut [Vec4],
-    normal: &'a mut [Vec3],
-    face_normal: &'a mut [Vec3],
-    position: &'a mut [Vec3],
+    color: &'a mut [HalfRgba],
+    normal: &'a mut [OctUnit],
+    face_normal: &'a mut [OctUnit],
+    /// Through a graph camera only ([`Impostor::position_at`]).
+    position: Option<&'a mut [Vec3]>,
     object: &'a mut [u32],
 }
 
@@ -239,23 +242,21 @@ impl Impostor {
     /// Its `gd`, and its other maps cut into runs of `n` texels (the last may be shorter) for
     /// parallel filling.
     fn gd_and_texel_runs(&mut self, n: usize) -> (&mut Image<f32>, Vec<TexelMaps<'_>>) {
+        let mut positions = self.position.as_mut().map(|p| p.pixels_mut().chunks_mut(n));
         let runs = self
             .color
             .pixels_mut()
             .chunks_mut(n)
             .zip(self.normal.pixels_mut().chunks_mut(n))
             .zip(self.face_normal.pixels_mut().chunks_mut(n))
-            .zip(self.position.pixels_mut().chunks_mut(n))
             .zip(self.object.pixels_mut().chunks_mut(n))
-            .map(
-                |((((color, normal), face_normal), position), object)| TexelMaps {
-                    color,
-                    normal,
-                    face_normal,
-                    position,
-                    object,
-                },
-            )
+            .map(|(((color, normal), face_normal), object)| TexelMaps {
+                color,
+                normal,
+                face_normal,
+                position: positions.as_mut().and_then(|p| p.next()),
+                object,
+            })
             .collect();
         (&mut self.gd, runs)
     }
@@ -272,6 +273,18 @@ enum MapsBefore {
     Zeroed,
 }
 
+/// A run's texels' `gd` and where the run starts, for a SPOC impostor: its rasterizer draws
+/// triangles straight in the image and interpolates `gd` linearly there, while the SPOC's rays
+/// curve, so the resolve moves each texel's `gd` to where its centre's ray meets the plane of
+/// the stored triangle ([`Spoc::gd_on_plane`]). The texel's position, derived from its `gd`
+/// ([`Impostor::position_at`]), is then on that plane, as the walk needs.
+struct RunDepth<'a> {
+    gd: &'a mut [f32],
+    first_pixel: usize,
+    width: usize,
+    spoc: &'a Spoc,
+}
+
 /// What resolving a visibility buffer needs besides the visible points.
 struct ResolveInputs<'a, F> {
     camera: &'a ImpostorCamera,
@@ -284,8 +297,12 @@ struct ResolveInputs<'a, F> {
 /// Fills a run of texels from the visible points `visible(i)` of its texels `i` (counted from
 /// the run's start), and empties the texels with none. After it, every map is empty wherever
 /// `object` is [`NO_OBJECT`].
-fn resolve_run<F, V>(run: &mut TexelMaps<'_>, inputs: &ResolveInputs<'_, F>, visible: V)
-where
+fn resolve_run<F, V>(
+    run: &mut TexelMaps<'_>,
+    mut depth: Option<RunDepth<'_>>,
+    inputs: &ResolveInputs<'_, F>,
+    visible: V,
+) where
     F: Fn(&SurfaceSample) -> Vec3 + Sync,
     V: Fn(usize) -> Option<Visible>,
 {
@@ -310,10 +327,12 @@ where
                 // Only texels written last time need clearing: most of an impostor's image
                 // is empty, and skipping it halves the pass.
                 MapsBefore::Resolved if run.object[x] != NO_OBJECT => {
-                    run.color[x] = Vec4::ZERO;
-                    run.normal[x] = Vec3::ZERO;
-                    run.face_normal[x] = Vec3::ZERO;
-                    run.position[x] = Vec3::ZERO;
+                    run.color[x] = HalfRgba::default();
+                    run.normal[x] = OctUnit::default();
+                    run.face_normal[x] = OctUnit::default();
+                    if let Some(position) = run.position.as_deref_mut() {
+                        position[x] = Vec3::ZERO;
+                    }
                     run.object[x] = NO_OBJECT;
                 }
                 MapsBefore::Resolved => {}
@@ -321,16 +340,26 @@ where
             continue;
         };
         let (s, face) = surface_sample(mesh, t, b);
-        run.color[x] = color(&s).extend(1.0);
-        run.normal[x] = s.normal;
+        run.color[x] = pack_rgba(color(&s).extend(1.0));
+        run.normal[x] = pack_unit(s.normal);
         // The face normal, turned toward the camera.
         let toward = toward_viewer(camera, s.position.as_dvec3(), frustum);
-        run.face_normal[x] = if face.as_dvec3().dot(toward) < 0.0 {
+        run.face_normal[x] = pack_unit(if face.as_dvec3().dot(toward) < 0.0 {
             -face
         } else {
             face
-        };
-        run.position[x] = s.position;
+        });
+        if let Some(d) = depth.as_mut() {
+            let i = d.first_pixel + x;
+            let centre = DVec2::new((i % d.width) as f64 + 0.5, (i / d.width) as f64 + 0.5);
+            let (n, p) = (face.as_dvec3(), s.position.as_dvec3());
+            if let Some(gd) = d.spoc.gd_on_plane(centre, n, p, d.gd[x] as f64) {
+                d.gd[x] = gd as f32;
+            }
+        }
+        if let Some(position) = run.position.as_deref_mut() {
+            position[x] = s.position;
+        }
         run.object[x] = *object;
     }
 }
@@ -361,7 +390,9 @@ fn resolve<F, V>(
         .1
         .into_par_iter()
         .enumerate()
-        .for_each(|(y, mut run)| resolve_run(&mut run, &inputs, |x| visible(y * row + x)));
+        .for_each(|(y, mut run)| {
+            resolve_run(&mut run, None, &inputs, |x| visible(y * row + x));
+        });
     finish_resolve(impostor, mesh);
 }
 
@@ -387,13 +418,18 @@ pub(super) fn impostor_bounds(mesh: &Mesh) -> Aabb {
 /// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
 fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     let (w, h) = camera.resolution();
+    let position = if camera.stores_positions() {
+        Some(Image::zeroed(w, h)?)
+    } else {
+        None
+    };
     Ok(Impostor::from_maps(
         camera,
         Image::zeroed(w, h)?,
         Image::zeroed(w, h)?,
         Image::zeroed(w, h)?,
         Image::zeroed(w, h)?,
-        Image::zeroed(w, h)?,
+        position,
         Image::zeroed(w, h)?,
         Aabb {
             min: Vec3::ZERO,
@@ -403,14 +439,16 @@ fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
 }
 
 /// The surface point with barycentrics `b` in triangle `t` of `m`.
-/// Also returns the triangle's unit face normal (zero if degenerate).
+/// Also returns the triangle's face normal `(p₁ − p₀) × (p₂ − p₀)`, not normalized: the maps
+/// pack it, which normalizes (zero if degenerate).
 fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3) {
     let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
     let [p0, p1, p2] = [i0, i1, i2].map(|i| m.positions[i]);
     let position = p0 * b.x + p1 * b.y + p2 * b.z;
-    let face = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-    let normal =
-        (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z).normalize_or(face);
+    let face = (p1 - p0).cross(p2 - p0);
+    let normal = (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z)
+        .try_normalize()
+        .unwrap_or_else(|| face.normalize_or_zero());
     let uv = m
         .uvs
         .as_ref()
@@ -606,8 +644,18 @@ impl ImpostorBuilder {
             before,
         };
         let (gd, runs) = impostor.gd_and_texel_runs((BAND_ROWS * w) as usize);
+        let spoc = match &camera {
+            ImpostorCamera::Spoc(s) => Some(s),
+            _ => None,
+        };
         let finish = |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
-            resolve_run(run, &inputs, |x| {
+            let depth = spoc.map(|spoc| RunDepth {
+                gd: &mut *band.gd,
+                first_pixel: band.first_pixel,
+                width: w as usize,
+                spoc,
+            });
+            resolve_run(run, depth, &inputs, |x| {
                 let item = band.item[x];
                 (item != ItemId::NONE).then(|| {
                     let b = full_barycentrics(band.attributes[x]);
@@ -881,7 +929,7 @@ mod tests {
             visible[i]
         });
         assert!(imp.coverage() > 0.3, "{}", imp.coverage());
-        assert!(imp.gd == merged.gd && imp.position == merged.position);
+        assert!(imp.gd == merged.gd && imp.position_image() == merged.position_image());
         assert!(imp.color == merged.color && imp.normal == merged.normal);
         assert!(imp.face_normal == merged.face_normal && imp.object == merged.object);
         assert_eq!(imp.bounds, merged.bounds);
@@ -921,13 +969,19 @@ mod tests {
         let (coarse, stats) = rasterize(&spoc, &[&sphere], &shader, ()).unwrap();
         assert!(stats.curved > 0 && stats.clipped == 0, "{stats:?}");
         let (fine, _) = rasterize(&spoc, &[&tess.mesh], &shader, ()).unwrap();
-        assert!(imp.gd == fine.gd && imp.gd != coarse.gd);
+        let covered = |gd: &Image<f32>| gd.pixels().iter().map(|&g| g > 0.0).collect::<Vec<_>>();
+        assert!(covered(&imp.gd) == covered(&fine.gd) && covered(&imp.gd) != covered(&coarse.gd));
+        // The resolve moved each texel's gd onto its triangle's plane: by a fraction of it.
+        let moved = (imp.gd.pixels().iter().zip(fine.gd.pixels()))
+            .map(|(&a, &b)| ((a - b) / b.max(1e-6)).abs())
+            .fold(0.0f32, f32::max);
+        assert!(moved < 0.01, "{moved}");
         let pinhole = rasterize(spoc.pinhole(), &[&sphere], &shader, ())
             .unwrap()
             .1;
         assert_eq!(pinhole.curved, 0);
         // Every stored position lies on the sphere's triangles (radius between inscribed and 0.5).
-        for (p, &g) in imp.position.pixels().iter().zip(imp.gd.pixels()) {
+        for (p, &g) in imp.position_image().pixels().iter().zip(imp.gd.pixels()) {
             if g > 0.0 {
                 assert!(p.length() <= 0.5 + 1e-5 && p.length() > 0.39, "{p}");
             }

@@ -240,10 +240,10 @@ pub fn holds(impostor: &Impostor, p: Vec3) -> Held {
     if impostor.gd.get(x, y) <= 0.0 {
         return Held::default();
     }
-    let stored = impostor.position.get(x, y);
+    let stored = impostor.position_at(x, y);
     let distance = stored.distance(p) as f64;
     let footprint = impostor.footprint(q.uv, q.gd);
-    let n = impostor.face_normal.get(x, y).as_dvec3();
+    let n = impostor.face_normal_at(x, y).as_dvec3();
     let view = impostor
         .camera
         .toward_camera_along_ray(q.uv, q.gd, stored.as_dvec3());

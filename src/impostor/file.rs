@@ -26,6 +26,7 @@
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{GraphCamera, Orthographic, Pinhole, Spoc};
 use crate::frame::io::{read_exr_channels, write_exr_channels_small};
+use crate::frame::packed::{OctUnit, pack_rgba, pack_unit};
 use crate::frame::{FrameError, Image};
 use crate::geom::Aabb;
 use crate::trace::NO_OBJECT;
@@ -300,29 +301,34 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
     }
     let split3 =
         |img: &Image<Vec3>, k: usize| img.pixels().iter().map(|v| v[k]).collect::<Vec<f32>>();
+    let color_image = impostor.color_image();
     let color = |k: usize| {
-        impostor
-            .color
+        color_image
             .pixels()
             .iter()
             .map(|c| c[k])
             .collect::<Vec<f32>>()
     };
+    let (normal, face_normal, position) = (
+        impostor.normal_image(),
+        impostor.face_normal_image(),
+        impostor.position_image(),
+    );
     let channels = vec![
         ("R", color(0)),
         ("G", color(1)),
         ("B", color(2)),
         ("A", color(3)),
         ("gd", impostor.gd.pixels().to_vec()),
-        ("N.X", split3(&impostor.normal, 0)),
-        ("N.Y", split3(&impostor.normal, 1)),
-        ("N.Z", split3(&impostor.normal, 2)),
-        ("Ng.X", split3(&impostor.face_normal, 0)),
-        ("Ng.Y", split3(&impostor.face_normal, 1)),
-        ("Ng.Z", split3(&impostor.face_normal, 2)),
-        ("P.X", split3(&impostor.position, 0)),
-        ("P.Y", split3(&impostor.position, 1)),
-        ("P.Z", split3(&impostor.position, 2)),
+        ("N.X", split3(&normal, 0)),
+        ("N.Y", split3(&normal, 1)),
+        ("N.Z", split3(&normal, 2)),
+        ("Ng.X", split3(&face_normal, 0)),
+        ("Ng.Y", split3(&face_normal, 1)),
+        ("Ng.Z", split3(&face_normal, 2)),
+        ("P.X", split3(&position, 0)),
+        ("P.Y", split3(&position, 1)),
+        ("P.Z", split3(&position, 2)),
         (
             "id",
             impostor
@@ -436,7 +442,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             .zip(g)
             .zip(b)
             .zip(a)
-            .map(|(((r, g), b), a)| Vec4::new(r, g, b, a))
+            .map(|(((r, g), b), a)| pack_rgba(Vec4::new(r, g, b, a)))
             .collect(),
     )?;
     let gd = Image::from_vec(w, h, get("gd")?)?;
@@ -456,8 +462,16 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             exr_path.display()
         )));
     }
-    let normal = vec3(get("N.X")?, get("N.Y")?, get("N.Z")?)?;
-    let face_normal = vec3(get("Ng.X")?, get("Ng.Y")?, get("Ng.Z")?)?;
+    // Packed as a build packs them; empty texels hold the zero bits a fresh build leaves.
+    let packed = |v: Image<Vec3>| -> Result<Image<OctUnit>, FrameError> {
+        let codes = (v.pixels().iter().zip(gd.pixels()))
+            .map(|(&n, &g)| if g > 0.0 { pack_unit(n) } else { [0, 0] })
+            .collect();
+        Image::from_vec(w, h, codes)
+    };
+    let normal = packed(vec3(get("N.X")?, get("N.Y")?, get("N.Z")?)?)?;
+    let face_normal = packed(vec3(get("Ng.X")?, get("Ng.Y")?, get("Ng.Z")?)?)?;
+    // Read (and checked finite) for every camera; kept only by a graph camera.
     let position = vec3(get("P.X")?, get("P.Y")?, get("P.Z")?)?;
     let object = Image::from_vec(
         w,
@@ -472,7 +486,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
         gd,
         normal,
         face_normal,
-        position,
+        Some(position),
         object,
         bounds,
     ))

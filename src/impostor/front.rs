@@ -57,8 +57,8 @@ fn texel_bound(imp: &Impostor, kappa: Option<(f64, f64)>, x: u32, y: u32) -> f32
     if gd <= 0.0 {
         return 0.0;
     }
-    let p = imp.position.get(x, y).as_dvec3();
-    let n = imp.face_normal.get(x, y).as_dvec3();
+    let p = imp.position_at(x, y).as_dvec3();
+    let n = imp.face_normal_at(x, y).as_dvec3();
     let square = |grow: f64| {
         let (x0, y0) = (x as f64 - grow, y as f64 - grow);
         let (x1, y1) = (x as f64 + 1.0 + grow, y as f64 + 1.0 + grow);
@@ -195,8 +195,8 @@ mod tests {
                     continue;
                 }
                 let (sp, n) = (
-                    imp.position.get(x, y).as_dvec3(),
-                    imp.face_normal.get(x, y).as_dvec3(),
+                    imp.position_at(x, y).as_dvec3(),
+                    imp.face_normal_at(x, y).as_dvec3(),
                 );
                 if (p - sp).dot(n) <= 0.0 {
                     behind += 1;

@@ -32,8 +32,9 @@ pub use walk::{HIERARCHICAL_MIN_SIDE, WalkMode, WalkStats};
 
 use crate::camera::{GraphCamera, ImagePoint, Orthographic, Pinhole, Projection, Spoc};
 use crate::frame::Image;
+use crate::frame::packed::{HalfRgba, OctUnit, unpack_rgba, unpack_unit};
 use crate::geom::Aabb;
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DVec2, DVec3, Vec3, Vec4};
 
 /// The cameras an impostor can be built through (a closed set, dispatched once per query).
 #[derive(Clone, Debug, PartialEq)]
@@ -219,6 +220,12 @@ impl ImpostorCamera {
         }
     }
 
+    /// Whether an impostor through this camera keeps its texels' world positions in a map
+    /// (a graph camera) rather than deriving them from `gd` ([`Impostor::position_at`]).
+    pub fn stores_positions(&self) -> bool {
+        matches!(self, ImpostorCamera::Graph(_))
+    }
+
     /// The unit direction toward the camera along its ray through image point `(uv, gd)`, at
     /// the point `p` there: how a surface at `p` is seen, for the slant of a texel's footprint
     /// on it. [`ImpostorCamera::toward_camera`], except for the SPOC, whose rays curve (§3.2):
@@ -306,22 +313,31 @@ impl Projection for ImpostorCamera {
 }
 
 /// A depth image that stands in for geometry.
+///
+/// Its maps are compact (24 bytes a texel through a pinhole, orthographic or SPOC camera):
+/// colour in half floats and normals in the octahedral encoding ([`crate::frame::packed`]),
+/// read through [`Impostor::color_at`], [`Impostor::normal_at`] and
+/// [`Impostor::face_normal_at`]. A texel's world position is the point of its camera ray at its
+/// `gd` ([`Impostor::position_at`]); only a graph camera, whose rays bend at faces between
+/// frusta, keeps it in a map.
 #[derive(Clone, Debug)]
 pub struct Impostor {
     /// The camera it was built through.
     pub camera: ImpostorCamera,
-    /// Linear radiance of the surface each texel shows (alpha 1 where covered, 0 where empty).
-    pub color: Image<crate::frame::Rgba>,
+    /// Linear radiance of the surface each texel shows, in half floats (alpha 1 where covered,
+    /// 0 where empty).
+    pub color: Image<HalfRgba>,
     /// Generalized depth (0 = empty).
     pub gd: Image<f32>,
-    /// Unit shading normal.
-    pub normal: Image<Vec3>,
-    /// Unit geometric normal of the stored triangle, turned toward the camera: with `position`,
-    /// the texel's exact plane. The walk measures which side of it a ray sample is on, and
-    /// places hits on it.
-    pub face_normal: Image<Vec3>,
-    /// World position of the surface point.
-    pub position: Image<Vec3>,
+    /// Unit shading normal, packed.
+    pub normal: Image<OctUnit>,
+    /// Unit geometric normal of the stored triangle, turned toward the camera, packed: with the
+    /// texel's position, the texel's plane. The walk measures which side of it a ray sample is
+    /// on, and places hits on it.
+    pub face_normal: Image<OctUnit>,
+    /// World position of the surface point, for a graph camera only (see
+    /// [`Impostor::position_at`]).
+    position: Option<Image<Vec3>>,
     /// Object id ([`crate::trace::NO_OBJECT`] where empty).
     pub object: Image<u32>,
     /// World box of the replaced geometry: rays are clipped to it.
@@ -343,18 +359,20 @@ struct WalkIndex {
 
 impl Impostor {
     /// An impostor from its camera, maps and box (the maps all of the camera's size; empty
-    /// texels hold `gd` 0 and [`crate::trace::NO_OBJECT`]).
+    /// texels hold `gd` 0 and [`crate::trace::NO_OBJECT`]). `position` is kept for a graph
+    /// camera, which needs it, and ignored otherwise (see [`Impostor::position_at`]).
     #[allow(clippy::too_many_arguments)]
     pub fn from_maps(
         camera: ImpostorCamera,
-        color: Image<crate::frame::Rgba>,
+        color: Image<HalfRgba>,
         gd: Image<f32>,
-        normal: Image<Vec3>,
-        face_normal: Image<Vec3>,
-        position: Image<Vec3>,
+        normal: Image<OctUnit>,
+        face_normal: Image<OctUnit>,
+        position: Option<Image<Vec3>>,
         object: Image<u32>,
         bounds: Aabb,
     ) -> Impostor {
+        let position = position.filter(|_| camera.stores_positions());
         Impostor {
             camera,
             color,
@@ -366,6 +384,91 @@ impl Impostor {
             bounds,
             walk_index: std::sync::OnceLock::new(),
         }
+    }
+
+    /// Colour of texel `(x, y)`.
+    #[inline]
+    pub fn color_at(&self, x: u32, y: u32) -> Vec4 {
+        unpack_rgba(self.color.get(x, y))
+    }
+
+    /// Unit shading normal of texel `(x, y)` (zero where empty).
+    #[inline]
+    pub fn normal_at(&self, x: u32, y: u32) -> Vec3 {
+        self.unit_at(&self.normal, x, y)
+    }
+
+    /// Unit face normal of texel `(x, y)`, turned toward the camera (zero where empty).
+    #[inline]
+    pub fn face_normal_at(&self, x: u32, y: u32) -> Vec3 {
+        self.unit_at(&self.face_normal, x, y)
+    }
+
+    fn unit_at(&self, map: &Image<OctUnit>, x: u32, y: u32) -> Vec3 {
+        if self.gd.get(x, y) > 0.0 {
+            unpack_unit(map.get(x, y))
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// World position of the surface point texel `(x, y)` shows (zero where empty): the point
+    /// of the camera's ray through the texel's centre at the texel's `gd`. The rasterizer
+    /// interpolates `gd = 1/t` at pixel centres, so through a pinhole or orthographic camera
+    /// this is the point where the centre's ray meets the stored triangle; through a SPOC, whose
+    /// rays curve, the triangle is drawn straight in the image when it curves by less than half
+    /// a pixel (§2.2), and the point is within that of it. A graph camera's rays bend where
+    /// frusta meet and a texel's `gd` alone may not say which frustum holds the point: it keeps
+    /// positions in a map.
+    #[inline]
+    pub fn position_at(&self, x: u32, y: u32) -> Vec3 {
+        if let Some(map) = &self.position {
+            return map.get(x, y);
+        }
+        let gd = self.gd.get(x, y);
+        if gd <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+        self.camera.unproject(centre, gd as f64).as_vec3()
+    }
+
+    /// Every texel's colour, as an image (for files, previews and billboards).
+    pub fn color_image(&self) -> Image<crate::frame::Rgba> {
+        self.map_image(|x, y| self.color_at(x, y))
+    }
+
+    /// Every texel's shading normal, as an image.
+    pub fn normal_image(&self) -> Image<Vec3> {
+        self.map_image(|x, y| self.normal_at(x, y))
+    }
+
+    /// Every texel's face normal, as an image.
+    pub fn face_normal_image(&self) -> Image<Vec3> {
+        self.map_image(|x, y| self.face_normal_at(x, y))
+    }
+
+    /// Every texel's world position, as an image.
+    pub fn position_image(&self) -> Image<Vec3> {
+        self.map_image(|x, y| self.position_at(x, y))
+    }
+
+    /// The image of `f(x, y)` over the impostor's texels, rows in parallel.
+    fn map_image<T: Copy + Default + Send + Sync>(
+        &self,
+        f: impl Fn(u32, u32) -> T + Sync,
+    ) -> Image<T> {
+        use rayon::prelude::*;
+        let (w, h) = self.gd.size();
+        let mut data = vec![T::default(); w as usize * h as usize];
+        data.par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, v) in row.iter_mut().enumerate() {
+                    *v = f(x as u32, y as u32);
+                }
+            });
+        Image::from_vec(w, h, data).expect("the size of the impostor's maps")
     }
 
     /// The pyramid of front bounds the hierarchical walk skips with, built on the first walk

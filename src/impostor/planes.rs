@@ -31,17 +31,25 @@ pub struct TexelPlane {
 /// The records of every texel of `impostor`, whose front bounds are `front` (row-major).
 pub(super) fn texel_planes(impostor: &Impostor, front: &[f32]) -> Image<TexelPlane> {
     let (w, h) = impostor.gd.size();
-    let records: Vec<TexelPlane> = (impostor.gd.pixels().par_iter())
-        .zip(impostor.position.pixels())
-        .zip(impostor.face_normal.pixels())
-        .zip(front)
-        .map(|(((&gd, &point), &normal), &front)| TexelPlane {
-            point,
-            gd,
-            normal,
-            front,
-        })
-        .collect();
+    let mut records = vec![TexelPlane::default(); front.len()];
+    records
+        .par_chunks_mut(w as usize)
+        .zip(front.par_chunks(w as usize))
+        .enumerate()
+        .for_each(|(y, (row, front))| {
+            for (x, (record, &front)) in row.iter_mut().zip(front).enumerate() {
+                let (x, y) = (x as u32, y as u32);
+                let gd = impostor.gd.get(x, y);
+                if gd > 0.0 {
+                    *record = TexelPlane {
+                        point: impostor.position_at(x, y),
+                        gd,
+                        normal: impostor.face_normal_at(x, y),
+                        front,
+                    };
+                }
+            }
+        });
     Image::from_vec(w, h, records).expect("the size of the impostor's maps")
 }
 
@@ -70,8 +78,8 @@ mod tests {
         for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
             let t = planes.get(x, y);
             assert_eq!(t.gd, imp.gd.get(x, y));
-            assert_eq!(t.point, imp.position.get(x, y));
-            assert_eq!(t.normal, imp.face_normal.get(x, y));
+            assert_eq!(t.point, imp.position_at(x, y));
+            assert_eq!(t.normal, imp.face_normal_at(x, y));
             assert_eq!(t.front, front.get(x, y));
             covered += usize::from(t.gd > 0.0);
         }

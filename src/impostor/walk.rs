@@ -532,17 +532,17 @@ impl Impostor {
 
     fn hit(&self, ray: &Ray, x: DVec3, (tx, ty): (u32, u32)) -> Hit {
         let t = (x - ray.origin.as_dvec3()).dot(ray.dir.as_dvec3()) as f32;
-        let normal = self.normal.get(tx, ty);
+        let normal = self.normal_at(tx, ty);
         Hit {
             t,
             position: x.as_vec3(),
             normal,
-            geometric_normal: self.face_normal.get(tx, ty),
+            geometric_normal: self.face_normal_at(tx, ty),
             uv: Vec2::new(tx as f32 + 0.5, ty as f32 + 0.5),
             bary: Vec2::ZERO,
             object: self.object.get(tx, ty),
             triangle: 0,
-            radiance: Some(self.color.get(tx, ty).truncate()),
+            radiance: Some(self.color_at(tx, ty).truncate()),
         }
     }
 }

@@ -242,8 +242,10 @@ pub fn rasterize_over<P: Projection, S: FragmentShader>(
 pub struct FinishedBand<'a, T> {
     /// Index of the band's first pixel in the row-major image (`first row × width`).
     pub first_pixel: usize,
-    /// The band's depth, item and attribute pixels, row-major.
-    pub gd: &'a [f32],
+    /// The band's depth, item and attribute pixels, row-major. The depth is the target's: a
+    /// finishing pass may refine it (an impostor through a curved camera moves each texel's
+    /// `gd` onto the surface it stores).
+    pub gd: &'a mut [f32],
     /// Item buffer of the band.
     pub item: &'a [ItemId],
     /// Attributes of the band.
