@@ -281,7 +281,6 @@ enum MapsBefore {
 struct RunDepth<'a> {
     gd: &'a mut [f32],
     first_pixel: usize,
-    width: usize,
     spoc: &'a Spoc,
 }
 
@@ -294,11 +293,14 @@ struct ResolveInputs<'a, F> {
     before: MapsBefore,
 }
 
-/// Fills a run of texels from the visible points `visible(i)` of its texels `i` (counted from
-/// the run's start), and empties the texels with none. After it, every map is empty wherever
+/// Fills a run of texels — whole image rows of `width` texels — from the visible points
+/// `visible(i)` of its texels `i` (counted from the run's start), and empties the texels with
+/// none. Only the texels of `columns` (inclusive) in each row are asked for a visible point:
+/// every other one is empty (`None`: all of them). After it, every map is empty wherever
 /// `object` is [`NO_OBJECT`].
 fn resolve_run<F, V>(
     run: &mut TexelMaps<'_>,
+    (width, columns): (usize, Option<(usize, usize)>),
     mut depth: Option<RunDepth<'_>>,
     inputs: &ResolveInputs<'_, F>,
     visible: V,
@@ -313,20 +315,65 @@ fn resolve_run<F, V>(
         color,
         before,
     } = inputs;
-    for x in 0..run.color.len() {
-        let Some(Visible {
-            triangle: t,
-            bary: b,
-            frustum,
-        }) = visible(x)
-        else {
-            match before {
-                // Written, not read first: reading a fresh page maps the shared zero page,
-                // and the write after it then pays a second fault.
-                MapsBefore::Zeroed => run.object[x] = NO_OBJECT,
-                // Only texels written last time need clearing: most of an impostor's image
-                // is empty, and skipping it halves the pass.
-                MapsBefore::Resolved if run.object[x] != NO_OBJECT => {
+    for row_start in (0..run.color.len()).step_by(width) {
+        let row_end = (row_start + width).min(run.color.len());
+        // Outside the drawn columns every texel is empty, handled in bulk.
+        let (x0, x1) = match columns {
+            Some((c0, c1)) => (row_start + c0, (row_start + c1 + 1).min(row_end)),
+            None => (row_start, row_start),
+        };
+        empty_texels(run, row_start..x0, *before);
+        empty_texels(run, x1..row_end, *before);
+        // The image row of this run row, for a SPOC's texel centres.
+        let image_row = depth
+            .as_ref()
+            .map_or(0.0, |d| ((d.first_pixel + row_start) / width) as f64 + 0.5);
+        for x in x0..x1 {
+            let Some(Visible {
+                triangle: t,
+                bary: b,
+                frustum,
+            }) = visible(x)
+            else {
+                empty_texels(run, x..x + 1, *before);
+                continue;
+            };
+            let (s, face) = surface_sample(mesh, t, b);
+            run.color[x] = pack_rgba(color(&s).extend(1.0));
+            run.normal[x] = pack_unit(s.normal);
+            // The face normal, turned toward the camera.
+            let toward = toward_viewer(camera, s.position.as_dvec3(), frustum);
+            run.face_normal[x] = pack_unit(if face.as_dvec3().dot(toward) < 0.0 {
+                -face
+            } else {
+                face
+            });
+            if let Some(d) = depth.as_mut() {
+                let centre = DVec2::new((x - row_start) as f64 + 0.5, image_row);
+                let (n, p) = (face.as_dvec3(), s.position.as_dvec3());
+                if let Some(gd) = d.spoc.gd_on_plane(centre, n, p, d.gd[x] as f64) {
+                    d.gd[x] = gd as f32;
+                }
+            }
+            if let Some(position) = run.position.as_deref_mut() {
+                position[x] = s.position;
+            }
+            run.object[x] = *object;
+        }
+    }
+}
+
+/// Empties the texels `range` of `run`, whose maps hold `before`.
+fn empty_texels(run: &mut TexelMaps<'_>, range: std::ops::Range<usize>, before: MapsBefore) {
+    match before {
+        // Written, not read first: reading a fresh page maps the shared zero page, and the
+        // write after it then pays a second fault.
+        MapsBefore::Zeroed => run.object[range].fill(NO_OBJECT),
+        // Only texels written last time need clearing: most of an impostor's image is empty,
+        // and skipping it halves the pass.
+        MapsBefore::Resolved => {
+            for x in range {
+                if run.object[x] != NO_OBJECT {
                     run.color[x] = HalfRgba::default();
                     run.normal[x] = OctUnit::default();
                     run.face_normal[x] = OctUnit::default();
@@ -335,32 +382,8 @@ fn resolve_run<F, V>(
                     }
                     run.object[x] = NO_OBJECT;
                 }
-                MapsBefore::Resolved => {}
-            }
-            continue;
-        };
-        let (s, face) = surface_sample(mesh, t, b);
-        run.color[x] = pack_rgba(color(&s).extend(1.0));
-        run.normal[x] = pack_unit(s.normal);
-        // The face normal, turned toward the camera.
-        let toward = toward_viewer(camera, s.position.as_dvec3(), frustum);
-        run.face_normal[x] = pack_unit(if face.as_dvec3().dot(toward) < 0.0 {
-            -face
-        } else {
-            face
-        });
-        if let Some(d) = depth.as_mut() {
-            let i = d.first_pixel + x;
-            let centre = DVec2::new((i % d.width) as f64 + 0.5, (i / d.width) as f64 + 0.5);
-            let (n, p) = (face.as_dvec3(), s.position.as_dvec3());
-            if let Some(gd) = d.spoc.gd_on_plane(centre, n, p, d.gd[x] as f64) {
-                d.gd[x] = gd as f32;
             }
         }
-        if let Some(position) = run.position.as_deref_mut() {
-            position[x] = s.position;
-        }
-        run.object[x] = *object;
     }
 }
 
@@ -391,7 +414,8 @@ fn resolve<F, V>(
         .into_par_iter()
         .enumerate()
         .for_each(|(y, mut run)| {
-            resolve_run(&mut run, None, &inputs, |x| visible(y * row + x));
+            let whole_row = (row, Some((0, row - 1)));
+            resolve_run(&mut run, whole_row, None, &inputs, |x| visible(y * row + x));
         });
     finish_resolve(impostor, mesh);
 }
@@ -652,10 +676,10 @@ impl ImpostorBuilder {
             let depth = spoc.map(|spoc| RunDepth {
                 gd: &mut *band.gd,
                 first_pixel: band.first_pixel,
-                width: w as usize,
                 spoc,
             });
-            resolve_run(run, depth, &inputs, |x| {
+            let columns = band.columns.map(|(a, b)| (a as usize, b as usize));
+            resolve_run(run, (w as usize, columns), depth, &inputs, |x| {
                 let item = band.item[x];
                 (item != ItemId::NONE).then(|| {
                     let b = full_barycentrics(band.attributes[x]);

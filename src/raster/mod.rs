@@ -242,6 +242,9 @@ pub fn rasterize_over<P: Projection, S: FragmentShader>(
 pub struct FinishedBand<'a, T> {
     /// Index of the band's first pixel in the row-major image (`first row × width`).
     pub first_pixel: usize,
+    /// The columns, inclusive, outside which no triangle was drawn in this band: every pixel
+    /// there is as the band was before drawing (`None`: no triangle at all).
+    pub columns: Option<(u32, u32)>,
     /// The band's depth, item and attribute pixels, row-major. The depth is the target's: a
     /// finishing pass may refine it (an impostor through a curved camera moves each texel's
     /// `gd` onto the surface it stores).
@@ -488,14 +491,18 @@ impl<S: FragmentShader> BandPass<'_, S> {
             attr,
         };
         let mut s = RasterStats::default();
+        let mut columns: Option<(u32, u32)> = None;
         for chunk in self.binned.chunks() {
             for t in chunk.band(index) {
                 band.draw(t, self.shader, &mut s);
+                let (x0, x1) = columns.map_or(t.cols, |(a, b)| (a.min(t.cols.0), b.max(t.cols.1)));
+                columns = Some((x0, x1));
             }
         }
         let first_pixel = index * (BAND_ROWS * self.width) as usize;
         let finished = FinishedBand {
             first_pixel,
+            columns,
             gd: band.gd,
             item: band.item,
             attributes: band.attr,
