@@ -20,6 +20,11 @@
 //! camera), `P.X P.Y P.Z` world position, `id` = object id + 1 (0 where empty; ids below 2^24
 //! are exact). Files written with another lossless encoding load the same.
 //!
+//! The channels hold the impostor's compact maps decoded (colour already in half precision,
+//! normals from their octahedral codes, positions derived from `gd`), and loading packs them
+//! again: a saved impostor reloads bit for bit. `P` is read and checked for every camera but
+//! kept only for a graph camera (see [`Impostor::position_at`]).
+//!
 //! Loading validates everything: sizes against the camera, finite values, a sidecar of at most
 //! 1 MiB; a corrupted file is an error naming the file and what is wrong.
 

@@ -10,8 +10,11 @@
 //! [`file`](mod@file) saves and loads it (OpenEXR channels + JSON sidecar).
 //!
 //! Invariants: texel `gd` follows algorithms.md §1.2 (0 = empty, larger = nearer); every non-empty
-//! texel holds the world position of the surface point it shows, so a hit's position is exact up
-//! to the texel's footprint; the impostor never consults the mesh after it is built.
+//! texel gives the world position of the surface point it shows ([`Impostor::position_at`]: the
+//! point of the texel's ray at its `gd`, on the plane of the stored triangle; a graph camera
+//! stores it), so a hit's position is exact up to the texel's footprint; the maps are compact
+//! (colour in half floats, normals in octahedral codes, `frame::packed`); the impostor never
+//! consults the mesh after it is built.
 
 mod billboard;
 mod build;

@@ -1,10 +1,10 @@
 //! What a walk reads of each texel, packed into one record (issue 3, beyond paper 1): the
-//! texel's `gd`, the plane of the triangle it stores (its point and face normal, the maps
-//! `position` and `face_normal`) and its front bound (`front.rs`). A walk sample first reads
+//! texel's `gd`, the plane of the triangle it stores (its point, [`Impostor::position_at`], and
+//! its unpacked face normal) and its front bound (`front.rs`). A walk sample first reads
 //! its texel's `gd` from the compact map — most samples lie over empty texels, sixteen to a
-//! cache line there — and only for a covered texel its plane and bound: from the separate maps
-//! three more lines far apart, from a [`TexelPlane`] one (two records fill a line, and records
-//! are aligned so none straddles two).
+//! cache line there — and only for a covered texel its plane and bound: from the maps an
+//! unprojection, an octahedral decoding and lines far apart, from a [`TexelPlane`] one line
+//! (two records fill a line, and records are aligned so none straddles two).
 //!
 //! Invariant: derived from the maps, never edited — [`Impostor::maps_changed`] drops it with
 //! the pyramid, and the next walk rebuilds both.
