@@ -26,9 +26,10 @@ pub struct Spoc {
     z_far: f64,
     k: f64,
     /// Derived, kept for the per-vertex cost of `project`: the focal distance `f` and the ramp's
-    /// slope `k/(z_f − z_n)`.
+    /// slope `k/(z_f − z_n)`; and for the per-texel cost of `gd_on_plane`, `M·(p0, 1)`.
     focal: f64,
     slope: f64,
+    to_pole: DVec3,
 }
 
 impl Spoc {
@@ -112,6 +113,7 @@ impl Spoc {
         Ok(Self {
             focal: ppc.focal(),
             slope: k / (z_far - z_near),
+            to_pole: ppc.unproject(pole, 1.0) - ppc.position(),
             ppc,
             pole,
             z_near,
@@ -184,9 +186,8 @@ impl Spoc {
         gd_guess: f64,
     ) -> Option<f64> {
         let c = self.ppc.position();
-        let to_pole = self.ppc.unproject(self.pole, 1.0) - c;
-        let a = normal.dot(to_pole);
-        let b = normal.dot(self.ppc.unproject(uv, 1.0) - c - to_pole);
+        let a = normal.dot(self.to_pole);
+        let b = normal.dot(self.ppc.unproject(uv, 1.0) - c - self.to_pole);
         let h = normal.dot(point - c);
         // Nearer than z_n: f/gd < z_n.
         let straight = |gd: f64| self.focal < self.z_near * gd;

@@ -63,7 +63,7 @@ pub fn pack_unit(n: Vec3) -> OctUnit {
     }
     // Project onto the octahedron |x| + |y| + |z| = 1, then fold its lower half over the
     // upper one's outside triangles.
-    let p = Vec2::new(n.x, n.y) / l1;
+    let p = Vec2::new(n.x, n.y) * (1.0 / l1);
     let p = if n.z < 0.0 { fold(p) } else { p };
     let q = p.clamp(Vec2::splat(-1.0), Vec2::ONE) * OCT_SCALE;
     [round_to_i16(q.x), round_to_i16(q.y)]
