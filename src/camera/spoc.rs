@@ -347,7 +347,7 @@ mod tests {
         let mut solved = 0;
         for i in 0..4000 {
             let p = random_point(i);
-            let n = (random_point(i + 7919) - DVec3::splat(0.0)).normalize_or_zero();
+            let n = random_point(i + 7919).normalize_or_zero();
             let Some(q) = s.project(p) else { continue };
             let uv = q.uv + DVec2::new((i % 7) as f64 * 0.1 - 0.3, (i % 5) as f64 * 0.1 - 0.2);
             let guess = q.gd * (1.0 + 0.005 * ((i % 3) as f64 - 1.0));
