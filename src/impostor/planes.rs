@@ -12,7 +12,6 @@
 use super::Impostor;
 use crate::frame::Image;
 use glam::Vec3;
-use rayon::prelude::*;
 
 /// One texel as the walk sees it (empty texels hold `gd` 0 and zeros).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -30,27 +29,19 @@ pub struct TexelPlane {
 
 /// The records of every texel of `impostor`, whose front bounds are `front` (row-major).
 pub(super) fn texel_planes(impostor: &Impostor, front: &[f32]) -> Image<TexelPlane> {
-    let (w, h) = impostor.gd.size();
-    let mut records = vec![TexelPlane::default(); front.len()];
-    records
-        .par_chunks_mut(w as usize)
-        .zip(front.par_chunks(w as usize))
-        .enumerate()
-        .for_each(|(y, (row, front))| {
-            for (x, (record, &front)) in row.iter_mut().zip(front).enumerate() {
-                let (x, y) = (x as u32, y as u32);
-                let gd = impostor.gd.get(x, y);
-                if gd > 0.0 {
-                    *record = TexelPlane {
-                        point: impostor.position_at(x, y),
-                        gd,
-                        normal: impostor.face_normal_at(x, y),
-                        front,
-                    };
-                }
-            }
-        });
-    Image::from_vec(w, h, records).expect("the size of the impostor's maps")
+    let w = impostor.gd.size().0 as usize;
+    impostor.map_image(|x, y| {
+        let gd = impostor.gd.get(x, y);
+        if gd <= 0.0 {
+            return TexelPlane::default();
+        }
+        TexelPlane {
+            point: impostor.position_at(x, y),
+            gd,
+            normal: impostor.face_normal_at(x, y),
+            front: front[y as usize * w + x as usize],
+        }
+    })
 }
 
 #[cfg(test)]
