@@ -10,7 +10,8 @@
 //! in its corridors beside a rasterization through the camera's root.
 //!
 //! Invariant: a timer stops before what it timed is freed, for a workload and its peer alike
-//! (a fresh impostor's maps are 15 MB, and returning them to the system is not building them).
+//! (a fresh SPOC impostor's maps are 6.3 MB at 512², and returning them to the system is not
+//! building them).
 
 use crate::camera::Pinhole;
 use crate::frame::Frame;
@@ -181,6 +182,27 @@ pub struct Figure {
     pub versus: Option<(f64, String)>,
 }
 
+impl Figure {
+    /// A duration, in milliseconds, with no peer.
+    fn millis(name: impl Into<String>, t: Duration) -> Figure {
+        Figure {
+            name: name.into(),
+            value: t.as_secs_f64() * 1e3,
+            unit: "ms",
+            versus: None,
+        }
+    }
+
+    /// This figure with the ratio `a / b` of two durations timed in the same run, `b` being
+    /// `peer`'s (which says what the ratio is: "× …" or "= … / this").
+    fn versus(self, (a, b): (Duration, Duration), peer: &str) -> Figure {
+        Figure {
+            versus: Some((a.as_secs_f64() / b.as_secs_f64(), peer.into())),
+            ..self
+        }
+    }
+}
+
 /// Runs the foundation benchmarks on `mesh` (the bunny); `quick` shortens every timing.
 pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
@@ -216,12 +238,7 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     let mut bvh = None;
     let build = time_median(min, || bvh = Some(Bvh::build(meshes.clone())));
     let bvh = bvh.expect("built at least once");
-    out.push(Figure {
-        name: "BVH build (56k triangles)".into(),
-        value: build.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: None,
-    });
+    out.push(Figure::millis("BVH build (56k triangles)", build));
     let cam = framing_camera(mesh, 512);
     let primary = primary_rays(&cam);
     let reflected = reflected_rays(&bvh, &primary, mesh.bounds().radius() * 1e-4);
@@ -337,78 +354,76 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
                 .expect("valid size");
         },
     );
-    out.push(Figure {
-        name: format!(
-            "build SPOC impostor {size}², {} triangles",
-            mesh.triangle_count()
+    out.push(
+        Figure::millis(
+            format!(
+                "build SPOC impostor {size}², {} triangles",
+                mesh.triangle_count()
+            ),
+            t_spoc,
+        )
+        .versus(
+            (t_spoc, t_plain),
+            "× a plain pinhole rasterization (depth + ids; goal ≤ 1.5)",
         ),
-        value: t_spoc.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: Some((
-            t_spoc.as_secs_f64() / t_plain.as_secs_f64(),
-            "× a plain pinhole rasterization (depth + ids; goal ≤ 1.5)".into(),
-        )),
-    });
-    out.push(Figure {
-        name: format!(
-            "  the same build beside a pinhole framing the bounding sphere ({framed_fragments} fragments; SPOC {spoc_fragments}, its reference pinhole {plain_fragments})"
+    );
+    let beside_framed = format!(
+        "  the same build beside a pinhole framing the bounding sphere ({framed_fragments} \
+         fragments; SPOC {spoc_fragments}, its reference pinhole {plain_fragments})"
+    );
+    out.push(Figure::millis(beside_framed, t_spoc_framed).versus(
+        (t_spoc_framed, t_framed),
+        "× a depth + id rasterization through that pinhole (measured alternately)",
+    ));
+    out.push(
+        Figure::millis(
+            format!("build pinhole impostor {size}² (same maps, the SPOC's reference pinhole)"),
+            t_pinhole_fresh,
+        )
+        .versus(
+            (t_spoc_vs_pinhole, t_pinhole_fresh),
+            "= fresh SPOC build time / this (measured alternately)",
         ),
-        value: t_spoc_framed.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: Some((
-            t_spoc_framed.as_secs_f64() / t_framed.as_secs_f64(),
-            "× a depth + id rasterization through that pinhole (measured alternately)".into(),
-        )),
-    });
-    out.push(Figure {
-        name: format!("build pinhole impostor {size}² (same maps, the SPOC's reference pinhole)"),
-        value: t_pinhole_fresh.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: Some((
-            t_spoc_vs_pinhole.as_secs_f64() / t_pinhole_fresh.as_secs_f64(),
-            "= fresh SPOC build time / this (measured alternately)".into(),
-        )),
-    });
-    out.push(Figure {
-        name: format!("render the same mesh {size}² by the raster method"),
-        value: t_render.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: Some((
-            t_spoc_again.as_secs_f64() / t_render.as_secs_f64(),
-            "= fresh SPOC build time / this (colour, distance, normals, ids; measured alternately)"
-                .into(),
-        )),
-    });
-    out.push(Figure {
-        name: format!("rebuild SPOC impostor {size}², memory reused"),
-        value: t_rebuild.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: Some((
-            t_rebuild.as_secs_f64() / t_plain_into.as_secs_f64(),
-            "× a plain rasterization into a reused target (goal ≤ 1.5)".into(),
-        )),
-    });
+    );
+    out.push(
+        Figure::millis(
+            format!("render the same mesh {size}² by the raster method"),
+            t_render,
+        )
+        .versus(
+            (t_spoc_again, t_render),
+            "= fresh SPOC build time / this (colour, distance, normals, ids; measured alternately)",
+        ),
+    );
+    out.push(
+        Figure::millis(
+            format!("rebuild SPOC impostor {size}², memory reused"),
+            t_rebuild,
+        )
+        .versus(
+            (t_rebuild, t_plain_into),
+            "× a plain rasterization into a reused target (goal ≤ 1.5)",
+        ),
+    );
     // Built on the first walk, not by `build`: timed apart.
     let t_pyramid = time_median(min, || {
         again.maps_changed();
         std::hint::black_box(again.pyramid());
     });
-    out.push(Figure {
-        name: "walk index of that impostor (front-bound pyramid, packed texel planes; first walk)"
-            .to_string(),
-        value: t_pyramid.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: None,
-    });
-    out.push(Figure {
-        name: format!("rebuild pinhole impostor {size}² (same maps)"),
-        value: t_pinhole.as_secs_f64() * 1e3,
-        unit: "ms",
-        versus: Some((
-            t_rebuild_again.as_secs_f64() / t_pinhole.as_secs_f64(),
-            "= SPOC rebuild time / this (measured alternately)".into(),
-        )),
-    });
+    out.push(Figure::millis(
+        "walk index of that impostor (front-bound pyramid, packed texel planes; first walk)",
+        t_pyramid,
+    ));
+    out.push(
+        Figure::millis(
+            format!("rebuild pinhole impostor {size}² (same maps)"),
+            t_pinhole,
+        )
+        .versus(
+            (t_rebuild_again, t_pinhole),
+            "= SPOC rebuild time / this (measured alternately)",
+        ),
+    );
     let Ok(setup) = ReflectorSetup::new(target, reflector, 1.4, 512) else {
         return out;
     };
@@ -544,28 +559,21 @@ pub fn graph_impostors(
                 .expect("valid size");
         },
     );
+    let built = format!(
+        "build graph-camera impostor {size}², maze + 4 bunnies ({} triangles, {} frusta)",
+        mesh.triangle_count(),
+        g.frusta().len()
+    );
+    let rebuilt = format!("rebuild graph-camera impostor {size}², memory reused");
     vec![
-        Figure {
-            name: format!(
-                "build graph-camera impostor {size}², maze + 4 bunnies ({} triangles, {} frusta)",
-                mesh.triangle_count(),
-                g.frusta().len()
-            ),
-            value: t_graph.as_secs_f64() * 1e3,
-            unit: "ms",
-            versus: Some((
-                t_graph.as_secs_f64() / t_root.as_secs_f64(),
-                "× a depth + id rasterization of the same triangles through its root pinhole (measured alternately)".into(),
-            )),
-        },
-        Figure {
-            name: format!("rebuild graph-camera impostor {size}², memory reused"),
-            value: t_rebuild.as_secs_f64() * 1e3,
-            unit: "ms",
-            versus: Some((
-                t_rebuild.as_secs_f64() / t_root_into.as_secs_f64(),
-                "× that rasterization into a reused target (measured alternately)".into(),
-            )),
-        },
+        Figure::millis(built, t_graph).versus(
+            (t_graph, t_root),
+            "× a depth + id rasterization of the same triangles through its root pinhole \
+             (measured alternately)",
+        ),
+        Figure::millis(rebuilt, t_rebuild).versus(
+            (t_rebuild, t_root_into),
+            "× that rasterization into a reused target (measured alternately)",
+        ),
     ]
 }
