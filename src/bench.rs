@@ -303,6 +303,29 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     let framed = framed_pinhole(eye, b.center(), radius, size).unwrap_or_else(|| plain.clone());
     let (t_spoc_framed, t_framed) =
         time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&framed, mesh));
+    // The SPOC `trompe impostor bake` places at the same eye: framed on the mesh's vertices
+    // (`ImpostorCamera::fitted`), so the object fills its image — and every texel it covers
+    // must be resolved — where the sphere's framing above leaves most of the image empty.
+    let fitted = match ImpostorCamera::fitted(
+        crate::impostor::ViewCamera::Spoc(Some(0.8)),
+        eye,
+        b.center(),
+        radius,
+        radius as f64,
+        size,
+        &mesh.positions,
+    ) {
+        Ok(ImpostorCamera::Spoc(s)) => Some(s),
+        _ => None,
+    };
+    let fitted_pair = fitted.map(|fitted| {
+        let reference = fitted.pinhole().clone();
+        let camera = ImpostorCamera::Spoc(fitted);
+        let fresh = || build(camera.clone(), mesh, 0, &color).expect("valid size");
+        let coverage = (fresh().coverage(), fresh_spoc_build().coverage());
+        let times = time_pair_median(min * 2, fresh, || plain_raster(&reference, mesh));
+        (times, coverage)
+    });
     let (spoc_fragments, plain_fragments, framed_fragments) = (
         fragments_through(&spoc, mesh),
         fragments_through(&plain, mesh),
@@ -375,6 +398,18 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         (t_spoc_framed, t_framed),
         "× a depth + id rasterization through that pinhole (measured alternately)",
     ));
+    if let Some(((t_fitted, t_fitted_plain), (covered, covered_sphere))) = fitted_pair {
+        let name = format!(
+            "  the same build framed on the mesh, as `impostor bake` frames it ({:.1} % of \
+             texels covered; {:.1} % above)",
+            covered * 100.0,
+            covered_sphere * 100.0
+        );
+        out.push(Figure::millis(name, t_fitted).versus(
+            (t_fitted, t_fitted_plain),
+            "× a depth + id rasterization through its reference pinhole (measured alternately)",
+        ));
+    }
     out.push(
         Figure::millis(
             format!("build pinhole impostor {size}² (same maps, the SPOC's reference pinhole)"),
