@@ -318,13 +318,40 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         Ok(ImpostorCamera::Spoc(s)) => Some(s),
         _ => None,
     };
+    // And the pinhole impostor `bake` would place there instead, framed on the mesh the same
+    // way: what choosing the SPOC costs a user who bakes.
+    let fitted_pinhole = ImpostorCamera::fitted(
+        crate::impostor::ViewCamera::Pinhole,
+        eye,
+        b.center(),
+        radius,
+        radius as f64,
+        size,
+        &mesh.positions,
+    )
+    .ok();
     let fitted_pair = fitted.map(|fitted| {
         let reference = fitted.pinhole().clone();
         let camera = ImpostorCamera::Spoc(fitted);
         let fresh = || build(camera.clone(), mesh, 0, &color).expect("valid size");
         let coverage = (fresh().coverage(), fresh_spoc_build().coverage());
         let times = time_pair_median(min * 2, fresh, || plain_raster(&reference, mesh));
-        (times, coverage)
+        let versus_pinhole = fitted_pinhole.as_ref().map(|pinhole| {
+            let fresh_pinhole = || build(pinhole.clone(), mesh, 0, &color).expect("valid size");
+            // The pinhole impostor beside a depth + id rasterization through its own camera:
+            // what resolving the maps costs when no camera is curved.
+            let against_raster = match pinhole {
+                ImpostorCamera::Pinhole(own) => {
+                    let (t_imp, t_raster) =
+                        time_pair_median(min * 2, fresh_pinhole, || plain_raster(own, mesh));
+                    Some(t_imp.as_secs_f64() / t_raster.as_secs_f64())
+                }
+                _ => None,
+            };
+            let pair = time_pair_median(min * 2, fresh, fresh_pinhole);
+            (pair, fresh_pinhole().coverage(), against_raster)
+        });
+        (times, coverage, versus_pinhole)
     });
     let (spoc_fragments, plain_fragments, framed_fragments) = (
         fragments_through(&spoc, mesh),
@@ -398,7 +425,9 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         (t_spoc_framed, t_framed),
         "× a depth + id rasterization through that pinhole (measured alternately)",
     ));
-    if let Some(((t_fitted, t_fitted_plain), (covered, covered_sphere))) = fitted_pair {
+    if let Some(((t_fitted, t_fitted_plain), (covered, covered_sphere), versus_pinhole)) =
+        fitted_pair
+    {
         let name = format!(
             "  the same build framed on the mesh, as `impostor bake` frames it ({:.1} % of \
              texels covered; {:.1} % above)",
@@ -409,6 +438,20 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
             (t_fitted, t_fitted_plain),
             "× a depth + id rasterization through its reference pinhole (measured alternately)",
         ));
+        if let Some(((t_spoc, t_pinhole), covered_pinhole, against_raster)) = versus_pinhole {
+            let against_raster = against_raster.map_or(String::new(), |r| {
+                format!("; {r:.2} × a depth + id rasterization through its own camera")
+            });
+            let name = format!(
+                "  the pinhole impostor `impostor bake` frames there ({:.1} % of texels \
+                 covered{against_raster})",
+                covered_pinhole * 100.0
+            );
+            out.push(Figure::millis(name, t_pinhole).versus(
+                (t_spoc, t_pinhole),
+                "= the mesh-framed SPOC build time / this (same maps, measured alternately)",
+            ));
+        }
     }
     out.push(
         Figure::millis(
