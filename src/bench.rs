@@ -306,30 +306,17 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     // The SPOC `trompe impostor bake` places at the same eye: framed on the mesh's vertices
     // (`ImpostorCamera::fitted`), so the object fills its image — and every texel it covers
     // must be resolved — where the sphere's framing above leaves most of the image empty.
-    let fitted = match ImpostorCamera::fitted(
-        crate::impostor::ViewCamera::Spoc(Some(0.8)),
-        eye,
-        b.center(),
-        radius,
-        radius as f64,
-        size,
-        &mesh.positions,
-    ) {
-        Ok(ImpostorCamera::Spoc(s)) => Some(s),
+    let fitted_at_eye = |kind| {
+        let (center, region) = (b.center(), radius as f64);
+        ImpostorCamera::fitted(kind, eye, center, radius, region, size, &mesh.positions).ok()
+    };
+    let fitted = match fitted_at_eye(crate::impostor::ViewCamera::Spoc(Some(0.8))) {
+        Some(ImpostorCamera::Spoc(s)) => Some(s),
         _ => None,
     };
     // And the pinhole impostor `bake` would place there instead, framed on the mesh the same
     // way: what choosing the SPOC costs a user who bakes.
-    let fitted_pinhole = ImpostorCamera::fitted(
-        crate::impostor::ViewCamera::Pinhole,
-        eye,
-        b.center(),
-        radius,
-        radius as f64,
-        size,
-        &mesh.positions,
-    )
-    .ok();
+    let fitted_pinhole = fitted_at_eye(crate::impostor::ViewCamera::Pinhole);
     let fitted_pair = fitted.map(|fitted| {
         let reference = fitted.pinhole().clone();
         let camera = ImpostorCamera::Spoc(fitted);
