@@ -305,41 +305,52 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&framed, mesh));
     // The SPOC `trompe impostor bake` places at the same eye: framed on the mesh's vertices
     // (`ImpostorCamera::fitted`), so the object fills its image — and every texel it covers
-    // must be resolved — where the sphere's framing above leaves most of the image empty.
+    // must be resolved — where the sphere's framing above leaves most of the image empty. And
+    // the pinhole impostor `bake` would place there instead: what choosing the SPOC costs a
+    // user who bakes, and what filling an impostor's maps costs when no ray is curved.
     let fitted_at_eye = |kind| {
         let (center, region) = (b.center(), radius as f64);
         ImpostorCamera::fitted(kind, eye, center, radius, region, size, &mesh.positions).ok()
     };
-    let fitted = match fitted_at_eye(crate::impostor::ViewCamera::Spoc(Some(0.8))) {
-        Some(ImpostorCamera::Spoc(s)) => Some(s),
-        _ => None,
-    };
-    // And the pinhole impostor `bake` would place there instead, framed on the mesh the same
-    // way: what choosing the SPOC costs a user who bakes.
-    let fitted_pinhole = fitted_at_eye(crate::impostor::ViewCamera::Pinhole);
-    let fitted_pair = fitted.map(|fitted| {
+    let mut bake_framed = Vec::new();
+    if let Some(ImpostorCamera::Spoc(fitted)) =
+        fitted_at_eye(crate::impostor::ViewCamera::Spoc(Some(0.8)))
+    {
         let reference = fitted.pinhole().clone();
         let camera = ImpostorCamera::Spoc(fitted);
         let fresh = || build(camera.clone(), mesh, 0, &color).expect("valid size");
-        let coverage = (fresh().coverage(), fresh_spoc_build().coverage());
-        let times = time_pair_median(min * 2, fresh, || plain_raster(&reference, mesh));
-        let versus_pinhole = fitted_pinhole.as_ref().map(|pinhole| {
-            let fresh_pinhole = || build(pinhole.clone(), mesh, 0, &color).expect("valid size");
-            // The pinhole impostor beside a depth + id rasterization through its own camera:
-            // what resolving the maps costs when no camera is curved.
-            let against_raster = match pinhole {
-                ImpostorCamera::Pinhole(own) => {
-                    let (t_imp, t_raster) =
-                        time_pair_median(min * 2, fresh_pinhole, || plain_raster(own, mesh));
-                    Some(t_imp.as_secs_f64() / t_raster.as_secs_f64())
-                }
-                _ => None,
-            };
-            let pair = time_pair_median(min * 2, fresh, fresh_pinhole);
-            (pair, fresh_pinhole().coverage(), against_raster)
-        });
-        (times, coverage, versus_pinhole)
-    });
+        let (t_fitted, t_reference) =
+            time_pair_median(min * 2, fresh, || plain_raster(&reference, mesh));
+        let name = format!(
+            "  the same build framed on the mesh, as `impostor bake` frames it ({:.1} % of \
+             texels covered; {:.1} % above)",
+            fresh().coverage() * 100.0,
+            fresh_spoc_build().coverage() * 100.0
+        );
+        bake_framed.push(Figure::millis(name, t_fitted).versus(
+            (t_fitted, t_reference),
+            "× a depth + id rasterization through its reference pinhole (measured alternately)",
+        ));
+        if let Some(ImpostorCamera::Pinhole(pinhole)) =
+            fitted_at_eye(crate::impostor::ViewCamera::Pinhole)
+        {
+            let camera = ImpostorCamera::Pinhole(pinhole.clone());
+            let fresh_pinhole = || build(camera.clone(), mesh, 0, &color).expect("valid size");
+            let (t_pinhole_imp, t_pinhole_raster) =
+                time_pair_median(min * 2, fresh_pinhole, || plain_raster(&pinhole, mesh));
+            let (t_spoc, t_pinhole) = time_pair_median(min * 2, fresh, fresh_pinhole);
+            let name = format!(
+                "  the pinhole impostor `impostor bake` frames there ({:.1} % of texels \
+                 covered; {:.2} × a depth + id rasterization through its own camera)",
+                fresh_pinhole().coverage() * 100.0,
+                t_pinhole_imp.as_secs_f64() / t_pinhole_raster.as_secs_f64()
+            );
+            bake_framed.push(Figure::millis(name, t_pinhole).versus(
+                (t_spoc, t_pinhole),
+                "= the mesh-framed SPOC build time / this (same maps, measured alternately)",
+            ));
+        }
+    }
     let (spoc_fragments, plain_fragments, framed_fragments) = (
         fragments_through(&spoc, mesh),
         fragments_through(&plain, mesh),
@@ -412,34 +423,7 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         (t_spoc_framed, t_framed),
         "× a depth + id rasterization through that pinhole (measured alternately)",
     ));
-    if let Some(((t_fitted, t_fitted_plain), (covered, covered_sphere), versus_pinhole)) =
-        fitted_pair
-    {
-        let name = format!(
-            "  the same build framed on the mesh, as `impostor bake` frames it ({:.1} % of \
-             texels covered; {:.1} % above)",
-            covered * 100.0,
-            covered_sphere * 100.0
-        );
-        out.push(Figure::millis(name, t_fitted).versus(
-            (t_fitted, t_fitted_plain),
-            "× a depth + id rasterization through its reference pinhole (measured alternately)",
-        ));
-        if let Some(((t_spoc, t_pinhole), covered_pinhole, against_raster)) = versus_pinhole {
-            let against_raster = against_raster.map_or(String::new(), |r| {
-                format!("; {r:.2} × a depth + id rasterization through its own camera")
-            });
-            let name = format!(
-                "  the pinhole impostor `impostor bake` frames there ({:.1} % of texels \
-                 covered{against_raster})",
-                covered_pinhole * 100.0
-            );
-            out.push(Figure::millis(name, t_pinhole).versus(
-                (t_spoc, t_pinhole),
-                "= the mesh-framed SPOC build time / this (same maps, measured alternately)",
-            ));
-        }
-    }
+    out.extend(bake_framed);
     out.push(
         Figure::millis(
             format!("build pinhole impostor {size}² (same maps, the SPOC's reference pinhole)"),
