@@ -442,6 +442,16 @@ pub(super) fn impostor_bounds(mesh: &Mesh) -> Aabb {
 /// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
 fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     let (w, h) = camera.resolution();
+    // Allocated on two threads, half the bytes each: memory the allocator recycles (a
+    // process that builds again and again) it clears itself, and that clearing then runs on
+    // both cores.
+    let ((color, normal), (face_normal, (object, gd))) = rayon::join(
+        || (Image::zeroed(w, h), Image::zeroed(w, h)),
+        || {
+            let (object, gd) = rayon::join(|| Image::zeroed(w, h), || Image::zeroed(w, h));
+            (Image::zeroed(w, h), (object, gd))
+        },
+    );
     let position = if camera.stores_positions() {
         Some(Image::zeroed(w, h)?)
     } else {
@@ -449,12 +459,12 @@ fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     };
     Ok(Impostor::from_maps(
         camera,
-        Image::zeroed(w, h)?,
-        Image::zeroed(w, h)?,
-        Image::zeroed(w, h)?,
-        Image::zeroed(w, h)?,
+        color?,
+        gd?,
+        normal?,
+        face_normal?,
         position,
-        Image::zeroed(w, h)?,
+        object?,
         Aabb {
             min: Vec3::ZERO,
             max: Vec3::ZERO,
