@@ -477,6 +477,13 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         return out;
     };
     let rays = setup.rays();
+    out.push(Figure {
+        name: "SPOC walks below: reflected rays of a bunny reflector that enter the teapot's box"
+            .into(),
+        value: rays.len() as f64,
+        unit: "rays",
+        versus: None,
+    });
     for res in [128u32, 256, 512, 1024] {
         let Ok(cam) = setup.camera(CheckCamera::Spoc(None), res) else {
             continue;

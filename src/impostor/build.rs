@@ -442,14 +442,17 @@ pub(super) fn impostor_bounds(mesh: &Mesh) -> Aabb {
 /// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
 fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     let (w, h) = camera.resolution();
-    // Allocated on two threads, half the bytes each: memory the allocator recycles (a
-    // process that builds again and again) it clears itself, and that clearing then runs on
-    // both cores.
-    let ((color, normal), (face_normal, (object, gd))) = rayon::join(
+    // Allocated on two threads, half the bytes each (colour and normal; face normal, object
+    // and gd): memory the allocator recycles (a process that builds again and again) it
+    // clears itself, and that clearing then runs on both cores.
+    let ((color, normal), (face_normal, object, gd)) = rayon::join(
         || (Image::zeroed(w, h), Image::zeroed(w, h)),
         || {
-            let (object, gd) = rayon::join(|| Image::zeroed(w, h), || Image::zeroed(w, h));
-            (Image::zeroed(w, h), (object, gd))
+            (
+                Image::zeroed(w, h),
+                Image::zeroed(w, h),
+                Image::zeroed(w, h),
+            )
         },
     );
     let position = if camera.stores_positions() {
