@@ -29,7 +29,8 @@
 //!   an up vector. Equirectangular maps use Mitsuba's mapping ([`frame::envmap`]).
 //! * Texture coordinates follow the image convention: `(0, 0)` is the top-left texel.
 
-#![forbid(unsafe_code)]
+// Safe Rust everywhere but one audited function, `prefetch` (a cache hint; see its module).
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod bench;
@@ -50,4 +51,5 @@ pub use raster::{Fragment, FragmentShader, ItemId, rasterize};
 pub use scene::Scene;
 pub use trace::{Bvh, Hit, RayQuery};
 pub mod impostor;
+mod prefetch;
 pub mod reflect;

@@ -165,6 +165,29 @@ pub enum MeshError {
 }
 
 impl Mesh {
+    /// Starts loading triangle `t`'s vertex indices and material index into the cache (a hint:
+    /// nothing changes; see [`crate::prefetch`]). Call it a few samples before
+    /// [`Mesh::prefetch_corners`], which reads the indices.
+    pub(crate) fn prefetch_triangle(&self, t: u32) {
+        crate::prefetch::prefetch(&self.triangles, t as usize);
+        crate::prefetch::prefetch(&self.face_material, t as usize);
+    }
+
+    /// Starts loading the position, normal and texture coordinates of triangle `t`'s corners
+    /// into the cache (a hint: nothing changes).
+    pub(crate) fn prefetch_corners(&self, t: u32) {
+        let Some(corners) = self.triangles.get(t as usize) else {
+            return;
+        };
+        for &i in corners {
+            crate::prefetch::prefetch(&self.positions, i as usize);
+            crate::prefetch::prefetch(&self.normals, i as usize);
+            if let Some(uvs) = &self.uvs {
+                crate::prefetch::prefetch(uvs, i as usize);
+            }
+        }
+    }
+
     /// Builds a mesh from raw arrays, validating it (module invariants): indices in range, finite
     /// coordinates; degenerate triangles are dropped and counted in a warning; missing normals are
     /// computed (area-weighted, welded by position).

@@ -329,6 +329,20 @@ fn resolve_run<F, V>(
             .as_ref()
             .map_or(0.0, |d| ((d.first_pixel + row_start) / width) as f64 + 0.5);
         for x in x0..x1 {
+            // The triangles of texels a little ahead, on their way from memory (see
+            // `crate::prefetch`): the triangle's indices first, its corners once they are here.
+            if let Some(v) = (x + TRIANGLE_AHEAD < x1)
+                .then(|| visible(x + TRIANGLE_AHEAD))
+                .flatten()
+            {
+                mesh.prefetch_triangle(v.triangle);
+            }
+            if let Some(v) = (x + CORNERS_AHEAD < x1)
+                .then(|| visible(x + CORNERS_AHEAD))
+                .flatten()
+            {
+                mesh.prefetch_corners(v.triangle);
+            }
             let Some(Visible {
                 triangle: t,
                 bary: b,
@@ -362,6 +376,11 @@ fn resolve_run<F, V>(
         }
     }
 }
+
+/// How many texels ahead [`resolve_run`] asks for a texel's triangle, and for its corners.
+/// The triangle must have arrived when its corners are asked for.
+const TRIANGLE_AHEAD: usize = 10;
+const CORNERS_AHEAD: usize = 5;
 
 /// Empties the texels `range` of `run`, whose maps hold `before`.
 fn empty_texels(run: &mut TexelMaps<'_>, range: std::ops::Range<usize>, before: MapsBefore) {
