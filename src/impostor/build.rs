@@ -295,9 +295,10 @@ struct ResolveInputs<'a, F> {
 
 /// Fills a run of texels — whole image rows of `width` texels — from the visible points
 /// `visible(i)` of its texels `i` (counted from the run's start), and empties the texels with
-/// none. Only the texels of `columns` (inclusive) in each row are asked for a visible point:
-/// every other one is empty (`None`: all of them). After it, every map is empty wherever
-/// `object` is [`NO_OBJECT`].
+/// none. Only the texels of `columns` (inclusive) in each row are resolved: every other one
+/// is empty (`None`: all of them). `visible` must answer for every texel of the run, though:
+/// texels ahead are asked for their triangle, to prefetch it. After it, every map is empty
+/// wherever `object` is [`NO_OBJECT`].
 fn resolve_run<F, V>(
     run: &mut TexelMaps<'_>,
     (width, columns): (usize, Option<(usize, usize)>),
@@ -315,7 +316,8 @@ fn resolve_run<F, V>(
         color,
         before,
     } = inputs;
-    for row_start in (0..run.color.len()).step_by(width) {
+    let run_len = run.color.len();
+    for row_start in (0..run_len).step_by(width) {
         let row_end = (row_start + width).min(run.color.len());
         // Outside the drawn columns every texel is empty, handled in bulk.
         let (x0, x1) = match columns {
@@ -331,13 +333,14 @@ fn resolve_run<F, V>(
         for x in x0..x1 {
             // The triangles of texels a little ahead, on their way from memory (see
             // `crate::prefetch`): the triangle's indices first, its corners once they are here.
-            if let Some(v) = (x + TRIANGLE_AHEAD < x1)
+            // Ahead runs on into the next row, so that row's first texels are asked for too.
+            if let Some(v) = (x + TRIANGLE_AHEAD < run_len)
                 .then(|| visible(x + TRIANGLE_AHEAD))
                 .flatten()
             {
                 mesh.prefetch_triangle(v.triangle);
             }
-            if let Some(v) = (x + CORNERS_AHEAD < x1)
+            if let Some(v) = (x + CORNERS_AHEAD < run_len)
                 .then(|| visible(x + CORNERS_AHEAD))
                 .flatten()
             {
