@@ -166,8 +166,8 @@ pub enum MeshError {
 
 impl Mesh {
     /// Starts loading triangle `t`'s vertex indices and material index into the cache (a hint:
-    /// nothing changes; see [`crate::prefetch`]). Call it a few samples before
-    /// [`Mesh::prefetch_corners`], which reads the indices.
+    /// nothing changes; see [`crate::prefetch`]). Call it a while before
+    /// [`Mesh::prefetch_corners`] of the same triangle, which reads the indices.
     pub(crate) fn prefetch_triangle(&self, t: u32) {
         crate::prefetch::prefetch(&self.triangles, t as usize);
         crate::prefetch::prefetch(&self.face_material, t as usize);

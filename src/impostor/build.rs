@@ -318,7 +318,7 @@ fn resolve_run<F, V>(
     } = inputs;
     let run_len = run.color.len();
     for row_start in (0..run_len).step_by(width) {
-        let row_end = (row_start + width).min(run.color.len());
+        let row_end = (row_start + width).min(run_len);
         // Outside the drawn columns every texel is empty, handled in bulk.
         let (x0, x1) = match columns {
             Some((c0, c1)) => (row_start + c0, (row_start + c1 + 1).min(row_end)),
