@@ -334,16 +334,11 @@ fn resolve_run<F, V>(
             // The triangles of texels a little ahead, on their way from memory (see
             // `crate::prefetch`): the triangle's indices first, its corners once they are here.
             // Ahead runs on into the next row, so that row's first texels are asked for too.
-            if let Some(v) = (x + TRIANGLE_AHEAD < run_len)
-                .then(|| visible(x + TRIANGLE_AHEAD))
-                .flatten()
-            {
+            let triangle_ahead = |k: usize| (x + k < run_len).then(|| visible(x + k)).flatten();
+            if let Some(v) = triangle_ahead(TRIANGLE_AHEAD) {
                 mesh.prefetch_triangle(v.triangle);
             }
-            if let Some(v) = (x + CORNERS_AHEAD < run_len)
-                .then(|| visible(x + CORNERS_AHEAD))
-                .flatten()
-            {
+            if let Some(v) = triangle_ahead(CORNERS_AHEAD) {
                 mesh.prefetch_corners(v.triangle);
             }
             let Some(Visible {
