@@ -178,6 +178,7 @@ impl Spoc {
     /// `R(gd) = −h·α·gd² + (A·α + B − h·β)·gd + A·β = 0`, solved by Newton's method from the
     /// guess (the error squares at each step: two or three reach a step below 10⁻⁹ of `gd`;
     /// `None` if four do not).
+    #[inline]
     pub fn gd_on_plane(
         &self,
         uv: DVec2,

@@ -33,6 +33,7 @@ pub const ZERO_UNIT: OctUnit = [i16::MIN, i16::MIN];
 const HALF_MAX: f32 = 65504.0;
 
 /// `c` in half precision, clamping finite values beyond the half range (infinities stay).
+#[inline]
 pub fn pack_rgba(c: Vec4) -> HalfRgba {
     let clamped = c.to_array().map(|v| {
         if v.is_finite() {

@@ -168,6 +168,7 @@ impl Mesh {
     /// Starts loading triangle `t`'s vertex indices and material index into the cache (a hint:
     /// nothing changes; see [`crate::prefetch`]). Call it a while before
     /// [`Mesh::prefetch_corners`] of the same triangle, which reads the indices.
+    #[inline]
     pub(crate) fn prefetch_triangle(&self, t: u32) {
         crate::prefetch::prefetch(&self.triangles, t as usize);
         crate::prefetch::prefetch(&self.face_material, t as usize);
@@ -175,6 +176,7 @@ impl Mesh {
 
     /// Starts loading the position, normal and texture coordinates of triangle `t`'s corners
     /// into the cache (a hint: nothing changes).
+    #[inline]
     pub(crate) fn prefetch_corners(&self, t: u32) {
         let Some(corners) = self.triangles.get(t as usize) else {
             return;

@@ -495,6 +495,11 @@ fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
 /// The surface point with barycentrics `b` in triangle `t` of `m`.
 /// Also returns the triangle's face normal `(p₁ − p₀) × (p₂ − p₀)`, not normalized: the maps
 /// pack it, which normalizes (zero if degenerate).
+// Inlined, like the other per-texel calls of `resolve_run` (`gd_on_plane`, `pack_rgba`, the
+// prefetches, `toward_camera`): as calls, each handed its results back through memory and the
+// texel's work could not be scheduled as one; inlining them cut the fresh SPOC build by about
+// 7 % (docs/performance.md, eighth session).
+#[inline(always)]
 fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3) {
     let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
     let [p0, p1, p2] = [i0, i1, i2].map(|i| m.positions[i]);

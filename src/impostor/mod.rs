@@ -211,6 +211,7 @@ impl ImpostorCamera {
 
     /// Direction from world point `p` back toward the camera (its centre of projection, or
     /// against the viewing direction for parallel projection); not normalized.
+    #[inline]
     pub fn toward_camera(&self, p: DVec3) -> DVec3 {
         match self {
             ImpostorCamera::Pinhole(c) => c.position() - p,
