@@ -48,6 +48,31 @@ pub fn pack_rgba(c: Vec4) -> HalfRgba {
     out
 }
 
+/// [`pack_rgba`] of opaque colours that remembers the last colour it packed: a run of texels
+/// of one colour (an untextured material's) is converted once, where each conversion is a call
+/// to the CPU's half-precision routine. The same bits give the same code, so every code equals
+/// `pack_rgba(c.extend(1.0))`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OpaquePacker {
+    last: Option<([u32; 3], HalfRgba)>,
+}
+
+impl OpaquePacker {
+    /// The code of opaque colour `c`.
+    #[inline]
+    pub fn pack(&mut self, c: Vec3) -> HalfRgba {
+        let bits = c.to_array().map(f32::to_bits);
+        match self.last {
+            Some((last, code)) if last == bits => code,
+            _ => {
+                let code = pack_rgba(c.extend(1.0));
+                self.last = Some((bits, code));
+                code
+            }
+        }
+    }
+}
+
 /// The colour a [`HalfRgba`] holds.
 pub fn unpack_rgba(c: HalfRgba) -> Vec4 {
     Vec4::from_array(c.map(f16::to_f32))
@@ -100,6 +125,28 @@ fn fold(p: Vec2) -> Vec2 {
 mod tests {
     use super::*;
     use crate::geom::SplitMix64;
+
+    #[test]
+    fn opaque_packer_gives_the_codes_of_pack_rgba() {
+        // Runs, signed zeros (equal as floats, not as codes), NaN (unequal to itself) and
+        // values that round to the same half but are not the same bits.
+        let colors = [
+            Vec3::new(0.2, 0.4, 0.6),
+            Vec3::new(0.2, 0.4, 0.6),
+            Vec3::ZERO,
+            Vec3::new(-0.0, 0.0, 0.0),
+            Vec3::new(f32::NAN, 0.5, 0.5),
+            Vec3::new(f32::NAN, 0.5, 0.5),
+            Vec3::new(0.2 + 1e-7, 0.4, 0.6),
+            Vec3::new(1e6, 0.4, 0.6),
+            Vec3::new(0.2, 0.4, 0.6),
+        ];
+        let mut packer = OpaquePacker::default();
+        for c in colors {
+            let code = packer.pack(c).map(f16::to_bits);
+            assert_eq!(code, pack_rgba(c.extend(1.0)).map(f16::to_bits), "{c}");
+        }
+    }
 
     fn random_unit(rng: &mut SplitMix64) -> Vec3 {
         loop {

@@ -7,7 +7,7 @@
 use super::{Impostor, ImpostorCamera};
 use crate::camera::Spoc;
 use crate::camera::{ImagePoint, Projection};
-use crate::frame::packed::{HalfRgba, OctUnit, pack_rgba, pack_unit};
+use crate::frame::packed::{HalfRgba, OctUnit, OpaquePacker, pack_unit};
 use crate::frame::{FrameError, Image};
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
@@ -317,6 +317,7 @@ fn resolve_run<F, V>(
         before,
     } = inputs;
     let run_len = run.color.len();
+    let mut colors = OpaquePacker::default();
     for row_start in (0..run_len).step_by(width) {
         let row_end = (row_start + width).min(run_len);
         // Outside the drawn columns every texel is empty, handled in bulk.
@@ -351,7 +352,7 @@ fn resolve_run<F, V>(
                 continue;
             };
             let (s, face) = surface_sample(mesh, t, b);
-            run.color[x] = pack_rgba(color(&s).extend(1.0));
+            run.color[x] = colors.pack(color(&s));
             run.normal[x] = pack_unit(s.normal);
             // The face normal, turned toward the camera.
             let toward = toward_viewer(camera, s.position.as_dvec3(), frustum);
