@@ -273,6 +273,35 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     out
 }
 
+/// Side of the goal's SPOC impostor (issue 3: a 512² SPOC impostor of the bunny).
+pub const GOAL_SIZE: u32 = 512;
+
+/// The SPOC of the goal's line and of [`impostors`]' builds: strength 0.8 around the bounding
+/// sphere of `mesh`, seen from the front-right at three radii; and its eye.
+pub fn goal_spoc(mesh: &Mesh) -> (Vec3, crate::camera::Spoc) {
+    let b = mesh.bounds();
+    let radius = b.radius().max(1e-3);
+    let eye = b.center() + Vec3::new(0.3, 0.2, 1.0).normalize() * radius * 3.0;
+    let spoc = crate::camera::Spoc::around(eye, b.center(), radius, 0.8, GOAL_SIZE)
+        .expect("the eye is three radii out, outside the sphere");
+    (eye, spoc)
+}
+
+/// The goal's pair alone (`trompe bench --goal`): a fresh SPOC impostor of `mesh` and its
+/// strict peer, a depth + id rasterization through the SPOC's reference pinhole, timed
+/// alternately for `min_time` ([`time_pair_median`]). The same workloads as the first line of
+/// [`impostors`], without the rest: quick, so that two builds of trompe can be compared by
+/// alternating many short runs of each.
+pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> (Duration, Duration) {
+    use crate::impostor::{ImpostorCamera, albedo_of, build};
+    let (_, spoc) = goal_spoc(mesh);
+    let plain = spoc.pinhole().clone();
+    let color = albedo_of(mesh);
+    let fresh_spoc_build =
+        || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
+    time_pair_median(min_time, fresh_spoc_build, || plain_raster(&plain, mesh))
+}
+
 /// Impostor workloads (issue 3): building a SPOC impostor of `mesh` beside a plain pinhole
 /// rasterization of it at the same resolution (depth and ids only: the strict peer of the
 /// ≤ 1.5× goal) and beside its render by the raster method (the same maps a user gets from a
@@ -286,10 +315,8 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     let mut out = Vec::new();
     let b = mesh.bounds();
     let radius = b.radius().max(1e-3);
-    let eye = b.center() + Vec3::new(0.3, 0.2, 1.0).normalize() * radius * 3.0;
-    let size = 512;
-    let spoc = crate::camera::Spoc::around(eye, b.center(), radius, 0.8, size)
-        .expect("eye outside the sphere");
+    let (eye, spoc) = goal_spoc(mesh);
+    let size = GOAL_SIZE;
     let plain = spoc.pinhole().clone();
     let color = albedo_of(mesh);
     // The workload of the first three pairs below: a fresh SPOC impostor.

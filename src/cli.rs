@@ -94,6 +94,12 @@ pub enum Command {
         /// Mesh to measure on (default: the shipped 56k-triangle bunny).
         #[arg(long)]
         mesh: Option<PathBuf>,
+        /// Time only the goal's line of issue 3 (a fresh 512² SPOC impostor beside a depth +
+        /// id rasterization through its reference pinhole), this many times, 3 s each; prints
+        /// each ratio, then their range and median.
+        #[arg(long, value_name = "RUNS",
+              value_parser = clap::value_parser!(u32).range(1..=1000))]
+        goal: Option<u32>,
     },
 }
 
@@ -558,6 +564,38 @@ fn print_timings(t: &Timings) {
     }
 }
 
+/// `trompe bench --goal RUNS`: the goal's pair alone, `runs` times (see
+/// [`trompe::bench::goal_pair`]).
+fn bench_goal_only(mesh: &trompe::geom::Mesh, runs: u32) {
+    let size = trompe::bench::GOAL_SIZE;
+    println!(
+        "fresh SPOC impostor {size}² / depth + id rasterization through its reference pinhole (goal ≤ 1.5)"
+    );
+    let mut ratios = Vec::new();
+    for run in 1..=runs {
+        let (build, peer) = trompe::bench::goal_pair(mesh, std::time::Duration::from_secs(3));
+        let ratio = build.as_secs_f64() / peer.as_secs_f64();
+        println!(
+            "  run {run}: build {:.3} ms, peer {:.3} ms, {ratio:.3} ×",
+            build.as_secs_f64() * 1e3,
+            peer.as_secs_f64() * 1e3
+        );
+        ratios.push(ratio);
+    }
+    ratios.sort_by(f64::total_cmp);
+    let n = ratios.len();
+    let median = if n % 2 == 1 {
+        ratios[n / 2]
+    } else {
+        (ratios[n / 2 - 1] + ratios[n / 2]) / 2.0
+    };
+    println!(
+        "{n} runs: {:.3} – {:.3} ×, median {median:.3} ×",
+        ratios[0],
+        ratios[n - 1]
+    );
+}
+
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<ExitCode> {
     if let Some(n) = cli.threads {
@@ -908,7 +946,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 print_timings(&timings);
             }
         }
-        Command::Bench { quick, mesh } => {
+        Command::Bench { quick, mesh, goal } => {
             let path = mesh.unwrap_or_else(|| {
                 trompe::report::DemoInputs::locate()
                     .assets
@@ -921,6 +959,10 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 m.triangle_count(),
                 rayon::current_num_threads()
             );
+            if let Some(runs) = goal {
+                bench_goal_only(&m, runs);
+                return Ok(ExitCode::SUCCESS);
+            }
             let assets = trompe::report::DemoInputs::locate().assets;
             let teapot = trompe::geom::io::load(&assets.join("meshes/teapot.obj"))?.mesh;
             let bunny = trompe::geom::io::load(&assets.join("meshes/bunny.obj"))?.mesh;
