@@ -26,8 +26,10 @@ pub struct Spoc {
     z_far: f64,
     k: f64,
     /// Derived, kept for the per-vertex cost of `project`: the focal distance `f` and the ramp's
-    /// slope `k/(z_f − z_n)`; and for the per-texel cost of `gd_on_plane`, `M·(p0, 1)`.
+    /// slope `k/(z_f − z_n)`; for the per-triangle cost of `midpoint_deviation_bound`, `1/f`;
+    /// and for the per-texel cost of `gd_on_plane`, `M·(p0, 1)`.
     focal: f64,
+    inv_focal: f64,
     slope: f64,
     to_pole: DVec3,
 }
@@ -112,6 +114,7 @@ impl Spoc {
         }
         Ok(Self {
             focal: ppc.focal(),
+            inv_focal: 1.0 / ppc.focal(),
             slope: k / (z_far - z_near),
             to_pole: ppc.unproject(pole, 1.0) - ppc.position(),
             ppc,
@@ -263,21 +266,29 @@ impl Projection for Spoc {
         let Some(first) = ends.first() else {
             return 0.0;
         };
+        // Set-up asks this of every triangle. Plain comparisons, not `f64::min`/`max` (which
+        // step around NaN at several instructions each): a NaN or non-positive `gd` fails
+        // `valid` instead, and a NaN image coordinate is skipped, as `min`/`max` would.
         let (mut gd_min, mut gd_max) = (first.gd, first.gd);
         let (mut lo, mut hi) = (first.uv, first.uv);
-        let mut r_max: f64 = 0.0;
+        let (mut r_max, mut valid) = (0.0f64, true);
         for p in ends {
-            (gd_min, gd_max) = (gd_min.min(p.gd), gd_max.max(p.gd));
-            (lo, hi) = (lo.min(p.uv), hi.max(p.uv));
-            let r = p.uv - self.pole;
-            r_max = r_max.max(r.x.abs() + r.y.abs());
+            valid &= p.gd > 0.0;
+            gd_min = if p.gd < gd_min { p.gd } else { gd_min };
+            gd_max = if p.gd > gd_max { p.gd } else { gd_max };
+            lo.x = if p.uv.x < lo.x { p.uv.x } else { lo.x };
+            lo.y = if p.uv.y < lo.y { p.uv.y } else { lo.y };
+            hi.x = if p.uv.x > hi.x { p.uv.x } else { hi.x };
+            hi.y = if p.uv.y > hi.y { p.uv.y } else { hi.y };
+            let r = (p.uv.x - self.pole.x).abs() + (p.uv.y - self.pole.y).abs();
+            r_max = if r > r_max { r } else { r_max };
         }
-        if gd_min.is_nan() || gd_min <= 0.0 {
+        if !valid {
             return f64::INFINITY;
         }
         let dz = self.focal * (gd_max - gd_min) / (gd_max * gd_min);
         let dr = (hi.x - lo.x) + (hi.y - lo.y) + self.slope * dz * r_max;
-        let inv_z_mean = gd_max / self.focal;
+        let inv_z_mean = gd_max * self.inv_focal;
         0.25 * dz * (dr * ((1.0 + self.k) * inv_z_mean + self.slope) + self.slope * r_max)
     }
 }

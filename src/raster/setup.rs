@@ -124,7 +124,9 @@ impl BinnedChunk {
                     object: o as u32,
                     triangle: t as u32,
                 };
-                let corners = corners.map(|i| (mesh.positions[i].as_dvec3(), seen[o][i]));
+                let seen = &seen[o];
+                let corner = |i: usize| (mesh.positions[i].as_dvec3(), seen[i]);
+                let corners = [corner(corners[0]), corner(corners[1]), corner(corners[2])];
                 match corners.map(|c| c.1.image) {
                     [Some(a), Some(b), Some(c)] => {
                         let bound = camera.midpoint_deviation_bound(&[a, b, c]);
