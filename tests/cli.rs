@@ -394,3 +394,27 @@ fn baking_a_mesh_with_a_degenerate_triangle_warns_of_it() {
     );
     assert!(json.is_file());
 }
+
+#[test]
+fn bench_goal_times_the_goal_pair_alone() {
+    // The teapot keeps a debug build quick; one run is 3 s of alternated pairs.
+    let o = trompe(&["bench", "--goal", "1", "--mesh", "assets/meshes/teapot.obj"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let run = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("run 1:"))
+        .unwrap_or_else(|| panic!("no run line in: {out}"));
+    // "run 1: build B ms, peer P ms, R ×": R is B / P as printed (three decimals each).
+    let numbers: Vec<f64> = run
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    let [_, build, peer, ratio] = numbers[..] else {
+        panic!("unexpected run line: {run}");
+    };
+    assert!(build > 0.0 && peer > 0.0, "{run}");
+    assert!((ratio - build / peer).abs() <= 2e-3 * ratio + 1e-3, "{run}");
+    assert!(out.contains("1 runs:") && out.contains("median"), "{out}");
+    fails_cleanly(&trompe(&["bench", "--goal", "0"]), "--goal");
+}
