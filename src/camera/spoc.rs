@@ -267,13 +267,13 @@ impl Projection for Spoc {
             return 0.0;
         };
         // Set-up asks this of every triangle. Plain comparisons, not `f64::min`/`max` (which
-        // step around NaN at several instructions each): a NaN or non-positive `gd` fails
-        // `valid` instead, and a NaN image coordinate is skipped, as `min`/`max` would.
+        // step around NaN at several instructions each): a NaN or non-positive `gd`, or a
+        // non-finite image coordinate, fails `valid` instead, and the bound is infinite.
         let (mut gd_min, mut gd_max) = (first.gd, first.gd);
         let (mut lo, mut hi) = (first.uv, first.uv);
         let (mut r_max, mut valid) = (0.0f64, true);
         for p in ends {
-            valid &= p.gd > 0.0;
+            valid &= p.gd > 0.0 && p.uv.is_finite();
             gd_min = if p.gd < gd_min { p.gd } else { gd_min };
             gd_max = if p.gd > gd_max { p.gd } else { gd_max };
             lo.x = if p.uv.x < lo.x { p.uv.x } else { lo.x };
@@ -374,6 +374,32 @@ mod tests {
         }
         // Planes seen nearly edge-on may have no crossing near the guess; most do.
         assert!(solved > 3600, "{solved}");
+    }
+
+    #[test]
+    fn midpoint_deviation_bound_is_infinite_for_corners_it_cannot_bound() {
+        // A corner with no depth, or off every image, whichever corner it is: the bound must
+        // then send the triangle to tessellation, not report it straight.
+        let s = spoc();
+        let good = [0.3, 0.0, -0.2].map(|x| s.project(DVec3::new(x, 0.2, 0.1)).unwrap());
+        assert!(s.midpoint_deviation_bound(&good).is_finite());
+        let spoilers = [
+            |p: &mut ImagePoint| p.gd = f64::NAN,
+            |p: &mut ImagePoint| p.gd = 0.0,
+            |p: &mut ImagePoint| p.uv.x = f64::NAN,
+            |p: &mut ImagePoint| p.uv.y = f64::INFINITY,
+        ];
+        for spoil in spoilers {
+            for k in 0..3 {
+                let mut ends = good;
+                spoil(&mut ends[k]);
+                assert_eq!(
+                    s.midpoint_deviation_bound(&ends),
+                    f64::INFINITY,
+                    "corner {k}"
+                );
+            }
+        }
     }
 
     #[test]
