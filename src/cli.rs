@@ -584,11 +584,7 @@ fn bench_goal_only(mesh: &trompe::geom::Mesh, runs: u32) {
     }
     ratios.sort_by(f64::total_cmp);
     let n = ratios.len();
-    let median = if n % 2 == 1 {
-        ratios[n / 2]
-    } else {
-        (ratios[n / 2 - 1] + ratios[n / 2]) / 2.0
-    };
+    let median = trompe::impostor::fidelity::median(&ratios);
     println!(
         "{n} runs: {:.3} – {:.3} ×, median {median:.3} ×",
         ratios[0],

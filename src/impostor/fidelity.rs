@@ -145,8 +145,8 @@ where
 }
 
 /// The middle of sorted `values` (the mean of the two middle ones for an even count; 0 for
-/// none).
-fn median(values: &[f64]) -> f64 {
+/// none). Also `trompe bench --goal`'s median of its runs' ratios.
+pub fn median(values: &[f64]) -> f64 {
     match values.len() {
         0 => 0.0,
         n if n % 2 == 1 => values[n / 2],
