@@ -289,9 +289,9 @@ pub fn goal_spoc(mesh: &Mesh) -> (Vec3, crate::camera::Spoc) {
 
 /// The goal's pair alone (`trompe bench --goal`): a fresh SPOC impostor of `mesh` and its
 /// strict peer, a depth + id rasterization through the SPOC's reference pinhole, timed
-/// alternately for `min_time` ([`time_pair_median`]). The same workloads as the first line of
-/// [`impostors`], without the rest: quick, so that two builds of trompe can be compared by
-/// alternating many short runs of each.
+/// alternately for `min_time` ([`time_pair_median`]). The first line of [`impostors`] times it
+/// too; alone it is quick, so that two builds of trompe can be compared by alternating many
+/// short runs of each.
 pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> (Duration, Duration) {
     use crate::impostor::{ImpostorCamera, albedo_of, build};
     let (_, spoc) = goal_spoc(mesh);
@@ -322,8 +322,8 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     // The workload of the first three pairs below: a fresh SPOC impostor.
     let fresh_spoc_build =
         || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-    let (t_spoc, t_plain) =
-        time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&plain, mesh));
+    // The goal's line: the very pair `trompe bench --goal` times.
+    let (t_spoc, t_plain) = goal_pair(mesh, min * 2);
     // The same rasterization through the pinhole a pinhole impostor of the object would have:
     // framing its bounding sphere. The SPOC's reference pinhole above is wider by (1 + k)·1.05,
     // to hold the pushed-out silhouette, so the object is smaller there than in either image.
