@@ -316,3 +316,37 @@ fn a_rebuilt_graph_impostor_equals_a_fresh_build() {
     let bare = build(camera, &without, 1, &albedo_of(&without)).unwrap();
     assert!(imp.gd != bare.gd, "the spheres are not seen");
 }
+
+#[test]
+fn every_impostor_camera_clips_and_projects_in_one_call_as_in_two() {
+    // The rasterizer asks each vertex for both in one call (one dispatch through the enum):
+    // the answer must be exactly the two separate calls', for every kind of camera, on both
+    // sides of each one's near boundary.
+    use trompe::impostor::ViewCamera;
+    let (g, _) = camera();
+    let (eye, center) = (Vec3::new(0.0, 1.0, 2.0), Vec3::new(0.0, 1.0, -1.0));
+    let mut cameras = vec![ImpostorCamera::Graph(g)];
+    for kind in [
+        ViewCamera::Pinhole,
+        ViewCamera::Orthographic,
+        ViewCamera::Spoc(Some(0.6)),
+    ] {
+        cameras.push(ImpostorCamera::around(kind, eye, center, 1.0, 0.5, 64).unwrap());
+    }
+    let mut rng = SplitMix64::new(11);
+    for camera in &cameras {
+        let (mut inside, mut outside) = (0, 0);
+        for _ in 0..2000 {
+            let p = (eye + rng.unit_vector() * 4.0 * rng.next_f32()).as_dvec3();
+            let clip = camera.clip_distance(p);
+            let expected = (clip, (clip >= 0.0).then(|| camera.project(p)).flatten());
+            assert_eq!(camera.clip_and_project(p), expected, "{p}");
+            if clip >= 0.0 {
+                inside += 1
+            } else {
+                outside += 1
+            }
+        }
+        assert!(inside > 100 && outside > 100, "{inside} / {outside}");
+    }
+}

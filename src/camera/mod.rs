@@ -68,6 +68,15 @@ pub trait Projection: Sync {
         0.0
     }
 
+    /// [`Projection::clip_distance`] of `p`, and its projection where that is `≥ 0`: what the
+    /// rasterizer asks of every mesh vertex. One call, so that a camera chosen at run time
+    /// (an enum of cameras) dispatches once per vertex, and each camera's two answers are
+    /// computed together.
+    fn clip_and_project(&self, p: DVec3) -> (f64, Option<ImagePoint>) {
+        let clip = self.clip_distance(p);
+        (clip, if clip >= 0.0 { self.project(p) } else { None })
+    }
+
     /// Projects an `f32` world point (convenience for mesh vertices).
     fn project_f32(&self, p: Vec3) -> Option<ImagePoint> {
         self.project(p.as_dvec3())

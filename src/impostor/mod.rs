@@ -306,6 +306,14 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Graph(c) => c.clip_distance(p),
         }
     }
+    fn clip_and_project(&self, p: DVec3) -> (f64, Option<ImagePoint>) {
+        match self {
+            ImpostorCamera::Pinhole(c) => c.clip_and_project(p),
+            ImpostorCamera::Orthographic(c) => c.clip_and_project(p),
+            ImpostorCamera::Spoc(c) => c.clip_and_project(p),
+            ImpostorCamera::Graph(c) => c.clip_and_project(p),
+        }
+    }
     fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
         match self {
             ImpostorCamera::Pinhole(c) => c.midpoint_deviation_bound(ends),

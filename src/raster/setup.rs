@@ -197,13 +197,10 @@ pub(super) fn screen_triangles<P: Projection>(
         seen.clear();
         seen.par_extend(m.positions.par_iter().map(|p| {
             let x = p.as_dvec3();
-            let clip = camera.clip_distance(x);
-            let image = (clip >= 0.0)
-                .then(|| camera.project(x))
-                .flatten()
-                .filter(|q| {
-                    q.gd > 0.0 && q.gd.is_finite() && q.uv.x.abs() < GUARD && q.uv.y.abs() < GUARD
-                });
+            let (clip, image) = camera.clip_and_project(x);
+            let image = image.filter(|q| {
+                q.gd > 0.0 && q.gd.is_finite() && q.uv.x.abs() < GUARD && q.uv.y.abs() < GUARD
+            });
             SeenVertex { clip, image }
         }));
     }
