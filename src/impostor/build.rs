@@ -7,7 +7,7 @@
 use super::{Impostor, ImpostorCamera};
 use crate::camera::Spoc;
 use crate::camera::{ImagePoint, Projection};
-use crate::frame::packed::{HalfRgba, OctUnit, OpaquePacker, pack_unit};
+use crate::frame::packed::{HalfRgba, OctUnit, OpaquePacker, ZERO_UNIT, pack_unit};
 use crate::frame::{FrameError, Image};
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
@@ -351,9 +351,9 @@ fn resolve_run<F, V>(
                 empty_texels(run, x..x + 1, *before);
                 continue;
             };
-            let (s, face) = surface_sample(mesh, t, b);
+            let (s, face, interpolated) = surface_sample(mesh, t, b);
             run.color[x] = colors.pack(color(&s));
-            run.normal[x] = pack_unit(s.normal);
+            run.normal[x] = pack_normal(interpolated, face);
             // The face normal, turned toward the camera.
             let toward = toward_viewer(camera, s.position.as_dvec3(), frustum);
             run.face_normal[x] = pack_unit(if face.as_dvec3().dot(toward) < 0.0 {
@@ -494,19 +494,22 @@ fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
 }
 
 /// The surface point with barycentrics `b` in triangle `t` of `m`.
-/// Also returns the triangle's face normal `(p₁ − p₀) × (p₂ − p₀)`, not normalized: the maps
-/// pack it, which normalizes (zero if degenerate).
+/// Also returns the triangle's face normal `(p₁ − p₀) × (p₂ − p₀)` and the interpolated vertex
+/// normal, neither normalized: the maps pack them, and packing normalizes ([`pack_normal`]).
 // Inlined, like the other per-texel calls of `resolve_run` (`gd_on_plane`, `pack_rgba`, the
 // prefetches, `toward_camera`): as calls, each handed its results back through memory and the
 // texel's work could not be scheduled as one; inlining them cut the fresh SPOC build by about
 // 7 % (docs/performance.md, eighth session).
 #[inline(always)]
-fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3) {
+fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3, Vec3) {
     let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);
     let [p0, p1, p2] = [i0, i1, i2].map(|i| m.positions[i]);
     let position = p0 * b.x + p1 * b.y + p2 * b.z;
     let face = (p1 - p0).cross(p2 - p0);
-    let normal = (m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z)
+    let interpolated = m.normals[i0] * b.x + m.normals[i1] * b.y + m.normals[i2] * b.z;
+    // The colour callback may use the unit normal; when it does not, being inlined, this
+    // square root and division are not computed at all.
+    let normal = interpolated
         .try_normalize()
         .unwrap_or_else(|| face.normalize_or_zero());
     let uv = m
@@ -519,7 +522,18 @@ fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3) {
         uv,
         triangle: t,
     };
-    (sample, face)
+    (sample, face, interpolated)
+}
+
+/// The packed shading normal of a surface sample: its `interpolated` vertex normal, or the
+/// triangle's `face` normal where that is zero — as [`surface_sample`]'s unit normal, but
+/// without normalizing first, since the octahedral packing divides by the 1-norm anyway.
+#[inline(always)]
+fn pack_normal(interpolated: Vec3, face: Vec3) -> OctUnit {
+    match pack_unit(interpolated) {
+        ZERO_UNIT => pack_unit(face),
+        code => code,
+    }
 }
 
 /// The direction from `p` toward the camera that sees it: through a graph camera, toward the
@@ -935,6 +949,26 @@ mod tests {
     use super::*;
     use crate::camera::Spoc;
     use crate::raster::rasterize;
+
+    #[test]
+    fn a_shading_normal_packs_as_its_unit_vector_and_falls_back_to_the_face() {
+        // Packing skips the normalization: the code must be that of the unit normal (at most a
+        // rounding step apart), and a zero or non-finite normal gives the face's.
+        let mut rng = crate::geom::SplitMix64::new(3);
+        for _ in 0..10_000 {
+            let n = rng.unit_vector() * (0.01 + 100.0 * rng.next_f32());
+            let (a, b) = (pack_normal(n, Vec3::X), pack_unit(n.normalize()));
+            assert!((a[0] - b[0]).abs() <= 1 && (a[1] - b[1]).abs() <= 1, "{n}");
+        }
+        let face = Vec3::new(0.0, 3.0, -4.0);
+        for bad in [
+            Vec3::ZERO,
+            Vec3::splat(f32::NAN),
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+        ] {
+            assert_eq!(pack_normal(bad, face), pack_unit(face), "{bad}");
+        }
+    }
 
     /// Clipping group by group gives the pieces of clipping each triangle, and drawing every
     /// frustum's pieces over one image equals drawing each into an image of its own and keeping,
