@@ -53,3 +53,5 @@ pub use trace::{Bvh, Hit, RayQuery};
 pub mod impostor;
 mod prefetch;
 pub mod reflect;
+#[cfg(test)]
+mod test_scratch;

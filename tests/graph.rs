@@ -1,6 +1,8 @@
 //! Graph-camera impostors (paper 1 §5; algorithms.md §4): an L-shaped corridor seen around its
 //! corner.
 
+mod common;
+
 use glam::{DVec3, Mat4, Vec3};
 use std::sync::Arc;
 use trompe::camera::GraphCamera;
@@ -161,8 +163,7 @@ fn graph_impostors_save_and_load_exactly() {
     let (g, _) = camera();
     let mesh = scene();
     let imp = build(ImpostorCamera::Graph(g), &mesh, 2, &albedo_of(&mesh)).unwrap();
-    let dir = std::env::temp_dir().join(format!("trompe-graph-file-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("graph-file");
     let path = dir.join("corridor.json");
     file::save(&imp, &path).unwrap();
     let back = file::load(&path).unwrap();

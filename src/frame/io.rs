@@ -273,8 +273,7 @@ mod tests {
 
     #[test]
     fn png_round_trip_is_within_8_bit_quantisation() {
-        let dir = std::env::temp_dir().join(format!("trompe-io-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_scratch::scratch("io-png-round-trip");
         let path = dir.join("rt.png");
         let img = Image::from_vec(
             3,
@@ -295,8 +294,7 @@ mod tests {
 
     #[test]
     fn exr_depth_round_trips_exactly() {
-        let dir = std::env::temp_dir().join(format!("trompe-io-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_scratch::scratch("io-exr-depth");
         let path = dir.join("depth.exr");
         let depth = Image::from_vec(2, 2, vec![1.0, 2.5, f32::INFINITY, 1e-3]).unwrap();
         write_exr_depth(&path, &depth).unwrap();
@@ -306,8 +304,7 @@ mod tests {
 
     #[test]
     fn garbage_files_are_errors() {
-        let dir = std::env::temp_dir().join(format!("trompe-io-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_scratch::scratch("io-garbage-files");
         for name in ["bad.png", "bad.exr", "bad.hdr"] {
             let path = dir.join(name);
             std::fs::write(&path, b"not an image at all").unwrap();

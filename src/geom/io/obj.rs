@@ -281,8 +281,7 @@ mod tests {
     use super::*;
 
     fn load_text(name: &str, text: &str) -> Result<LoadedMesh, MeshError> {
-        let dir = std::env::temp_dir().join(format!("trompe-obj-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = crate::test_scratch::scratch(&format!("obj-{name}"));
         let path = dir.join(name);
         std::fs::write(&path, text).expect("write");
         load(&path)
