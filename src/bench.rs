@@ -6,7 +6,7 @@
 //! through the BVH (peer: brute force over every triangle, on a sample of the same rays).
 //!
 //! Workloads (issue 3): SPOC impostor construction beside pinhole rasterizations of the same
-//! mesh; SPOC walks per resolution; graph-camera impostor construction of a maze with bunnies
+//! mesh, for the bunny and for a textured mesh; SPOC walks per resolution; graph-camera impostor construction of a maze with bunnies
 //! in its corridors beside a rasterization through the camera's root.
 //!
 //! Invariant: a timer stops before what it timed is freed, for a workload and its peer alike
@@ -575,6 +575,61 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         });
     }
     out
+}
+
+/// A textured mesh's SPOC impostor (issue 3's maps for what a technical artist bakes): a fresh
+/// [`GOAL_SIZE`]² build of `mesh` framed as the goal's ([`goal_spoc`]), its colour sampled from
+/// its textures texel by texel, beside a depth + id rasterization through the SPOC's reference
+/// pinhole (the goal's peer) and beside the same build with its textures left out — what
+/// sampling them costs, where an untextured mesh's colour repeats from texel to texel.
+/// `name` labels the mesh. Nothing when `mesh` has no texture.
+pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
+    use crate::geom::Material;
+    use crate::impostor::{ImpostorCamera, albedo_of, build};
+    if mesh.materials.iter().all(|m| m.texture.is_none()) {
+        return Vec::new();
+    }
+    let min = Duration::from_millis(if quick { 200 } else { 1500 });
+    let (_, spoc) = goal_spoc(mesh);
+    let plain = spoc.pinhole().clone();
+    let untextured = Mesh {
+        materials: mesh
+            .materials
+            .iter()
+            .map(|m| Material {
+                texture: None,
+                ..m.clone()
+            })
+            .collect(),
+        ..mesh.clone()
+    };
+    let (sampled, flat) = (albedo_of(mesh), albedo_of(&untextured));
+    let camera = ImpostorCamera::Spoc(spoc);
+    let textured_build = || build(camera.clone(), mesh, 0, &sampled).expect("valid size");
+    let flat_build = || build(camera.clone(), &untextured, 0, &flat).expect("valid size");
+    let (t_textured, t_plain) =
+        time_pair_median(min * 2, textured_build, || plain_raster(&plain, mesh));
+    let (t_textured_again, t_flat) = time_pair_median(min * 2, textured_build, flat_build);
+    let size = GOAL_SIZE;
+    vec![
+        Figure::millis(
+            format!(
+                "build SPOC impostor {size}² of a textured mesh ({name}, {} triangles; {:.1} % \
+                 of texels covered)",
+                mesh.triangle_count(),
+                textured_build().coverage() * 100.0
+            ),
+            t_textured,
+        )
+        .versus(
+            (t_textured, t_plain),
+            "× a depth + id rasterization through its reference pinhole (measured alternately)",
+        ),
+        Figure::millis("  the same build with its textures left out", t_flat).versus(
+            (t_textured_again, t_flat),
+            "= the textured build time / this (measured alternately)",
+        ),
+    ]
 }
 
 /// The maze's geometry with `count` copies of `object` (largest extent half a cell) standing on

@@ -966,9 +966,12 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 .scenes
                 .join("maze.maze");
             let maze = trompe::scene::maze::Maze::load(&maze_path)?;
+            let duck_path = assets.join("gltf/Duck.glb");
+            let duck = trompe::geom::io::load(&duck_path)?.mesh;
             let figures = trompe::bench::foundation(&m, quick)
                 .into_iter()
                 .chain(trompe::bench::impostors(&m, &teapot, &bunny, quick))
+                .chain(trompe::bench::textured_impostor(&duck, "Duck.glb", quick))
                 .chain(trompe::bench::graph_impostors(
                     &maze, &maze_path, &bunny, quick,
                 ));

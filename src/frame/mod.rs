@@ -231,15 +231,10 @@ pub enum Wrap {
 impl<T: Lerp> Image<T> {
     /// Bilinear lookup at continuous image coordinates (pixel centres at `+0.5`).
     pub fn sample_bilinear(&self, uv: Vec2, wrap_x: Wrap, wrap_y: Wrap) -> T {
-        let fx = uv.x - PIXEL_CENTER;
-        let fy = uv.y - PIXEL_CENTER;
-        let x0 = fx.floor();
-        let y0 = fy.floor();
-        let (tx, ty) = (fx - x0, fy - y0);
-        let xi = |x: i64| resolve(x, self.width, wrap_x);
-        let yi = |y: i64| resolve(y, self.height, wrap_y);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let (xa, xb, ya, yb) = (xi(x0), xi(x0 + 1), yi(y0), yi(y0 + 1));
+        let (x0, tx) = floor_and_fraction(uv.x - PIXEL_CENTER);
+        let (y0, ty) = floor_and_fraction(uv.y - PIXEL_CENTER);
+        let (xa, xb) = texel_pair(x0, self.width, wrap_x);
+        let (ya, yb) = texel_pair(y0, self.height, wrap_y);
         let top = self.get(xa, ya) * (1.0 - tx) + self.get(xb, ya) * tx;
         let bottom = self.get(xa, yb) * (1.0 - tx) + self.get(xb, yb) * tx;
         top * (1.0 - ty) + bottom * ty
@@ -252,11 +247,32 @@ impl<T: Lerp> Image<T> {
     }
 }
 
-fn resolve(i: i64, n: u32, wrap: Wrap) -> u32 {
+/// `⌊x⌋` and `x − ⌊x⌋`, by a conversion: `f32::floor` is a library call on baseline x86-64,
+/// and bilinear texture lookups make two a texel. The integer saturates beyond `i64`, and
+/// a NaN gives 0 (its fraction stays NaN).
+fn floor_and_fraction(x: f32) -> (i64, f32) {
+    let toward_zero = x as i64;
+    let floor = if (toward_zero as f32) > x {
+        toward_zero.saturating_sub(1)
+    } else {
+        toward_zero
+    };
+    (floor, x - floor as f32)
+}
+
+/// The texels `i` and `i + 1` of a row (or column) of `n`, wrapped: one division for the
+/// pair where two `rem_euclid` took two.
+fn texel_pair(i: i64, n: u32, wrap: Wrap) -> (u32, u32) {
     let n = n as i64;
     match wrap {
-        Wrap::Clamp => i.clamp(0, n - 1) as u32,
-        Wrap::Repeat => i.rem_euclid(n) as u32,
+        Wrap::Clamp => (
+            i.clamp(0, n - 1) as u32,
+            i.saturating_add(1).clamp(0, n - 1) as u32,
+        ),
+        Wrap::Repeat => {
+            let a = i.rem_euclid(n);
+            (a as u32, if a + 1 == n { 0 } else { a as u32 + 1 })
+        }
     }
 }
 
@@ -376,6 +392,47 @@ mod tests {
                 < 1e-6
         );
         assert_eq!(img.sample_nearest(Vec2::new(1.9, 0.2)), 1.0);
+    }
+
+    #[test]
+    fn bilinear_lookups_match_the_floor_and_remainder_definition() {
+        // The cast-based floor and one-division wrap against `f32::floor` and `rem_euclid` per
+        // texel, at coordinates on and between texel centres, negative, past the edge and far
+        // out; and no panic at non-finite ones.
+        let (w, h) = (5u32, 3u32);
+        let texels: Vec<f32> = (0..w * h).map(|i| (i * i % 17) as f32).collect();
+        let img = Image::from_vec(w, h, texels).unwrap();
+        let reference = |uv: Vec2, wrap: Wrap| {
+            let (fx, fy) = (uv.x - PIXEL_CENTER, uv.y - PIXEL_CENTER);
+            let (x0, y0) = (fx.floor(), fy.floor());
+            let (tx, ty) = (fx - x0, fy - y0);
+            let at = |i: i64, n: u32| match wrap {
+                Wrap::Clamp => i.clamp(0, n as i64 - 1) as u32,
+                Wrap::Repeat => i.rem_euclid(n as i64) as u32,
+            };
+            let (x0, y0) = (x0 as i64, y0 as i64);
+            let (xa, xb, ya, yb) = (at(x0, w), at(x0 + 1, w), at(y0, h), at(y0 + 1, h));
+            let top = img.get(xa, ya) * (1.0 - tx) + img.get(xb, ya) * tx;
+            let bottom = img.get(xa, yb) * (1.0 - tx) + img.get(xb, yb) * tx;
+            top * (1.0 - ty) + bottom * ty
+        };
+        let mut rng = crate::geom::SplitMix64::new(11);
+        let mut coords: Vec<f32> = vec![0.0, 0.5, 1.0, -0.5, -1.0, 4.5, 5.0, 5.5, -7.25, 1e6 + 0.5];
+        coords.extend((0..200).map(|_| rng.next_f32() * 40.0 - 20.0));
+        for wrap in [Wrap::Clamp, Wrap::Repeat] {
+            for (&x, &y) in coords.iter().zip(coords.iter().rev()) {
+                let uv = Vec2::new(x, y);
+                assert_eq!(
+                    img.sample_bilinear(uv, wrap, wrap),
+                    reference(uv, wrap),
+                    "{uv}"
+                );
+            }
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 3e19, -3e19] {
+                let _ = img.sample_bilinear(Vec2::new(bad, 1.0), wrap, wrap);
+                let _ = img.sample_bilinear(Vec2::new(1.0, bad), wrap, wrap);
+            }
+        }
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! Impostor construction (paper 1 §3.1; algorithms.md §2.2): rasterize the mesh through the
-//! camera, keeping the largest `gd`; through a curved camera, triangles the rasterizer reports
-//! as curved beyond half a pixel are tessellated adaptively and the mesh drawn again. Through
-//! a graph camera (§4.5), each frustum draws the pieces of the triangles clipped to it, over one
-//! image.
+//! camera, keeping the largest `gd`; through a curved camera, when the rasterizer's set-up finds
+//! triangles curved beyond half a pixel, the mesh is tessellated adaptively before anything is
+//! drawn, and the tessellation drawn instead. Through a graph camera (§4.5), each frustum draws
+//! the pieces of the triangles clipped to it, over one image.
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::Spoc;
@@ -628,16 +628,27 @@ impl ImpostorBuilder {
         if matches!(impostor.camera, ImpostorCamera::Graph(_)) {
             return self.build_graph_into(impostor, (mesh, object), color, before);
         }
-        // Detailed meshes rarely need splitting (paper 1 §3.1): draw the mesh as it is, and
-        // tessellate only when the rasterizer reports triangles the camera may curve by more
-        // than the tolerance, or that it had to clip — then draw the tessellation instead.
-        let stats = self.draw_and_resolve(impostor, (mesh, object), (mesh, None), color, before)?;
-        if impostor.camera.is_curved() && stats.curved + stats.clipped > 0 {
-            if let Some(t) = tessellate_with(&impostor.camera, mesh, &mut self.tessellation) {
-                let drawn = (&t.mesh, Some(t.source.as_slice()));
-                let before = MapsBefore::Resolved;
-                self.draw_and_resolve(impostor, (mesh, object), drawn, color, before)?;
+        // Detailed meshes rarely need splitting (paper 1 §3.1): the mesh is drawn as it is
+        // unless, through a curved camera, set-up finds triangles the camera may curve by more
+        // than the tolerance, or that it had to clip. Then, before anything is drawn, the mesh
+        // is tessellated, and when some edge does need splitting (set-up's test is a bound)
+        // the tessellation is drawn instead of the mesh.
+        let camera = impostor.camera.clone();
+        let scratch = &mut self.tessellation;
+        let mut pieces = None;
+        let mut unless_tessellated = |stats: &RasterStats| {
+            if camera.is_curved() && stats.has_curved_or_clipped() {
+                pieces = tessellate_with(&camera, mesh, scratch);
             }
+            pieces.is_none()
+        };
+        let raster = &mut self.raster;
+        let source = (mesh, object);
+        let ask = Some(&mut unless_tessellated as &mut dyn FnMut(&RasterStats) -> bool);
+        draw_and_resolve(raster, impostor, source, (mesh, None), color, before, ask)?;
+        if let Some(t) = pieces {
+            let drawn = (&t.mesh, Some(t.source.as_slice()));
+            draw_and_resolve(raster, impostor, source, drawn, color, before, None)?;
         }
         finish_resolve(impostor, mesh);
         Ok(())
@@ -695,64 +706,67 @@ impl ImpostorBuilder {
         });
         Ok(())
     }
+}
 
-    /// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle)
-    /// through the impostor's camera into its `gd`, resolving each band of the visibility
-    /// buffer into its other maps (surface points of `mesh`; the maps hold `before`) as soon as
-    /// the band is drawn.
-    fn draw_and_resolve<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
-        &mut self,
-        impostor: &mut Impostor,
-        (mesh, object): (&Mesh, u32),
-        (drawn, source): (&Mesh, Option<&[SourceTriangle]>),
-        color: &F,
-        before: MapsBefore,
-    ) -> Result<RasterStats, FrameError> {
-        let w = impostor.camera.resolution().0;
-        let camera = impostor.camera.clone();
-        let inputs = ResolveInputs {
-            camera: &camera,
-            mesh,
-            object,
-            color,
-            before,
-        };
-        let (gd, runs) = impostor.gd_and_texel_runs((BAND_ROWS * w) as usize);
-        let spoc = match &camera {
-            ImpostorCamera::Spoc(s) => Some(s),
-            _ => None,
-        };
-        let finish = |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
-            let depth = spoc.map(|spoc| RunDepth {
-                gd: &mut *band.gd,
-                first_pixel: band.first_pixel,
-                spoc,
-            });
-            let columns = band.columns.map(|(a, b)| (a as usize, b as usize));
-            resolve_run(run, (w as usize, columns), depth, &inputs, |x| {
-                let item = band.item[x];
-                (item != ItemId::NONE).then(|| {
-                    let b = full_barycentrics(band.attributes[x]);
-                    to_source(source, item.triangle, b)
-                })
-            });
-        };
-        let target = DepthTarget {
-            gd,
-            zeroed: before == MapsBefore::Zeroed,
-            memory: &mut self.raster,
-        };
-        let meshes = [drawn];
-        rasterize_depth_then(
-            &camera,
-            &meshes,
-            &Barycentrics,
-            Vec2::ZERO,
-            target,
-            runs,
-            finish,
-        )
-    }
+/// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle) through
+/// the impostor's camera into its `gd`, with the working memory `raster`, resolving each band
+/// of the visibility buffer into its other maps (surface points of `mesh`; the maps hold
+/// `before`) as soon as the band is drawn — unless `draw_if`, asked after set-up, refuses:
+/// then every map is left as it was ([`DepthTarget::draw_if`]).
+fn draw_and_resolve<'a, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    raster: &'a mut RasterMemory<Vec2>,
+    impostor: &'a mut Impostor,
+    (mesh, object): (&Mesh, u32),
+    (drawn, source): (&Mesh, Option<&[SourceTriangle]>),
+    color: &F,
+    before: MapsBefore,
+    draw_if: Option<&'a mut dyn FnMut(&RasterStats) -> bool>,
+) -> Result<RasterStats, FrameError> {
+    let w = impostor.camera.resolution().0;
+    let camera = impostor.camera.clone();
+    let inputs = ResolveInputs {
+        camera: &camera,
+        mesh,
+        object,
+        color,
+        before,
+    };
+    let (gd, runs) = impostor.gd_and_texel_runs((BAND_ROWS * w) as usize);
+    let spoc = match &camera {
+        ImpostorCamera::Spoc(s) => Some(s),
+        _ => None,
+    };
+    let finish = |band: FinishedBand<'_, Vec2>, run: &mut TexelMaps<'_>| {
+        let depth = spoc.map(|spoc| RunDepth {
+            gd: &mut *band.gd,
+            first_pixel: band.first_pixel,
+            spoc,
+        });
+        let columns = band.columns.map(|(a, b)| (a as usize, b as usize));
+        resolve_run(run, (w as usize, columns), depth, &inputs, |x| {
+            let item = band.item[x];
+            (item != ItemId::NONE).then(|| {
+                let b = full_barycentrics(band.attributes[x]);
+                to_source(source, item.triangle, b)
+            })
+        });
+    };
+    let target = DepthTarget {
+        gd,
+        zeroed: before == MapsBefore::Zeroed,
+        memory: raster,
+        draw_if,
+    };
+    let meshes = [drawn];
+    rasterize_depth_then(
+        &camera,
+        &meshes,
+        &Barycentrics,
+        Vec2::ZERO,
+        target,
+        runs,
+        finish,
+    )
 }
 
 /// Triangles per group whose box is tested against a frustum's planes before its triangles are
@@ -1027,6 +1041,28 @@ mod tests {
         assert!(imp.color == merged.color && imp.normal == merged.normal);
         assert!(imp.face_normal == merged.face_normal && imp.object == merged.object);
         assert_eq!(imp.bounds, merged.bounds);
+    }
+
+    #[test]
+    fn a_tessellated_impostor_rebuilt_equals_a_fresh_build() {
+        // Through a curved camera a coarse mesh is tessellated before anything is drawn: a
+        // rebuild over an older impostor's maps must clear them as a fresh build starts empty.
+        let sphere = crate::geom::icosphere(1);
+        let spoc = Spoc::around(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 0.5, 1.2, 256).unwrap();
+        assert!(tessellate(&spoc, &sphere).is_some(), "the case must tessellate");
+        let camera = ImpostorCamera::Spoc(spoc);
+        let color = |s: &SurfaceSample| s.normal.abs();
+        let mut builder = ImpostorBuilder::new();
+        let mut imp = builder.build(camera.clone(), &sphere, 3, &color).unwrap();
+        let moved = sphere.transformed(
+            &(glam::Mat4::from_translation(Vec3::new(0.2, -0.1, 0.0))
+                * glam::Mat4::from_scale(Vec3::splat(0.5))),
+        );
+        builder.rebuild(&mut imp, &moved, 3, &color).unwrap();
+        let fresh = build(camera, &moved, 3, &color).unwrap();
+        assert!(imp.gd == fresh.gd && imp.color == fresh.color && imp.object == fresh.object);
+        assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);
+        assert!(fresh.coverage() > 0.01);
     }
 
     #[test]

@@ -150,6 +150,15 @@ pub struct RasterStats {
     pub curved: u64,
 }
 
+impl RasterStats {
+    /// Whether set-up found triangles a curved camera may misplace when drawn straight
+    /// ([`RasterStats::curved`]) or that it had to clip ([`RasterStats::clipped`]): through a
+    /// curved camera, a caller that tessellates then draws the tessellation instead.
+    pub fn has_curved_or_clipped(&self) -> bool {
+        self.curved + self.clipped > 0
+    }
+}
+
 impl std::ops::Add for RasterStats {
     type Output = RasterStats;
     fn add(self, o: RasterStats) -> RasterStats {
@@ -284,6 +293,13 @@ pub struct DepthTarget<'a, T> {
     pub zeroed: bool,
     /// Working memory, kept between rasterizations.
     pub memory: &'a mut RasterMemory<T>,
+    /// Asked once set-up is done, before any pixel is drawn, with set-up's counters; `None`
+    /// draws always. When it answers `false`, nothing is drawn: the depth image and the
+    /// outputs are left as they were, `finish` is never called, and set-up's counters are
+    /// returned. A caller that tessellates what a curved camera would misplace
+    /// ([`RasterStats::has_curved_or_clipped`]) decides here, and draws the tessellation
+    /// instead, without drawing the mesh as it is first.
+    pub draw_if: Option<&'a mut dyn FnMut(&RasterStats) -> bool>,
 }
 
 /// Rasterizes into a depth image alone: each band's item and attribute rows exist only while
@@ -324,6 +340,11 @@ where
     }
     let RasterMemory { binned, rows } = target.memory;
     let stats = setup::screen_triangles(camera, objects, BAND_ROWS, binned);
+    if let Some(draw_if) = target.draw_if {
+        if !draw_if(&stats) {
+            return Ok(stats);
+        }
+    }
     let pass = BandPass {
         shader,
         empty,

@@ -393,6 +393,7 @@ fn each_band_is_finished_with_its_own_output() {
             gd: &mut gd,
             zeroed: false,
             memory: &mut memory,
+            draw_if: None,
         };
         rasterize_depth_then(
             &cam,
@@ -430,6 +431,7 @@ fn each_band_is_finished_with_its_own_output() {
         gd: &mut fresh,
         zeroed: true,
         memory: &mut memory,
+        draw_if: None,
     };
     let outputs = vec![(); bands];
     rasterize_depth_then(
@@ -449,9 +451,77 @@ fn each_band_is_finished_with_its_own_output() {
         gd: &mut small,
         zeroed: false,
         memory: &mut RasterMemory::default(),
+        draw_if: None,
     };
     let outputs = vec![(); bands];
     assert!(
         rasterize_depth_then(&cam, &[&m], &NoAttributes, (), target, outputs, |_, _| {}).is_err()
     );
+}
+
+#[test]
+fn a_depth_pass_asked_first_draws_nothing_when_told_not_to() {
+    // One triangle crosses the near plane (set-up clips it), the other does not; the caller
+    // draws only when set-up clipped nothing.
+    let cam = ScreenSpace(16, 16);
+    let m = mesh(
+        vec![
+            Vec3::new(2.0, 2.0, 1.0),
+            Vec3::new(14.0, 2.0, 1.0),
+            Vec3::new(2.0, 14.0, -1.0),
+            Vec3::new(3.0, 3.0, 2.0),
+            Vec3::new(12.0, 3.0, 2.0),
+            Vec3::new(3.0, 12.0, 2.0),
+        ],
+        vec![[0, 1, 2], [3, 4, 5]],
+    );
+    let bands = 16u32.div_ceil(BAND_ROWS) as usize;
+    let mut memory = RasterMemory::default();
+    let unclipped = mesh(m.positions.clone(), vec![[3, 4, 5]]);
+    for (objects, ask) in [(&m, true), (&m, false), (&unclipped, true)] {
+        let mut gd = Image::new(16, 16, 0.25f32).unwrap();
+        let finished = std::sync::atomic::AtomicUsize::new(0);
+        let mut asked = None;
+        let mut unless_clipped = |stats: &RasterStats| {
+            asked = Some(*stats);
+            !stats.has_curved_or_clipped()
+        };
+        let target = DepthTarget {
+            gd: &mut gd,
+            zeroed: false,
+            memory: &mut memory,
+            draw_if: if ask { Some(&mut unless_clipped) } else { None },
+        };
+        let stats = rasterize_depth_then(
+            &cam,
+            &[objects],
+            &NoAttributes,
+            (),
+            target,
+            vec![(); bands],
+            |_, _| {
+                finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            },
+        )
+        .unwrap();
+        let finished = finished.into_inner();
+        let untouched = gd.pixels().iter().all(|&g| g == 0.25);
+        if ask {
+            // Asked once, with set-up's counters.
+            let asked = asked.expect("asked");
+            assert_eq!(asked.clipped, stats.clipped);
+            assert_eq!(asked.screen_triangles, stats.screen_triangles);
+        }
+        if ask && stats.has_curved_or_clipped() {
+            // Counted by set-up, then left: nothing drawn, nothing finished.
+            assert_eq!(stats.clipped, 1, "{stats:?}");
+            assert_eq!((stats.fragments, finished), (0, 0), "{stats:?}");
+            assert!(untouched);
+        } else {
+            // Nothing to refuse, or nobody asked: every band drawn and finished.
+            assert!(stats.written > 10, "{stats:?}");
+            assert_eq!(finished, bands);
+            assert!(!untouched);
+        }
+    }
 }
