@@ -1049,7 +1049,10 @@ mod tests {
         // rebuild over an older impostor's maps must clear them as a fresh build starts empty.
         let sphere = crate::geom::icosphere(1);
         let spoc = Spoc::around(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 0.5, 1.2, 256).unwrap();
-        assert!(tessellate(&spoc, &sphere).is_some(), "the case must tessellate");
+        assert!(
+            tessellate(&spoc, &sphere).is_some(),
+            "the case must tessellate"
+        );
         let camera = ImpostorCamera::Spoc(spoc);
         let color = |s: &SurfaceSample| s.normal.abs();
         let mut builder = ImpostorBuilder::new();
