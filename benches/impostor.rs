@@ -1,9 +1,9 @@
 //! Impostor construction and ray walks (issue 3): a SPOC impostor of the bunny beside a pinhole
 //! impostor, a plain rasterization and a raster-method render of the same mesh, framed on its
 //! bounding sphere and, as `trompe impostor bake` frames them, on the mesh; walks of reflected
-//! rays per resolution;
-//! the graph-camera impostor of the demo maze with four bunnies beside a rasterization through
-//! its root.
+//! rays per resolution; a SPOC impostor of a textured mesh (the Duck) beside the same build
+//! without its texture; the graph-camera impostor of the demo maze with four bunnies beside a
+//! rasterization through its root.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
@@ -118,6 +118,27 @@ fn impostor(c: &mut Criterion) {
         "peer: raster render method (colour, distance, normals, ids)",
         |bch| bch.iter_with_large_drop(|| render_raster_once(&render_peer)),
     );
+    group.finish();
+
+    // A textured mesh (`trompe bench`'s `bench::textured_impostor`): its texture sampled at
+    // every covered texel, beside the goal's peer and the same build without the texture.
+    let duck = trompe::geom::io::load(&assets.join("gltf/Duck.glb"))
+        .expect("shipped duck")
+        .mesh;
+    let (_, duck_spoc) = trompe::bench::goal_spoc(&duck);
+    let untextured = trompe::bench::without_textures(&duck);
+    let (sampled, flat) = (albedo_of(&duck), albedo_of(&untextured));
+    let camera = ImpostorCamera::Spoc(duck_spoc.clone());
+    let mut group = c.benchmark_group("impostor build, textured Duck 512²");
+    group.bench_function("SPOC impostor", |bch| {
+        bch.iter_with_large_drop(|| build(camera.clone(), &duck, 0, &sampled).expect("valid"))
+    });
+    group.bench_function("peer: the same build, texture left out", |bch| {
+        bch.iter_with_large_drop(|| build(camera.clone(), &untextured, 0, &flat).expect("valid"))
+    });
+    group.bench_function("peer: plain rasterization (depth + ids)", |bch| {
+        bch.iter_with_large_drop(|| plain_raster(duck_spoc.pinhole(), &duck))
+    });
     group.finish();
 
     let setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 512).expect("valid setup");

@@ -577,6 +577,20 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
     out
 }
 
+/// `mesh` with every material's texture left out (its base colours kept): the peer that prices
+/// texture sampling.
+pub fn without_textures(mesh: &Mesh) -> Mesh {
+    Mesh {
+        materials: (mesh.materials.iter())
+            .map(|m| crate::geom::Material {
+                texture: None,
+                ..m.clone()
+            })
+            .collect(),
+        ..mesh.clone()
+    }
+}
+
 /// A textured mesh's SPOC impostor (issue 3's maps for what a technical artist bakes): a fresh
 /// [`GOAL_SIZE`]² build of `mesh` framed as the goal's ([`goal_spoc`]), its colour sampled from
 /// its textures texel by texel, beside a depth + id rasterization through the SPOC's reference
@@ -584,7 +598,6 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
 /// sampling them costs, where an untextured mesh's colour repeats from texel to texel.
 /// `name` labels the mesh. Nothing when `mesh` has no texture.
 pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
-    use crate::geom::Material;
     use crate::impostor::{ImpostorCamera, albedo_of, build};
     if mesh.materials.iter().all(|m| m.texture.is_none()) {
         return Vec::new();
@@ -592,17 +605,7 @@ pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let (_, spoc) = goal_spoc(mesh);
     let plain = spoc.pinhole().clone();
-    let untextured = Mesh {
-        materials: mesh
-            .materials
-            .iter()
-            .map(|m| Material {
-                texture: None,
-                ..m.clone()
-            })
-            .collect(),
-        ..mesh.clone()
-    };
+    let untextured = without_textures(mesh);
     let (sampled, flat) = (albedo_of(mesh), albedo_of(&untextured));
     let camera = ImpostorCamera::Spoc(spoc);
     let textured_build = || build(camera.clone(), mesh, 0, &sampled).expect("valid size");
