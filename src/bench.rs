@@ -6,8 +6,9 @@
 //! through the BVH (peer: brute force over every triangle, on a sample of the same rays).
 //!
 //! Workloads (issue 3): SPOC impostor construction beside pinhole rasterizations of the same
-//! mesh, for the bunny and for a textured mesh; SPOC walks per resolution; graph-camera impostor construction of a maze with bunnies
-//! in its corridors beside a rasterization through the camera's root.
+//! mesh, for the bunny and for a textured mesh; SPOC walks per resolution; graph-camera
+//! impostor construction of a maze with bunnies in its corridors beside a rasterization
+//! through the camera's root.
 //!
 //! Invariant: a timer stops before what it timed is freed, for a workload and its peer alike
 //! (a fresh SPOC impostor's maps are 6.3 MB at 512², and returning them to the system is not
