@@ -158,7 +158,7 @@ pub fn reflected_rays(bvh: &Bvh, primary: &[Ray], epsilon: f32) -> Vec<Ray> {
         .par_iter()
         .filter_map(|r| {
             let h = bvh.closest_hit(r, f32::INFINITY)?;
-            Some(crate::reflect::mirror_ray(r, &h, epsilon))
+            Some(h.mirror_ray(r, epsilon))
         })
         .collect()
 }

@@ -52,6 +52,5 @@ pub use scene::Scene;
 pub use trace::{Bvh, Hit, RayQuery};
 pub mod impostor;
 mod prefetch;
-pub mod reflect;
 #[cfg(test)]
 mod test_scratch;

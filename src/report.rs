@@ -408,25 +408,70 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
     // A baked impostor's check: rays from around its viewpoint.
     html.push_str(&viewpoint_table(&teapot, &color)?);
 
-    // The mirror view: the same frame with reflected rays answered four ways.
+    // The mirror view: the same frame, one renderer, with reflected rays answered four ways.
     let view_setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 400).map_err(camera_error)?;
-    let primary = crate::trace::Bvh::build(vec![
-        view_setup.target.clone(),
-        view_setup.reflector.clone(),
-    ]);
     let env =
         crate::frame::envmap::EnvMap::load(&inputs.assets.join("envmaps/studio.hdr"), 0.0, 0.6)?;
-    let shade = |h: &crate::trace::Hit| teapot_color(h.normal);
-    let scene = crate::reflect::MirrorScene {
-        camera: &view_setup.view,
-        primary: &primary,
-        mirror: 1,
-        environment: &env,
-        shade: &shade,
-        epsilon: 1e-4,
+    let lighting = crate::scene::Lighting {
+        environment: env,
+        light: Some(crate::scene::Light {
+            direction: Vec3::new(0.3, 0.8, 0.5).normalize(),
+            radiance: Vec3::splat(0.75),
+        }),
     };
-    let (reference, mask) = crate::reflect::mirror_frame(&scene, &exact)?;
+    let orange = crate::scene::Surface::Diffuse(Some(crate::scene::DiffuseOverride {
+        color: Vec3::new(0.9, 0.45, 0.15),
+        texture: None,
+    }));
+    let mirror_view = crate::scene::View {
+        camera: view_setup.view.clone(),
+        meshes: vec![view_setup.target.clone(), view_setup.reflector.clone()],
+        surfaces: vec![orange, crate::scene::Surface::Mirror { tint: Vec3::ONE }],
+    };
+    let settings = crate::scene::RenderSettings {
+        max_depth: 4,
+        time: 0.0,
+        ray_epsilon: 1e-4,
+    };
+    let primary = crate::trace::Bvh::build(mirror_view.meshes.clone());
+    let render_with =
+        |secondary: &dyn crate::trace::SecondaryQuery| -> Result<crate::frame::Frame, ReportError> {
+            let tracer = crate::render::Tracer {
+                view: &mirror_view,
+                primary: &primary,
+                secondary,
+                lighting: &lighting,
+                settings: &settings,
+            };
+            Ok(crate::render::render_trace(&tracer, &())?)
+        };
+    let exact_frame = render_with(&crate::trace::Exact(&primary))?;
+    let reference = exact_frame.color.clone();
+    let mask = exact_frame.object_id.map(|id| id == 1);
     io::write_png(&out.join("mirror-exact.png"), &reference)?;
+    // The tracer's diffuse shading baked into each impostor, as `render --method impostor` does.
+    let eye = view_setup.reflector.bounds().center();
+    let shaded = |s: &crate::impostor::SurfaceSample| {
+        let n = if s.normal.dot(eye - s.position) < 0.0 {
+            -s.normal
+        } else {
+            s.normal
+        };
+        crate::render::shading::lambert(Vec3::new(0.9, 0.45, 0.15), n, &lighting)
+    };
+    let mut answers = Vec::new();
+    for kind in [CheckCamera::Spoc(None), CheckCamera::Pinhole] {
+        let imp = build(
+            view_setup.camera(kind, 512).map_err(camera_error)?,
+            &view_setup.target,
+            0,
+            &shaded,
+        )?;
+        answers.push(crate::render::ReflectorImpostors::from_impostors(
+            &mirror_view,
+            vec![Vec::new(), vec![imp]],
+        ));
+    }
     let mut row = String::from(
         "<div class=row><figure><img src=\"mirror-exact.png\"><figcaption>reflected rays traced in the exact BVH</figcaption></figure>\n",
     );
@@ -437,11 +482,11 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
         .into_iter()
         .enumerate()
     {
-        let img = match i {
-            0 => crate::reflect::mirror_frame(&scene, &impostors[1])?.0,
-            1 => crate::reflect::mirror_frame(&scene, &impostors[0])?.0,
-            _ => crate::reflect::mirror_frame(&scene, &crate::reflect::Nothing)?.0,
+        let frame = match answers.get(i) {
+            Some(a) => render_with(a)?,
+            None => render_with(&crate::trace::EnvironmentOnly)?,
         };
+        let img = frame.color;
         let file = format!("mirror-{i}.png");
         io::write_png(&out.join(&file), &img)?;
         let sc = metrics::compare(&reference, &img, Some(&mask))?;

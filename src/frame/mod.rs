@@ -18,6 +18,10 @@ use thiserror::Error;
 
 /// Offset of a pixel's centre from its integer corner (algorithms.md §1.1).
 pub const PIXEL_CENTER: f32 = 0.5;
+/// Object id of "nothing": an empty pixel or texel.
+pub const NO_OBJECT: u32 = u32::MAX;
+/// Object id of the environment (a hit at infinity).
+pub const ENVIRONMENT: u32 = u32::MAX - 1;
 /// Largest width or height trompe allocates.
 pub const MAX_DIMENSION: u32 = 16_384;
 /// Largest pixel count trompe allocates (8192 × 8192).
@@ -285,7 +289,7 @@ pub struct Frame {
     pub depth: Image<f32>,
     /// Shading normal (zero where nothing was hit).
     pub normal: Image<Vec3>,
-    /// Object id ([`crate::trace::NO_OBJECT`] where nothing was hit).
+    /// Object id ([`NO_OBJECT`] where nothing was hit).
     pub object_id: Image<u32>,
 }
 
@@ -296,7 +300,7 @@ impl Frame {
             color: Image::new(width, height, Vec4::ZERO)?,
             depth: Image::new(width, height, f32::INFINITY)?,
             normal: Image::new(width, height, Vec3::ZERO)?,
-            object_id: Image::new(width, height, crate::trace::NO_OBJECT)?,
+            object_id: Image::new(width, height, NO_OBJECT)?,
         })
     }
 }

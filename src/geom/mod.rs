@@ -10,9 +10,12 @@
 mod hull;
 pub mod io;
 mod mesh;
+pub mod optics;
 mod primitives;
 mod sampling;
 
+/// Object ids: said in [`crate::frame`], the lowest layer, where frames first store them.
+pub use crate::frame::{ENVIRONMENT, NO_OBJECT};
 pub use hull::convex_hull;
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
 pub use primitives::{cube, icosphere, plane};

@@ -9,12 +9,12 @@ use crate::camera::Spoc;
 use crate::camera::{ImagePoint, Projection};
 use crate::frame::packed::{HalfRgba, OctUnit, OpaquePacker, ZERO_UNIT, pack_unit};
 use crate::frame::{FrameError, Image};
+use crate::geom::NO_OBJECT;
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
     BAND_ROWS, DepthTarget, FinishedBand, Fragment, FragmentShader, ItemId, RasterMemory,
     RasterStats, RasterTarget, rasterize_depth_then, rasterize_over,
 };
-use crate::trace::NO_OBJECT;
 use glam::{DVec2, Vec2, Vec3};
 use rayon::prelude::*;
 

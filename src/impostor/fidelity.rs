@@ -166,7 +166,7 @@ pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
         .filter_map(|i| {
             let r = view.ray(DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5));
             let hit = bvh.closest_hit(&r, f32::INFINITY)?;
-            Some(crate::reflect::mirror_ray(&r, &hit, eps))
+            Some(hit.mirror_ray(&r, eps))
         })
         .collect()
 }

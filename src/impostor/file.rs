@@ -34,7 +34,7 @@ use crate::frame::io::{read_exr_channels, write_exr_channels_small};
 use crate::frame::packed::{OctUnit, pack_rgba, pack_unit};
 use crate::frame::{FrameError, Image};
 use crate::geom::Aabb;
-use crate::trace::NO_OBJECT;
+use crate::geom::NO_OBJECT;
 use glam::{DVec2, DVec3, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

@@ -350,7 +350,7 @@ pub struct Impostor {
     /// World position of the surface point, for a graph camera only (see
     /// [`Impostor::position_at`]).
     position: Option<Image<Vec3>>,
-    /// Object id ([`crate::trace::NO_OBJECT`] where empty).
+    /// Object id ([`crate::geom::NO_OBJECT`] where empty).
     pub object: Image<u32>,
     /// World box of the replaced geometry: rays are clipped to it.
     pub bounds: Aabb,
@@ -371,7 +371,7 @@ struct WalkIndex {
 
 impl Impostor {
     /// An impostor from its camera, maps and box (the maps all of the camera's size; empty
-    /// texels hold `gd` 0 and [`crate::trace::NO_OBJECT`]). `position` is kept for a graph
+    /// texels hold `gd` 0 and [`crate::geom::NO_OBJECT`]). `position` is kept for a graph
     /// camera, which needs it, and ignored otherwise (see [`Impostor::position_at`]).
     #[allow(clippy::too_many_arguments)]
     pub fn from_maps(

@@ -23,7 +23,7 @@ use crate::frame::Frame;
 use crate::geom::{Mesh, Ray};
 use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, ViewCamera};
 use crate::scene::{Lighting, RenderSettings, Surface, View};
-use crate::trace::{Bvh, Hit, RayQuery};
+use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
 use glam::Vec3;
 
 /// Impostor resolution (square) when none is asked for.
@@ -31,6 +31,83 @@ pub const DEFAULT_IMPOSTOR_RESOLUTION: u32 = 512;
 
 /// A flat object is one whose bounding box is thinner than this fraction of its largest extent.
 const FLAT: f32 = 0.01;
+
+/// The answers of paper 1 §6's method to the rays mirrors and glass send out: per mirror or
+/// glass object, impostors of the diffuse objects it sees, and the mirrors and glass exactly
+/// (a BVH of them alone), the nearer answer winning.
+pub struct ReflectorImpostors {
+    /// Per object id: the impostors its rays meet (empty for a diffuse object).
+    per_object: Vec<Vec<Impostor>>,
+    /// Scene ids of the mirror and glass objects, in `specular`'s order.
+    specular_ids: Vec<u32>,
+    /// The mirror and glass objects alone, exact.
+    specular: Bvh,
+}
+
+impl ReflectorImpostors {
+    /// Builds, for every mirror or glass object of `view`, `resolution²` impostors of the
+    /// diffuse objects seen from its centre, shaded as the tracer shades them under `lighting`.
+    pub fn build(
+        view: &View,
+        lighting: &Lighting,
+        resolution: u32,
+        timings: &mut Timings,
+    ) -> Result<Self, RenderError> {
+        // A size the maps can have, said as such rather than as a degenerate camera.
+        crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
+        let per_object = timings.time("build impostors", || {
+            reflector_impostors(view, lighting, resolution)
+        })?;
+        Ok(timings.time("prepare walks, specular BVH", || {
+            Self::from_impostors(view, per_object)
+        }))
+    }
+
+    /// Wraps impostors made elsewhere (baked, or built with settings of one's own):
+    /// `per_object[o]` are those object `o`'s rays meet; mirrors and glass of `view` see one
+    /// another exactly.
+    pub fn from_impostors(view: &View, mut per_object: Vec<Vec<Impostor>>) -> Self {
+        per_object.resize_with(view.surfaces.len(), Vec::new);
+        for imp in per_object.iter().flatten() {
+            imp.prepare_walks();
+        }
+        let specular_ids: Vec<u32> = (0..view.surfaces.len() as u32)
+            .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
+            .collect();
+        let specular = Bvh::build(
+            specular_ids
+                .iter()
+                .map(|&o| view.meshes[o as usize].clone())
+                .collect(),
+        );
+        Self {
+            per_object,
+            specular_ids,
+            specular,
+        }
+    }
+
+    /// The impostors the rays of object `reflector` meet.
+    pub fn of(&self, reflector: u32) -> &[Impostor] {
+        self.per_object
+            .get(reflector as usize)
+            .map_or(&[], Vec::as_slice)
+    }
+}
+
+impl SecondaryQuery for ReflectorImpostors {
+    fn secondary_hit(&self, reflector: u32, ray: &Ray) -> Option<Hit> {
+        let seen = self
+            .of(reflector)
+            .iter()
+            .filter_map(|imp| imp.closest_hit(ray, f32::INFINITY));
+        let exact = self.specular.closest_hit(ray, f32::INFINITY).map(|h| Hit {
+            object: self.specular_ids[h.object as usize],
+            ..h
+        });
+        seen.chain(exact).min_by(|a, b| a.t.total_cmp(&b.t))
+    }
+}
 
 /// Renders `view` by the impostor method, with `resolution²` impostors.
 pub fn render_impostor(
@@ -41,41 +118,15 @@ pub fn render_impostor(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
-    // A size the maps can have, said as such rather than as a degenerate camera.
     crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
     let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
-    // The mirrors and glass alone, exact: what they send out meets one another here.
-    let specular: Vec<u32> = (0..view.surfaces.len() as u32)
-        .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
-        .collect();
-    let specular_bvh = timings.time("specular BVH", || {
-        Bvh::build(
-            specular
-                .iter()
-                .map(|&o| view.meshes[o as usize].clone())
-                .collect(),
-        )
-    });
-    let impostors = timings.time("build impostors", || {
-        reflector_impostors(view, lighting, resolution)
-    })?;
-    let answer = |from: u32, ray: &Ray| -> Option<Hit> {
-        let seen = impostors
-            .get(from as usize)?
-            .iter()
-            .filter_map(|imp| imp.closest_hit(ray, f32::INFINITY));
-        let exact = specular_bvh.closest_hit(ray, f32::INFINITY).map(|h| Hit {
-            object: specular[h.object as usize],
-            ..h
-        });
-        seen.chain(exact).min_by(|a, b| a.t.total_cmp(&b.t))
-    };
+    let secondary = ReflectorImpostors::build(view, lighting, resolution, timings)?;
     let tracer = Tracer {
         view,
-        scene: &bvh,
+        primary: &bvh,
+        secondary: &secondary,
         lighting,
         settings,
-        secondary: Some(&answer),
     };
     timings.time("trace", || render_trace(&tracer, progress))
 }
@@ -121,9 +172,7 @@ fn reflector_impostors(
                 lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
             };
             for camera in cameras {
-                let impostor = builder.build(camera, mesh, o as u32, &color)?;
-                impostor.prepare_walks();
-                seen.push(impostor);
+                seen.push(builder.build(camera, mesh, o as u32, &color)?);
             }
         }
         out.push(seen);

@@ -17,13 +17,14 @@ mod raster;
 pub mod shading;
 mod trace;
 
+pub use impostor::ReflectorImpostors;
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use raster::render_raster;
-pub use trace::{SecondaryRays, Tracer, render_trace};
+pub use trace::{Tracer, render_trace};
 
 use crate::frame::{Frame, FrameError};
 use crate::scene::{Lighting, RenderSettings, Scene, View};
-use crate::trace::Bvh;
+use crate::trace::{Bvh, Exact};
 use std::time::{Duration, Instant};
 use thiserror::Error;
 
@@ -140,10 +141,10 @@ pub fn render_view(
             let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
             let tracer = Tracer {
                 view,
-                scene: &bvh,
+                primary: &bvh,
+                secondary: &Exact(&bvh),
                 lighting,
                 settings,
-                secondary: None,
             };
             timings.time("trace", || render_trace(&tracer, progress))
         }

@@ -1,9 +1,10 @@
 //! The raster method: rasterize a visibility buffer through the view camera, then shade each
 //! pixel from its fragment (deferred, so each pixel is shaded once).
 
-use super::shading::{albedo, facing, fresnel, lambert, reflect, refract};
+use super::shading::{albedo, lambert};
 use super::{Progress, RenderError, Timings};
 use crate::frame::Frame;
+use crate::geom::optics::{facing, fresnel, reflect, refract};
 use crate::raster::{Fragment, StoreFragment, rasterize};
 use crate::scene::{Lighting, Surface, View};
 use glam::{DVec2, Vec2, Vec3};

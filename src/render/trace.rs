@@ -1,41 +1,44 @@
-//! The trace method: a Whitted ray tracer (Whitted 1980) over any [`RayQuery`] — perfect mirror
-//! reflection, refraction with exact Fresnel weights, a recursion limit — lit like the raster
-//! method. Rays that escape, or reach the depth limit, take the environment's radiance.
+//! The one renderer every ray-answering method shares: a Whitted ray tracer (Whitted 1980) —
+//! perfect mirror reflection, refraction with exact Fresnel weights, a recursion limit — lit
+//! like the raster method. It is generic over what answers primary rays ([`RayQuery`]) and what
+//! answers the rays mirrors and glass send out into the open ([`SecondaryQuery`]): the exact
+//! BVH for both is the `trace` method; impostors for the second is paper 1 §6's method; the
+//! environment alone is classic environment mapping. Rays that escape, or reach the depth limit,
+//! take the environment's radiance.
 
-use super::shading::{albedo, facing, fresnel, lambert, reflect, refract};
+use super::shading::{albedo, lambert};
 use super::{Progress, RenderError};
 use crate::frame::Frame;
 use crate::geom::Ray;
+use crate::geom::optics::{facing, fresnel, reflect, refract};
 use crate::scene::{Lighting, RenderSettings, Surface, View};
-use crate::trace::{Hit, RayQuery};
+use crate::trace::{Hit, RayQuery, SecondaryQuery};
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 
-/// A ray tracer over one view and one scene representation.
-pub struct Tracer<'a, Q: RayQuery> {
+/// A ray tracer over one view: primary rays (and rays that go into glass) answered by `P`,
+/// rays mirrors and glass send out into the open answered by `S`.
+pub struct Tracer<'a, P: RayQuery, S: SecondaryQuery + ?Sized> {
     /// Camera and surfaces.
     pub view: &'a View,
-    /// What answers the rays (the exact BVH for the ground truth).
-    pub scene: &'a Q,
+    /// What answers primary rays and rays that go into a glass object (the exact BVH for the
+    /// ground truth).
+    pub primary: &'a P,
+    /// What answers every ray a mirror or glass object sends out into the open, given that
+    /// object's id: a hit that carries its radiance (impostors of what the object reflects,
+    /// paper 1 §6), or a hit without radiance on an object the tracer shades itself (one more
+    /// bounce); a miss takes the environment's.
+    pub secondary: &'a S,
     /// Environment and sun.
     pub lighting: &'a Lighting,
     /// Depth limit and ray offset.
     pub settings: &'a RenderSettings,
-    /// When set, answers instead of `scene` every ray a mirror or glass object sends out into
-    /// the open — given that object's id — with a hit that carries its radiance (impostors of
-    /// what the object reflects, paper 1 §6), or a hit without radiance on an object the
-    /// tracer shades itself (one more bounce); a miss takes the environment's. Rays that go
-    /// into a glass object still follow `scene`.
-    pub secondary: Option<&'a SecondaryRays<'a>>,
 }
 
-/// Answers the rays a mirror or glass object (its id) sends out: see [`Tracer::secondary`].
-pub type SecondaryRays<'a> = dyn Fn(u32, &Ray) -> Option<Hit> + Sync + 'a;
-
-impl<Q: RayQuery> Tracer<'_, Q> {
+impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
     /// Radiance arriving along `ray` after at most `max_depth − depth` more bounces.
     pub fn radiance(&self, ray: &Ray, depth: u32) -> Vec3 {
-        match self.scene.closest_hit(ray, f32::INFINITY) {
+        match self.primary.closest_hit(ray, f32::INFINITY) {
             None => self.lighting.environment.radiance(ray.dir),
             Some(hit) => self.shade(ray, &hit, depth),
         }
@@ -55,16 +58,18 @@ impl<Q: RayQuery> Tracer<'_, Q> {
         // `outward`: the ray leaves the object into the open (not into the glass).
         let follow = |origin: Vec3, dir: Vec3, outward: bool| {
             let ray = Ray::new(origin, dir);
-            match self.secondary {
-                Some(answer) if outward => match answer(hit.object, &ray) {
+            if outward {
+                match self.secondary.secondary_hit(hit.object, &ray) {
                     Some(Hit {
                         radiance: Some(l), ..
                     }) => l,
                     Some(h) if !last => self.shade(&ray, &h, depth + 1),
                     _ => env.radiance(dir),
-                },
-                _ if last => env.radiance(dir),
-                _ => self.radiance(&ray, depth + 1),
+                }
+            } else if last {
+                env.radiance(dir)
+            } else {
+                self.radiance(&ray, depth + 1)
             }
         };
         match surface {
@@ -91,8 +96,8 @@ impl<Q: RayQuery> Tracer<'_, Q> {
 }
 
 /// Traces one primary ray per pixel centre.
-pub fn render_trace<Q: RayQuery>(
-    tracer: &Tracer<'_, Q>,
+pub fn render_trace<P: RayQuery, S: SecondaryQuery + ?Sized>(
+    tracer: &Tracer<'_, P, S>,
     progress: &dyn Progress,
 ) -> Result<Frame, RenderError> {
     let camera = &tracer.view.camera;
@@ -103,7 +108,7 @@ pub fn render_trace<Q: RayQuery>(
         .for_each(|(y, (color, depth, normal, id))| {
             for x in 0..w as usize {
                 let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                match tracer.scene.closest_hit(&ray, f32::INFINITY) {
+                match tracer.primary.closest_hit(&ray, f32::INFINITY) {
                     None => color[x] = tracer.lighting.environment.radiance(ray.dir).extend(1.0),
                     Some(hit) => {
                         color[x] = tracer.shade(&ray, &hit, 0).extend(1.0);
@@ -116,4 +121,108 @@ pub fn render_trace<Q: RayQuery>(
             progress.advance(1);
         });
     Ok(frame)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Pinhole;
+    use crate::frame::envmap::EnvMap;
+    use crate::trace::{Bvh, Exact};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// Primary rays: the exact BVH, counted.
+    struct CountedPrimary<'a>(&'a Bvh, AtomicU64);
+
+    impl RayQuery for CountedPrimary<'_> {
+        fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+            self.1.fetch_add(1, Ordering::Relaxed);
+            self.0.closest_hit(ray, t_max)
+        }
+    }
+
+    /// Secondary rays: a pure red image-based answer, counted, remembering who asked.
+    struct RedSecondary(AtomicU64, AtomicU64);
+
+    impl SecondaryQuery for RedSecondary {
+        fn secondary_hit(&self, reflector: u32, ray: &Ray) -> Option<Hit> {
+            self.0.fetch_add(1, Ordering::Relaxed);
+            self.1
+                .fetch_max(u64::from(reflector) + 1, Ordering::Relaxed);
+            Some(Hit {
+                t: 1.0,
+                position: ray.at(1.0),
+                normal: -ray.dir,
+                geometric_normal: -ray.dir,
+                uv: glam::Vec2::ZERO,
+                bary: glam::Vec2::ZERO,
+                object: 7,
+                triangle: 0,
+                radiance: Some(Vec3::X),
+            })
+        }
+    }
+
+    #[test]
+    fn primary_and_secondary_rays_both_go_through_the_traits() {
+        // A 4-unit mirror floor under a camera looking straight down at it: every pixel sees it.
+        let floor =
+            Arc::new(crate::geom::plane(1).transformed(&glam::Mat4::from_scale(Vec3::splat(4.0))));
+        let (w, h) = (16u32, 12u32);
+        let camera = Pinhole::look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 60.0, w, h).unwrap();
+        let view = View {
+            camera,
+            meshes: vec![floor],
+            surfaces: vec![Surface::Mirror {
+                tint: Vec3::splat(0.5),
+            }],
+        };
+        let lighting = Lighting {
+            environment: EnvMap::constant(Vec3::new(0.0, 0.0, 1.0)),
+            light: None,
+        };
+        let settings = RenderSettings {
+            max_depth: 4,
+            time: 0.0,
+            ray_epsilon: 1e-4,
+        };
+        let bvh = Bvh::build(view.meshes.clone());
+        let primary = CountedPrimary(&bvh, AtomicU64::new(0));
+        let secondary = RedSecondary(AtomicU64::new(0), AtomicU64::new(0));
+        let tracer = Tracer {
+            view: &view,
+            primary: &primary,
+            secondary: &secondary,
+            lighting: &lighting,
+            settings: &settings,
+        };
+        let frame = render_trace(&tracer, &()).unwrap();
+        let pixels = u64::from(w * h);
+        assert_eq!(primary.1.load(Ordering::Relaxed), pixels);
+        assert_eq!(secondary.0.load(Ordering::Relaxed), pixels);
+        // The mirror (object 0) asked, and its tint scales what the secondary query answered.
+        assert_eq!(secondary.1.load(Ordering::Relaxed), 1);
+        for c in frame.color.pixels() {
+            assert!(
+                (c.truncate() - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-6,
+                "{c}"
+            );
+        }
+        // Answered exactly instead, the floor reflects the blue sky.
+        let exact = Tracer {
+            view: &view,
+            primary: &bvh,
+            secondary: &Exact(&bvh),
+            lighting: &lighting,
+            settings: &settings,
+        };
+        let sky = render_trace(&exact, &()).unwrap();
+        for c in sky.color.pixels() {
+            assert!(
+                (c.truncate() - Vec3::new(0.0, 0.0, 0.5)).length() < 1e-6,
+                "{c}"
+            );
+        }
+    }
 }

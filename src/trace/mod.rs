@@ -1,8 +1,10 @@
-//! Exact ray queries: the [`RayQuery`] trait every ray-answering representation implements, the
+//! Ray queries: the [`RayQuery`] trait every ray-answering representation implements, the
+//! [`SecondaryQuery`] trait renderers ask for the rays a mirror or glass object sends out, the
 //! BVH over triangle meshes (ground truth for every impostor; the CPU "software shader" of
 //! paper 3), a brute-force oracle, and the environment map as a hit at infinity.
 //!
-//! Invariants: `trace` never uses impostors — it is the ground truth. A [`Hit`]'s `t` is the ray
+//! Invariants: nothing here uses impostors — the BVH is the ground truth; impostors implement
+//! these traits in the modules above this one. A [`Hit`]'s `t` is the ray
 //! parameter (a distance when the direction is unit length); hits satisfy `0 < t < t_max`.
 
 mod bvh;
@@ -13,10 +15,7 @@ use crate::frame::envmap::EnvMap;
 use crate::geom::Ray;
 use glam::{Vec2, Vec3};
 
-/// Object id of "nothing" (an empty pixel).
-pub const NO_OBJECT: u32 = u32::MAX;
-/// Object id of the environment (a hit at infinity).
-pub const ENVIRONMENT: u32 = u32::MAX - 1;
+pub use crate::geom::{ENVIRONMENT, NO_OBJECT};
 
 /// What a ray query found.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,14 +41,61 @@ pub struct Hit {
     pub radiance: Option<Vec3>,
 }
 
-/// Anything that answers rays: the exact BVH, an environment map, later impostors and
-/// billboards. Renderers are generic over it.
+/// Anything that answers rays: the exact BVH, an environment map, impostors and billboards.
+/// Renderers are generic over it for primary rays, and over [`SecondaryQuery`] for the rays
+/// mirrors and glass send out.
 pub trait RayQuery: Sync {
     /// The nearest hit with `0 < t < t_max`.
     fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit>;
     /// Whether anything is hit with `0 < t < t_max` (shadow and visibility rays).
     fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
         self.closest_hit(ray, t_max).is_some()
+    }
+}
+
+impl Hit {
+    /// The mirror ray of `ray` at this hit, `epsilon` off the surface
+    /// ([`crate::geom::optics::mirror_ray`]).
+    pub fn mirror_ray(&self, ray: &Ray, epsilon: f32) -> Ray {
+        crate::geom::optics::mirror_ray(
+            ray,
+            self.position,
+            self.normal,
+            self.geometric_normal,
+            epsilon,
+        )
+    }
+}
+
+/// What answers the rays a mirror or glass object sends out into the open (paper 1 §6: the
+/// secondary rays an impostor stands in for the geometry behind). Given the id of the object
+/// the ray leaves and the ray, it returns a hit carrying its own radiance (an image-based
+/// answer: an impostor's texel, the environment), a hit without radiance on an object the
+/// renderer shades itself (one more bounce), or `None` (the renderer takes the environment's
+/// radiance).
+///
+/// Implemented by [`Exact`] (the same scene as primary rays: ground truth), [`EnvironmentOnly`]
+/// (classic environment mapping) and, above this module, by per-reflector impostor sets.
+pub trait SecondaryQuery: Sync {
+    /// The answer to `ray`, sent out by object `reflector`.
+    fn secondary_hit(&self, reflector: u32, ray: &Ray) -> Option<Hit>;
+}
+
+/// Secondary rays answered exactly by a [`RayQuery`], whichever object sends them.
+pub struct Exact<'a, Q: RayQuery>(pub &'a Q);
+
+impl<Q: RayQuery> SecondaryQuery for Exact<'_, Q> {
+    fn secondary_hit(&self, _reflector: u32, ray: &Ray) -> Option<Hit> {
+        self.0.closest_hit(ray, f32::INFINITY)
+    }
+}
+
+/// Secondary rays that meet nothing: reflections show only the environment.
+pub struct EnvironmentOnly;
+
+impl SecondaryQuery for EnvironmentOnly {
+    fn secondary_hit(&self, _reflector: u32, _ray: &Ray) -> Option<Hit> {
+        None
     }
 }
 
