@@ -10,7 +10,7 @@ use glam::Vec3;
 use std::path::PathBuf;
 use trompe::bench::{framed_pinhole, plain_raster, raster_view, render_raster_once};
 use trompe::camera::Spoc;
-use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup};
+use trompe::eval::fidelity::ReflectorSetup;
 use trompe::impostor::{ImpostorCamera, ViewCamera, albedo_of, build};
 use trompe::raster::NoAttributes;
 
@@ -147,7 +147,7 @@ fn impostor(c: &mut Criterion) {
     group.throughput(Throughput::Elements(rays.len() as u64));
     for res in [128u32, 256, 512, 1024] {
         let imp = build(
-            setup.camera(CheckCamera::Spoc(None), res).expect("camera"),
+            setup.camera(ViewCamera::Spoc(None), res).expect("camera"),
             &setup.target,
             0,
             &albedo_of(&setup.target),
@@ -167,7 +167,7 @@ fn impostor(c: &mut Criterion) {
     let maze_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/maze.maze");
     let maze = trompe::scene::maze::Maze::load(&maze_path).expect("shipped maze");
     let graph = maze.graph_camera(512, &maze_path).expect("maze camera");
-    let scene = trompe::bench::maze_with_objects(&maze, &bunny, 4);
+    let scene = maze.with_objects(&bunny, 4);
     let color = albedo_of(&scene);
     let mut group = c.benchmark_group("graph-camera impostor, maze + 4 bunnies 512²");
     group.bench_function("graph impostor", |bch| {

@@ -27,15 +27,12 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// A camera framing `mesh` from the front-right, `size × size` pixels.
+/// A camera framing `mesh` ([`crate::eval::fixtures::framing_camera`]).
+///
+/// # Panics
+/// On a mesh whose box is not finite or a size of 0: benchmarks run on meshes that loaded.
 pub fn framing_camera(mesh: &Mesh, size: u32) -> Pinhole {
-    let b = mesh.bounds();
-    // A flat or point-like mesh (from `trompe bench --mesh`) still gets a camera.
-    let r = b.radius().max(1e-3);
-    let eye = b.center() + Vec3::new(0.5, 0.35, 1.0).normalize() * r * 2.6;
-    Pinhole::look_at(eye, b.center(), Vec3::Y, 45.0, size, size)
-        .expect("a valid framing")
-        .with_near(r as f64 * 1e-3)
+    crate::eval::fixtures::framing_camera(mesh, size).expect("a valid framing")
 }
 
 /// Runs `f` repeatedly for at least `min_time` (and at least once); returns the median duration.
@@ -310,7 +307,8 @@ pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> (Duration, Duration) {
 /// impostors of `target` at resolutions 128 … 1024 (ns and texel visits per ray, and the length
 /// of the rays' image paths, as in paper 1's Table 2).
 pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> Vec<Figure> {
-    use crate::impostor::fidelity::{CheckCamera, ReflectorSetup};
+    use crate::eval::fidelity::ReflectorSetup;
+    use crate::impostor::ViewCamera;
     use crate::impostor::{ImpostorCamera, WalkMode, albedo_of, build};
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
@@ -513,7 +511,7 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         versus: None,
     });
     for res in [128u32, 256, 512, 1024] {
-        let Ok(cam) = setup.camera(CheckCamera::Spoc(None), res) else {
+        let Ok(cam) = setup.camera(ViewCamera::Spoc(None), res) else {
             continue;
         };
         let Ok(imp) = build(cam, &setup.target, 0, &albedo_of(&setup.target)) else {
@@ -636,29 +634,6 @@ pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
     ]
 }
 
-/// The maze's geometry with `count` copies of `object` (largest extent half a cell) standing on
-/// floor cells spread along the plan in reading order — paper 1's dynamic maze scene (§6: "the
-/// maze with 4 bunnies").
-pub fn maze_with_objects(maze: &crate::scene::maze::Maze, object: &Mesh, count: usize) -> Mesh {
-    let mut mesh = maze.mesh();
-    let cells = maze.floor_cells();
-    let b = object.bounds();
-    let scale = 0.5 / b.extent().max_element().max(f32::MIN_POSITIVE);
-    let base = Vec3::new(b.center().x, b.min.y, b.center().z);
-    for i in 1..=count {
-        let Some(&(c, r)) = cells.get(i * cells.len() / (count + 1)) else {
-            continue;
-        };
-        let at = Vec3::new(c as f32 + 0.5, 0.0, r as f32 + 0.5);
-        mesh.append(&object.transformed(
-            &(glam::Mat4::from_translation(at)
-                * glam::Mat4::from_scale(Vec3::splat(scale))
-                * glam::Mat4::from_translation(-base)),
-        ));
-    }
-    mesh
-}
-
 /// Graph-camera impostor construction (paper 1 §4.5; the paper builds its maze with 4 bunnies,
 /// 66 k triangles, at over 100 frames a second on a GPU): the demo maze with four copies of
 /// `object`, `size²`, beside a depth + id rasterization of the same triangles through the
@@ -675,7 +650,7 @@ pub fn graph_impostors(
     let Ok(g) = maze.graph_camera(size, maze_path) else {
         return Vec::new();
     };
-    let mesh = maze_with_objects(maze, object, 4);
+    let mesh = crate::scene::maze::Maze::with_objects(maze, object, 4);
     let color = albedo_of(&mesh);
     let camera = ImpostorCamera::Graph(g.clone());
     let (t_graph, t_root) = time_pair_median(
@@ -718,4 +693,128 @@ pub fn graph_impostors(
             "× that rasterization into a reused target (measured alternately)",
         ),
     ]
+}
+
+/// What `trompe bench` measured: a heading and its rows.
+pub struct BenchReport {
+    /// The mesh and thread count.
+    pub heading: String,
+    /// The rows.
+    pub figures: Vec<Figure>,
+}
+
+impl std::fmt::Display for BenchReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.heading)?;
+        for fig in &self.figures {
+            let versus = fig
+                .versus
+                .as_ref()
+                .map_or(String::new(), |(r, peer)| format!("   ({r:.2} {peer})"));
+            write!(
+                f,
+                "\n  {:<48} {:>12.4} {:<7}{versus}",
+                fig.name, fig.value, fig.unit
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Why `trompe bench` could not run: a shipped input did not load.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BenchError {
+    /// A mesh did not load.
+    #[error(transparent)]
+    Mesh(#[from] crate::geom::MeshError),
+    /// The maze did not load.
+    #[error(transparent)]
+    Maze(#[from] crate::scene::maze::MazeError),
+}
+
+/// The heading of a bench run on `mesh`, read from `path`.
+pub fn heading(path: &std::path::Path, mesh: &Mesh) -> String {
+    format!(
+        "trompe bench on {} ({} triangles), {} threads",
+        path.display(),
+        mesh.triangle_count(),
+        rayon::current_num_threads()
+    )
+}
+
+/// Every `trompe bench` workload: the foundation's on `mesh` (read from `path`), then the
+/// impostors' on the shipped teapot, bunny, Duck and maze found under `inputs`.
+pub fn run(
+    path: &std::path::Path,
+    mesh: &Mesh,
+    inputs: &crate::report::DemoInputs,
+    quick: bool,
+) -> Result<BenchReport, BenchError> {
+    let assets = &inputs.assets;
+    let teapot = crate::geom::io::load(&assets.join("meshes/teapot.obj"))?.mesh;
+    let bunny = crate::geom::io::load(&assets.join("meshes/bunny.obj"))?.mesh;
+    let maze_path = inputs.scenes.join("maze.maze");
+    let maze = crate::scene::maze::Maze::load(&maze_path)?;
+    let duck = crate::geom::io::load(&assets.join("gltf/Duck.glb"))?.mesh;
+    let figures = foundation(mesh, quick)
+        .into_iter()
+        .chain(impostors(mesh, &teapot, &bunny, quick))
+        .chain(textured_impostor(&duck, "Duck.glb", quick))
+        .chain(graph_impostors(&maze, &maze_path, &bunny, quick))
+        .collect();
+    Ok(BenchReport {
+        heading: heading(path, mesh),
+        figures,
+    })
+}
+
+/// `trompe bench --goal RUNS`: the goal's pair alone ([`goal_pair`]), `runs` times, 3 s each.
+pub struct GoalReport {
+    /// The bench heading.
+    pub heading: String,
+    /// Per run: the build's and the peer's median durations.
+    pub runs: Vec<(Duration, Duration)>,
+}
+
+/// Times [`goal_pair`] on `mesh` (read from `path`) `runs` times.
+pub fn goal(path: &std::path::Path, mesh: &Mesh, runs: u32) -> GoalReport {
+    GoalReport {
+        heading: heading(path, mesh),
+        runs: (0..runs)
+            .map(|_| goal_pair(mesh, Duration::from_secs(3)))
+            .collect(),
+    }
+}
+
+impl std::fmt::Display for GoalReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{}", self.heading)?;
+        write!(
+            f,
+            "fresh SPOC impostor {GOAL_SIZE}² / depth + id rasterization through its reference pinhole (goal ≤ 1.5)"
+        )?;
+        let mut ratios = Vec::new();
+        for (run, (build, peer)) in self.runs.iter().enumerate() {
+            let ratio = build.as_secs_f64() / peer.as_secs_f64();
+            write!(
+                f,
+                "\n  run {}: build {:.3} ms, peer {:.3} ms, {ratio:.3} ×",
+                run + 1,
+                build.as_secs_f64() * 1e3,
+                peer.as_secs_f64() * 1e3
+            )?;
+            ratios.push(ratio);
+        }
+        ratios.sort_by(f64::total_cmp);
+        if let (Some(lo), Some(hi)) = (ratios.first(), ratios.last()) {
+            let median = crate::eval::fidelity::median(&ratios);
+            write!(
+                f,
+                "\n{} runs: {lo:.3} – {hi:.3} ×, median {median:.3} ×",
+                ratios.len()
+            )?;
+        }
+        Ok(())
+    }
 }

@@ -35,6 +35,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod eval;
 pub mod frame;
 pub mod geom;
 pub mod raster;
@@ -42,7 +43,6 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod trace;
-pub mod validate;
 
 pub use camera::{ImagePoint, Pinhole, Projection};
 pub use frame::{Frame, Image, Rgba};
@@ -52,5 +52,6 @@ pub use scene::Scene;
 pub use trace::{Bvh, Hit, RayQuery};
 pub mod impostor;
 mod prefetch;
+pub mod progress;
 #[cfg(test)]
 mod test_scratch;

@@ -206,7 +206,7 @@ pub fn demo(
     html.push_str("</table>\n");
 
     let bunny = crate::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
-    let agreement = crate::validate::raster_vs_bvh(&bunny, 256)?;
+    let agreement = crate::eval::validate::raster_vs_bvh(&bunny, 256)?;
     let _ = writeln!(
         html,
         "<h3>Rasterizer against the exact BVH (bunny, 256²)</h3>\n<table><tr><th>covered pixels</th><th>max relative depth error</th><th>item ids equal</th><th>coverage equal</th></tr>\n<tr><td>{}</td><td>{:.2e}</td><td>{:.3} %</td><td>{:.3} %</td></tr></table>",
@@ -270,11 +270,12 @@ fn viewpoint_table<F>(teapot: &crate::geom::Mesh, color: &F) -> Result<String, R
 where
     F: Fn(&crate::impostor::SurfaceSample) -> Vec3 + Sync,
 {
-    use crate::impostor::fidelity::{CheckCamera, check, viewpoint_rays};
+    use crate::eval::fidelity::{check, viewpoint_rays};
+    use crate::impostor::ViewCamera;
     use crate::impostor::{ImpostorCamera, build};
     let from = Vec3::new(0.0, 0.3, 1.0);
     let mut impostors = Vec::new();
-    for kind in [CheckCamera::Pinhole, CheckCamera::Spoc(None)] {
+    for kind in [ViewCamera::Pinhole, ViewCamera::Spoc(None)] {
         let camera = ImpostorCamera::facing_mesh(kind, teapot, from, 3.0, 512).map_err(|e| {
             ReportError::Frame(FrameError::Codec {
                 path: "teapot".into(),
@@ -310,7 +311,8 @@ where
 }
 
 fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<(), ReportError> {
-    use crate::impostor::fidelity::{self, CheckCamera, ReflectorSetup};
+    use crate::eval::fidelity::{self, ReflectorSetup};
+    use crate::impostor::ViewCamera;
     use crate::impostor::{ImpostorCamera, build};
     let teapot = crate::geom::io::load(&inputs.assets.join("meshes/teapot.obj"))?.mesh;
     let bunny = crate::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
@@ -330,7 +332,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
     let mut table = String::from(
         "<table><tr><th>camera</th><th>k</th><th>rays</th><th>exact hits</th><th>agreement</th><th>agreement on hits</th><th>missed (by the walk)</th><th>spurious</th><th>error, mean / median (texel footprints)</th><th>surface captured (within 1.5 footprints / 1.5 texel extents)</th><th>texel visits / ray</th></tr>\n",
     );
-    for kind in [CheckCamera::Pinhole, CheckCamera::Spoc(None)] {
+    for kind in [ViewCamera::Pinhole, ViewCamera::Spoc(None)] {
         let cam = setup.camera(kind, 512).map_err(camera_error)?;
         let k = match &cam {
             ImpostorCamera::Spoc(s) => format!("{:.3}", s.strength()),
@@ -384,7 +386,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
         let exact = crate::trace::Bvh::build(vec![s.target.clone()]);
         let rays = s.rays();
         let mut cells = Vec::new();
-        for kind in [CheckCamera::Pinhole, CheckCamera::Spoc(None)] {
+        for kind in [ViewCamera::Pinhole, ViewCamera::Spoc(None)] {
             let imp = build(
                 s.camera(kind, 512).map_err(camera_error)?,
                 &s.target,
@@ -460,7 +462,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
         crate::render::shading::lambert(Vec3::new(0.9, 0.45, 0.15), n, &lighting)
     };
     let mut answers = Vec::new();
-    for kind in [CheckCamera::Spoc(None), CheckCamera::Pinhole] {
+    for kind in [ViewCamera::Spoc(None), ViewCamera::Pinhole] {
         let imp = build(
             view_setup.camera(kind, 512).map_err(camera_error)?,
             &view_setup.target,
@@ -571,8 +573,8 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
 
     // Fidelity in the paper's Fig. 5 setting: a mirror bunny in the first corridor.
     let fidelity = {
+        use crate::eval::fidelity::{ReflectorSetup, check_with};
         use crate::impostor::WalkMode;
-        use crate::impostor::fidelity::{ReflectorSetup, check_with};
         let bunny = crate::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
         let setup =
             ReflectorSetup::in_maze(&maze, &bunny, 384).map_err(|e| frame_err(e.to_string()))?;
@@ -689,4 +691,23 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
         fidelity
     );
     Ok(())
+}
+
+impl std::fmt::Display for DemoSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for r in &self.renders {
+            writeln!(
+                f,
+                "{:<12} {:<7} {:>8.0} ms  PSNR {:>6.2}  SSIM {:.4}  FLIP {:.4}  ids {:.2} %",
+                r.scene,
+                r.method.to_string(),
+                r.time.as_secs_f64() * 1e3,
+                r.scores.psnr,
+                r.scores.ssim,
+                r.scores.flip,
+                r.id_agreement * 100.0
+            )?;
+        }
+        write!(f, "wrote {}", self.index.display())
+    }
 }

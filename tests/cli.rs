@@ -418,3 +418,40 @@ fn bench_goal_times_the_goal_pair_alone() {
     assert!(out.contains("1 runs:") && out.contains("median"), "{out}");
     fails_cleanly(&trompe(&["bench", "--goal", "0"]), "--goal");
 }
+
+/// `impostor check` looks nothing up relative to the build tree: a copy of the binary, run
+/// from a directory outside the repository on a copy of the mesh, prints the same figures.
+#[test]
+fn impostor_check_gives_the_same_figures_from_a_moved_binary() {
+    let away = std::env::temp_dir().join(format!("trompe-moved-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&away);
+    std::fs::create_dir_all(&away).unwrap();
+    let binary = away.join("trompe");
+    std::fs::copy(env!("CARGO_BIN_EXE_trompe"), &binary).unwrap();
+    let mesh = away.join("teapot.obj");
+    std::fs::copy(common::asset("meshes/teapot.obj"), &mesh).unwrap();
+    let args = [
+        "impostor",
+        "check",
+        mesh.to_str().unwrap(),
+        "--resolution",
+        "96",
+        "--view",
+        "160",
+    ];
+    let here = trompe(&args);
+    let moved = Command::new(&binary)
+        .args(args)
+        .current_dir(&away)
+        .output()
+        .expect("runs");
+    let _ = std::fs::remove_dir_all(&away);
+    assert!(here.status.success(), "{}", stderr(&here));
+    assert!(moved.status.success(), "{}", stderr(&moved));
+    let out = String::from_utf8_lossy(&here.stdout);
+    assert!(
+        out.contains("agreement ") && out.contains("beside it"),
+        "{out}"
+    );
+    assert_eq!(here.stdout, moved.stdout);
+}

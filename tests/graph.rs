@@ -208,7 +208,7 @@ fn graph_impostors_save_and_load_exactly() {
 /// reflected rays answered by the maze's graph-camera impostor (algorithm 2) and by the BVH.
 #[test]
 fn the_maze_impostor_agrees_with_the_bvh_on_reflected_rays() {
-    use trompe::impostor::fidelity::{ReflectorSetup, check, check_with};
+    use trompe::eval::fidelity::{ReflectorSetup, check, check_with};
     use trompe::scene::maze::Maze;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let path = root.join("scenes/maze.maze");
@@ -293,7 +293,7 @@ fn a_rebuilt_graph_impostor_equals_a_fresh_build() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/maze.maze");
     let maze = trompe::scene::maze::Maze::load(&path).unwrap();
     let g = maze.graph_camera(128, &path).unwrap();
-    let with = trompe::bench::maze_with_objects(&maze, &trompe::geom::icosphere(2), 4);
+    let with = maze.with_objects(&trompe::geom::icosphere(2), 4);
     let without = maze.mesh();
     let camera = ImpostorCamera::Graph(g);
     let mut builder = ImpostorBuilder::new();

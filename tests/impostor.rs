@@ -4,8 +4,9 @@ mod common;
 use common::shared;
 use glam::DVec2;
 use trompe::Projection;
+use trompe::eval::fidelity::{ReflectorSetup, check, surface_captured};
 use trompe::geom::io::load;
-use trompe::impostor::fidelity::{CheckCamera, ReflectorSetup, check, surface_captured};
+use trompe::impostor::ViewCamera;
 use trompe::impostor::{ImpostorCamera, albedo_of, build};
 use trompe::trace::Bvh;
 
@@ -26,10 +27,7 @@ fn teapot_impostors_agree_with_the_bvh_on_reflected_rays() {
     let mut failures = Vec::new();
     let mut missed = Vec::new();
     let mut captures = Vec::new();
-    for (kind, goal) in [
-        (CheckCamera::Spoc(None), 0.99),
-        (CheckCamera::Pinhole, 0.95),
-    ] {
+    for (kind, goal) in [(ViewCamera::Spoc(None), 0.99), (ViewCamera::Pinhole, 0.95)] {
         let cam = s.camera(kind, 512).unwrap();
         let imp = build(cam, &s.target, 0, &albedo_of(&s.target)).unwrap();
         let r = check(&imp, &exact, &rays);
@@ -82,7 +80,7 @@ fn a_pinhole_impostor_returns_its_own_rasterized_depth() {
     // Intersected with its own camera's primary rays, a pinhole impostor is exact: the hit is
     // the point the texel stores.
     let s = setup();
-    let cam = s.camera(CheckCamera::Pinhole, 128).unwrap();
+    let cam = s.camera(ViewCamera::Pinhole, 128).unwrap();
     let ImpostorCamera::Pinhole(pin) = &cam else {
         unreachable!()
     };
@@ -119,7 +117,7 @@ fn impostors_save_and_load_exactly() {
     use trompe::impostor::file;
     let s = setup();
     let dir = common::scratch("impostor_file");
-    for kind in [CheckCamera::Spoc(Some(0.7)), CheckCamera::Pinhole] {
+    for kind in [ViewCamera::Spoc(Some(0.7)), ViewCamera::Pinhole] {
         let imp = build(
             s.camera(kind, 96).unwrap(),
             &s.target,
@@ -154,7 +152,7 @@ fn corrupted_impostor_files_are_errors() {
     let s = setup();
     let dir = common::scratch("impostor_corrupt");
     let imp = build(
-        s.camera(CheckCamera::Pinhole, 32).unwrap(),
+        s.camera(ViewCamera::Pinhole, 32).unwrap(),
         &s.target,
         0,
         &albedo_of(&s.target),
@@ -214,14 +212,14 @@ fn corrupted_impostor_files_are_errors() {
 
 #[test]
 fn hierarchical_and_linear_walks_give_identical_hits() {
+    use trompe::eval::fidelity::sphere_rays;
     use trompe::impostor::WalkMode;
-    use trompe::impostor::fidelity::sphere_rays;
     let s = setup();
     let b = s.target.bounds();
     let mut rays = sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 11);
     rays.extend(s.rays());
     assert!(rays.len() >= 100_000);
-    for kind in [CheckCamera::Pinhole, CheckCamera::Spoc(None)] {
+    for kind in [ViewCamera::Pinhole, ViewCamera::Spoc(None)] {
         let imp = build(
             s.camera(kind, 256).unwrap(),
             &s.target,
@@ -251,7 +249,7 @@ fn a_billboard_shows_the_impostor_from_its_own_camera() {
     use trompe::impostor::Billboard;
     use trompe::trace::RayQuery;
     let s = setup();
-    let cam = s.camera(CheckCamera::Pinhole, 64).unwrap();
+    let cam = s.camera(ViewCamera::Pinhole, 64).unwrap();
     let ImpostorCamera::Pinhole(pin) = &cam else {
         unreachable!()
     };
@@ -277,7 +275,7 @@ fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
     let rays = s.rays();
     let exact = Bvh::build(vec![s.target.clone()]);
     let imp = build(
-        s.camera(CheckCamera::Pinhole, 256).unwrap(),
+        s.camera(ViewCamera::Pinhole, 256).unwrap(),
         &s.target,
         0,
         &albedo_of(&s.target),
@@ -315,7 +313,7 @@ fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
 fn a_rebuilt_impostor_equals_a_fresh_build() {
     use trompe::impostor::ImpostorBuilder;
     let s = setup();
-    let cam = s.camera(CheckCamera::Spoc(Some(0.8)), 128).unwrap();
+    let cam = s.camera(ViewCamera::Spoc(Some(0.8)), 128).unwrap();
     let color = albedo_of(&s.target);
     let mut builder = ImpostorBuilder::new();
     let mut imp = builder.build(cam.clone(), &s.target, 1, &color).unwrap();
@@ -386,7 +384,7 @@ fn walks_from_many_threads_on_a_fresh_impostor_agree_with_one_thread() {
     use rayon::prelude::*;
     let s = setup();
     let rays = s.rays();
-    let camera = s.camera(CheckCamera::Spoc(None), 256).unwrap();
+    let camera = s.camera(ViewCamera::Spoc(None), 256).unwrap();
     let reference = build(camera.clone(), &s.target, 0, &albedo_of(&s.target)).unwrap();
     let one: Vec<_> = rays
         .iter()
@@ -489,7 +487,7 @@ fn a_cube_map_of_a_room_answers_rays_that_meet_it_next_to_its_edges() {
 
 /// The camera `trompe impostor bake` places by default: 3 bounding radii from the centre along
 /// (0, 0.3, 1).
-fn baked_camera(mesh: &trompe::geom::Mesh, kind: CheckCamera, size: u32) -> ImpostorCamera {
+fn baked_camera(mesh: &trompe::geom::Mesh, kind: ViewCamera, size: u32) -> ImpostorCamera {
     ImpostorCamera::facing_mesh(kind, mesh, glam::Vec3::new(0.0, 0.3, 1.0), 3.0, size).unwrap()
 }
 
@@ -498,7 +496,7 @@ fn an_impostor_knows_the_mesh_it_was_built_from() {
     use trompe::impostor::file;
     let teapot = load(&shared("meshes/teapot.obj")).unwrap().mesh;
     let bunny = load(&shared("meshes/bunny.obj")).unwrap().mesh;
-    let cam = baked_camera(&teapot, CheckCamera::Spoc(None), 64);
+    let cam = baked_camera(&teapot, ViewCamera::Spoc(None), 64);
     let imp = build(cam, &teapot, 0, &albedo_of(&teapot)).unwrap();
     let path = common::scratch("impostor_built_from").join("teapot.json");
     file::save(&imp, &path).unwrap();
@@ -517,11 +515,11 @@ fn an_impostor_knows_the_mesh_it_was_built_from() {
 /// fewer of them than the pinhole depth image from the same point (paper 1 Fig. 6–7).
 #[test]
 fn a_baked_spoc_answers_rays_from_around_its_viewpoint_better_than_a_pinhole() {
-    use trompe::impostor::fidelity::viewpoint_rays;
+    use trompe::eval::fidelity::viewpoint_rays;
     let teapot = load(&shared("meshes/teapot.obj")).unwrap().mesh;
     let exact = Bvh::build(vec![std::sync::Arc::new(teapot.clone())]);
     let b = teapot.bounds();
-    let [spoc, pinhole] = [CheckCamera::Spoc(None), CheckCamera::Pinhole].map(|kind| {
+    let [spoc, pinhole] = [ViewCamera::Spoc(None), ViewCamera::Pinhole].map(|kind| {
         build(
             baked_camera(&teapot, kind, 512),
             &teapot,
@@ -551,7 +549,7 @@ fn the_direction_toward_a_spoc_follows_its_curved_ray() {
     let teapot = load(&shared("meshes/teapot.obj")).unwrap().mesh;
     let eps = teapot.bounds().radius() as f64 * 1e-4;
     let (mut points, mut bent) = (0, 0);
-    for kind in [CheckCamera::Spoc(None), CheckCamera::Pinhole] {
+    for kind in [ViewCamera::Spoc(None), ViewCamera::Pinhole] {
         let cam = baked_camera(&teapot, kind, 256);
         for p in teapot.positions.iter().step_by(5) {
             let p = p.as_dvec3();
@@ -570,7 +568,7 @@ fn the_direction_toward_a_spoc_follows_its_curved_ray() {
             assert!(moved.gd > q.gd, "{kind:?} at {p}");
             let eye = cam.toward_camera(p).normalize();
             match kind {
-                CheckCamera::Pinhole => assert!(along.dot(eye) > 1.0 - 1e-9, "{p}"),
+                ViewCamera::Pinhole => assert!(along.dot(eye) > 1.0 - 1e-9, "{p}"),
                 _ => {
                     points += 1;
                     bent += usize::from(along.dot(eye) < 1.0f64.to_radians().cos());

@@ -5,10 +5,10 @@ mod common;
 use common::shared;
 use glam::Vec3;
 use std::sync::Arc;
+use trompe::eval::validate::raster_vs_bvh;
 use trompe::geom::Ray;
 use trompe::geom::io::load;
 use trompe::trace::{BruteForce, Bvh, RayQuery};
-use trompe::validate::raster_vs_bvh;
 
 #[track_caller]
 fn check(rel: &str) {

@@ -993,7 +993,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/maze.maze");
         let maze = crate::scene::maze::Maze::load(&path).unwrap();
         let g = maze.graph_camera(160, &path).unwrap();
-        let mesh = crate::bench::maze_with_objects(&maze, &crate::geom::icosphere(3), 4);
+        let mesh = maze.with_objects(&crate::geom::icosphere(3), 4);
         let groups = group_bounds(&mesh);
         let color = albedo_of(&mesh);
         let imp = build(ImpostorCamera::Graph(g.clone()), &mesh, 2, &color).unwrap();

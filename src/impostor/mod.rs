@@ -16,21 +16,24 @@
 //! (colour in half floats, normals in octahedral codes, `frame::packed`); the impostor never
 //! consults the mesh after it is built.
 
+mod bake;
 mod billboard;
 mod build;
-pub mod fidelity;
 pub mod file;
 mod front;
 mod planes;
 mod pyramid;
 mod straight;
+mod subject;
 mod walk;
 
+pub use bake::{BakeError, BakeReport, BakeSettings, bake};
 pub use billboard::Billboard;
 pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};
 pub use front::front_bounds;
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
+pub use subject::{CameraChoice, Paired, Subject, SubjectError, is_maze};
 pub use walk::{HIERARCHICAL_MIN_SIDE, WalkMode, WalkStats};
 
 use crate::camera::{GraphCamera, ImagePoint, Orthographic, Pinhole, Projection, Spoc};
@@ -584,5 +587,55 @@ impl Impostor {
     /// Fraction of texels that are covered.
     pub fn coverage(&self) -> f64 {
         self.gd.pixels().iter().filter(|&&g| g > 0.0).count() as f64 / self.gd.pixels().len() as f64
+    }
+}
+
+/// What `trompe info` says of a baked impostor ([`Impostor::summary`]).
+pub struct ImpostorSummary<'a> {
+    path: &'a std::path::Path,
+    impostor: &'a Impostor,
+}
+
+impl Impostor {
+    /// Camera, size, viewpoint, coverage and box, for printing.
+    pub fn summary<'a>(&'a self, path: &'a std::path::Path) -> ImpostorSummary<'a> {
+        ImpostorSummary {
+            path,
+            impostor: self,
+        }
+    }
+}
+
+impl std::fmt::Display for ImpostorSummary<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let imp = self.impostor;
+        let (w, h) = imp.gd.size();
+        let v = imp.camera.viewpoint();
+        writeln!(f, "{}", self.path.display())?;
+        writeln!(
+            f,
+            "  impostor   {} camera, {w}×{h} texels",
+            imp.camera.kind()
+        )?;
+        writeln!(f, "  viewpoint  [{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z)?;
+        match &imp.camera {
+            ImpostorCamera::Spoc(s) => {
+                let (near, far) = s.depth_range();
+                writeln!(
+                    f,
+                    "  SPOC       strength k = {:.4}, depth ramp from {near:.4} to {far:.4}",
+                    s.strength()
+                )?;
+            }
+            ImpostorCamera::Graph(g) => writeln!(f, "  frusta     {}", g.frusta().len())?,
+            ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {}
+        }
+        writeln!(f, "  covered    {:.1} % of texels", imp.coverage() * 100.0)?;
+        let b = imp.bounds;
+        write!(
+            f,
+            "  bounds     [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+            b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+        )
     }
 }

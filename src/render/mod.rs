@@ -23,9 +23,9 @@ pub use raster::render_raster;
 pub use trace::{Tracer, render_trace};
 
 use crate::frame::{Frame, FrameError};
+pub use crate::progress::{Progress, Timings};
 use crate::scene::{Lighting, RenderSettings, Scene, View};
 use crate::trace::{Bvh, Exact};
-use std::time::{Duration, Instant};
 use thiserror::Error;
 
 /// Which renderer.
@@ -71,30 +71,6 @@ pub enum RenderError {
         /// Why not.
         reason: &'static str,
     },
-}
-
-/// Progress of long work, reported in rows; the CLI shows it as a bar.
-pub trait Progress: Sync {
-    /// `rows` more rows are done.
-    fn advance(&self, rows: u64);
-}
-
-impl Progress for () {
-    fn advance(&self, _: u64) {}
-}
-
-/// Named wall-clock durations of the steps of one job, in order.
-#[derive(Clone, Debug, Default)]
-pub struct Timings(pub Vec<(&'static str, Duration)>);
-
-impl Timings {
-    /// Runs `f`, recording its duration under `name`.
-    pub fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
-        let start = Instant::now();
-        let out = f();
-        self.0.push((name, start.elapsed()));
-        out
-    }
 }
 
 /// Renders `scene` at its default time with `method`.

@@ -68,6 +68,29 @@ pub struct Maze {
 const DIRS: [(i64, i64); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
 
 impl Maze {
+    /// The maze's geometry with `count` copies of `object` (largest extent half a cell)
+    /// standing on floor cells spread along the plan in reading order — paper 1's dynamic maze
+    /// scene (§6: "the maze with 4 bunnies").
+    pub fn with_objects(&self, object: &Mesh, count: usize) -> Mesh {
+        let mut mesh = self.mesh();
+        let cells = self.floor_cells();
+        let b = object.bounds();
+        let scale = 0.5 / b.extent().max_element().max(f32::MIN_POSITIVE);
+        let base = Vec3::new(b.center().x, b.min.y, b.center().z);
+        for i in 1..=count {
+            let Some(&(c, r)) = cells.get(i * cells.len() / (count + 1)) else {
+                continue;
+            };
+            let at = Vec3::new(c as f32 + 0.5, 0.0, r as f32 + 0.5);
+            mesh.append(&object.transformed(
+                &(glam::Mat4::from_translation(at)
+                    * glam::Mat4::from_scale(Vec3::splat(scale))
+                    * glam::Mat4::from_translation(-base)),
+            ));
+        }
+        mesh
+    }
+
     /// Parses a floor plan (`path` names it in errors).
     pub fn parse(text: &str, path: &Path) -> Result<Maze, MazeError> {
         let invalid = |element: String, reason: &str| MazeError::Invalid {

@@ -66,3 +66,60 @@ fn load_texture(mesh_path: &Path, name: &str) -> Result<super::Texture, MeshErro
         })?;
     Ok(std::sync::Arc::new(image))
 }
+
+/// What `trompe info` says of a loaded mesh file ([`LoadedMesh::summary`]).
+pub struct MeshSummary<'a> {
+    path: &'a Path,
+    loaded: &'a LoadedMesh,
+}
+
+impl LoadedMesh {
+    /// Counts, bounds, surface, materials and textures, for printing.
+    pub fn summary<'a>(&'a self, path: &'a Path) -> MeshSummary<'a> {
+        MeshSummary { path, loaded: self }
+    }
+}
+
+impl std::fmt::Display for MeshSummary<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (loaded, m) = (self.loaded, &self.loaded.mesh);
+        let b = m.bounds();
+        writeln!(f, "{}", self.path.display())?;
+        writeln!(
+            f,
+            "  vertices   {} in the file, {} after splitting by attribute",
+            loaded.source.vertices,
+            m.positions.len()
+        )?;
+        writeln!(
+            f,
+            "  triangles  {} in the file, {} kept",
+            loaded.source.triangles,
+            m.triangle_count()
+        )?;
+        writeln!(
+            f,
+            "  bounds     [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+            b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+        )?;
+        writeln!(f, "  surface    {:.6} square units", m.area())?;
+        writeln!(
+            f,
+            "  UVs        {}",
+            if m.uvs.is_some() { "yes" } else { "no" }
+        )?;
+        write!(f, "  materials  {}", m.materials.len())?;
+        for mat in &m.materials {
+            let c = mat.base_color;
+            let tex = mat.texture.as_ref().map_or("no texture".to_string(), |t| {
+                format!("texture {}×{}", t.width(), t.height())
+            });
+            write!(
+                f,
+                "\n    {:<24} colour [{:.3}, {:.3}, {:.3}], {tex}",
+                mat.name, c.x, c.y, c.z
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -8,9 +8,9 @@
 //! Agreement of one ray: both miss, or both hit with positions within 1.5 texel footprints (the
 //! footprint of the impostor texel at the exact hit).
 
-use super::Impostor;
 use crate::camera::{Pinhole, Projection};
 use crate::geom::{Mesh, Ray};
+use crate::impostor::Impostor;
 use crate::trace::{Bvh, RayQuery};
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
@@ -74,7 +74,7 @@ pub fn check_with(
     impostor: &Impostor,
     exact: &Bvh,
     rays: &[Ray],
-    mode: super::WalkMode,
+    mode: crate::impostor::WalkMode,
 ) -> FidelityReport {
     check_by(impostor, exact, rays, |r| {
         impostor.walk_mode(r, f32::INFINITY, mode)
@@ -83,7 +83,7 @@ pub fn check_with(
 
 fn check_by<W>(impostor: &Impostor, exact: &Bvh, rays: &[Ray], walk: W) -> FidelityReport
 where
-    W: Fn(&Ray) -> (Option<crate::trace::Hit>, super::WalkStats) + Sync,
+    W: Fn(&Ray) -> (Option<crate::trace::Hit>, crate::impostor::WalkStats) + Sync,
 {
     #[derive(Default, Clone, Copy)]
     struct One {
@@ -192,7 +192,7 @@ pub fn sphere_rays(
 }
 
 /// Rays from the region an impostor serves: `count` rays from points spread over the sphere of
-/// radius `region` around its camera's viewpoint ([`super::ImpostorCamera::viewpoint`]), each
+/// radius `region` around its camera's viewpoint ([`crate::impostor::ImpostorCamera::viewpoint`]), each
 /// aimed at a point of `target` (the object's box). These are the rays a baked impostor was
 /// built to answer: the SPOC's strength is chosen for secondary rays from such a region (§3.2).
 pub fn viewpoint_rays(
@@ -271,9 +271,6 @@ pub fn surface_captured(
     }
 }
 
-/// Which camera to build a checked impostor through (see [`super::ImpostorCamera::around`]).
-pub use super::ViewCamera as CheckCamera;
-
 /// The paper's setting (Fig. 1, 6–7): a target object, a reflector beside it, and a viewer who
 /// sees the target in the reflector. Everything in world space.
 pub struct ReflectorSetup {
@@ -331,6 +328,52 @@ impl ReflectorSetup {
         })
     }
 
+    /// The same setting in `target`'s own coordinates: `target` is kept as it is; with `s` its
+    /// largest extent, the reflector is scaled to `0.8 s` and rests on the plane of the
+    /// target's lowest point, its centre `distance · s` along `+x` from the target's centre;
+    /// the viewer looks at it from `s · (−1.4, 0.4, 1.6)` off its centre. It is [`Self::new`]'s
+    /// setting scaled by `s` and moved onto the target.
+    pub fn beside(
+        target: &Mesh,
+        reflector: &Mesh,
+        distance: f32,
+        view_size: u32,
+    ) -> Result<Self, crate::camera::CameraError> {
+        let mut s = 0.0;
+        for m in [target, reflector] {
+            let e = m.bounds().extent().max_element();
+            if !(e.is_finite() && e > 0.0) {
+                return Err(crate::camera::CameraError::Degenerate(
+                    "a mesh with no extent cannot be placed",
+                ));
+            }
+            if s == 0.0 {
+                s = e;
+            }
+        }
+        let b = target.bounds();
+        let base = Vec3::new(b.center().x, b.min.y, b.center().z);
+        let reflector = Arc::new(fit(
+            reflector,
+            0.8 * s,
+            base + Vec3::new(distance * s, 0.0, 0.0),
+        ));
+        let rc = reflector.bounds().center();
+        let view = Pinhole::look_at(
+            rc + Vec3::new(-1.4, 0.4, 1.6) * s,
+            rc,
+            Vec3::Y,
+            30.0,
+            view_size,
+            view_size,
+        )?;
+        Ok(Self {
+            target: Arc::new(target.clone()),
+            reflector,
+            view,
+        })
+    }
+
     /// Paper 1's Fig. 5 setting: the reflector (largest extent 0.5) stands on the floor of the
     /// maze's first corridor, two cells in, and the viewer looks at it from 2.5 cells outside
     /// the entrance. The target is the maze itself, in its own coordinates.
@@ -380,16 +423,16 @@ impl ReflectorSetup {
     }
 
     /// An impostor camera at the reflector's centre looking at the target, framed tightly on
-    /// it ([`super::ImpostorCamera::fitted`]), `size²` texels; the SPOC strength follows from
+    /// it ([`crate::impostor::ImpostorCamera::fitted`]), `size²` texels; the SPOC strength follows from
     /// the reflector's radius (the region of the rays).
     pub fn camera(
         &self,
-        kind: CheckCamera,
+        kind: crate::impostor::ViewCamera,
         size: u32,
-    ) -> Result<super::ImpostorCamera, crate::camera::CameraError> {
+    ) -> Result<crate::impostor::ImpostorCamera, crate::camera::CameraError> {
         let (eye, tb) = (self.reflector.bounds().center(), self.target.bounds());
         let region = self.reflector.bounds().radius() as f64;
-        super::ImpostorCamera::fitted(
+        crate::impostor::ImpostorCamera::fitted(
             kind,
             eye,
             tb.center(),

@@ -1,7 +1,7 @@
 //! Cross-checks between methods that must agree: rasterized depth and item ids against BVH
-//! primary hits (issue 2). Used by the tests and shown in the demo report.
+//! primary hits . Used by the tests and shown in the demo report.
 
-use crate::bench::framing_camera;
+use super::fixtures::framing_camera;
 use crate::camera::Projection;
 use crate::frame::FrameError;
 use crate::geom::Mesh;
@@ -26,7 +26,11 @@ pub struct RasterAgreement {
 
 /// Rasterizes `mesh` at `size²` through a framing camera and traces the same pixel centres.
 pub fn raster_vs_bvh(mesh: &Mesh, size: u32) -> Result<RasterAgreement, FrameError> {
-    let cam = framing_camera(mesh, size);
+    let cam = framing_camera(mesh, size).ok_or(FrameError::InvalidSize {
+        width: u64::from(size),
+        height: u64::from(size),
+        reason: "no camera frames this mesh at this size",
+    })?;
     let (target, _) = rasterize(&cam, &[mesh], &NoAttributes, ())?;
     let bvh = Bvh::build(vec![Arc::new(mesh.clone())]);
     let (w, _) = cam.resolution();
