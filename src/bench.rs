@@ -522,13 +522,16 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         // timing (it is timed on its own above).
         let visits = [WalkMode::Linear, WalkMode::Hierarchical].map(|mode| {
             rays.iter()
-                .map(|r| imp.walk_mode(r, f32::INFINITY, mode).1.texel_visits as f64)
+                .map(|r| {
+                    imp.walk_mode(r, f32::INFINITY, mode)
+                        .map_or(0.0, |w| w.1.texel_visits as f64)
+                })
                 .sum::<f64>()
                 / n
         });
         let walk_all = |mode: WalkMode| {
             rays.par_iter().for_each(|r| {
-                std::hint::black_box(imp.walk_mode(r, f32::INFINITY, mode));
+                let _ = std::hint::black_box(imp.walk_mode(r, f32::INFINITY, mode));
             });
         };
         // Timed alternately, so their ratio is steady on a noisy machine.

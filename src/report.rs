@@ -36,6 +36,9 @@ pub enum ReportError {
     /// A shipped mesh failed to load.
     #[error(transparent)]
     Mesh(#[from] crate::geom::MeshError),
+    /// A walk was asked of a camera it does not go with.
+    #[error(transparent)]
+    Walk(#[from] crate::impostor::WalkError),
     /// The output directory could not be written.
     #[error("{path}: {source}")]
     Io {
@@ -585,7 +588,7 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
             ("algorithm 2 (exact, per frustum)", WalkMode::Exact),
             ("algorithm 1 (uniform 3-D steps)", WalkMode::Linear),
         ] {
-            let r = check_with(&imp, &exact, &rays, mode);
+            let r = check_with(&imp, &exact, &rays, mode)?;
             let _ = write!(
                 rows,
                 "<tr><td>{name}</td><td>{}</td><td>{:.2} %</td><td>{:.2} %</td><td>{:.2} / {:.1e}</td><td>{:.0}</td></tr>",

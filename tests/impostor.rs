@@ -229,8 +229,10 @@ fn hierarchical_and_linear_walks_give_identical_hits() {
         .unwrap();
         let (mut linear_visits, mut hier_visits, mut hits) = (0u64, 0u64, 0usize);
         for (i, r) in rays.iter().enumerate() {
-            let (a, sa) = imp.walk_mode(r, f32::INFINITY, WalkMode::Linear);
-            let (b, sb) = imp.walk_mode(r, f32::INFINITY, WalkMode::Hierarchical);
+            let (a, sa) = imp.walk_mode(r, f32::INFINITY, WalkMode::Linear).unwrap();
+            let (b, sb) = imp
+                .walk_mode(r, f32::INFINITY, WalkMode::Hierarchical)
+                .unwrap();
             assert_eq!(a, b, "{kind:?}: ray {i} differs");
             hits += a.is_some() as usize;
             linear_visits += sa.texel_visits;
@@ -286,7 +288,7 @@ fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
         let mut err = 0.0f64;
         for r in &rays {
             let e = trompe::trace::RayQuery::closest_hit(&exact, r, f32::INFINITY);
-            let i = imp.walk_mode(r, f32::INFINITY, mode).0;
+            let i = imp.walk_mode(r, f32::INFINITY, mode).unwrap().0;
             match (e, i) {
                 (None, None) => good += 1,
                 (Some(e), Some(i)) => {
@@ -336,8 +338,8 @@ fn a_rebuilt_impostor_equals_a_fresh_build() {
     for r in s.rays().iter().take(300) {
         let mode = trompe::impostor::WalkMode::Hierarchical;
         assert_eq!(
-            imp.walk_mode(r, f32::INFINITY, mode).0,
-            fresh.walk_mode(r, f32::INFINITY, mode).0
+            imp.walk_mode(r, f32::INFINITY, mode).unwrap().0,
+            fresh.walk_mode(r, f32::INFINITY, mode).unwrap().0
         );
     }
 }
@@ -579,4 +581,29 @@ fn the_direction_toward_a_spoc_follows_its_curved_ray() {
     // Most of the teapot lies off the SPOC's pole, where its rays leave the eye's direction
     // by more than a degree.
     assert!(bent * 2 > points, "{bent} of {points}");
+}
+
+#[test]
+fn an_exact_walk_is_refused_through_a_curved_camera() {
+    use trompe::impostor::{WalkError, WalkMode};
+    let s = setup();
+    let spoc = build(
+        s.camera(ViewCamera::Spoc(None), 32).unwrap(),
+        &s.target,
+        0,
+        &albedo_of(&s.target),
+    )
+    .unwrap();
+    let ray = trompe::Ray::new(glam::Vec3::new(0.0, 0.5, 3.0), -glam::Vec3::Z);
+    assert_eq!(
+        spoc.walk_mode(&ray, f32::INFINITY, WalkMode::Exact),
+        Err(WalkError::ExactOnCurved { camera: "spoc" })
+    );
+    // The walks that go with it still answer, and the default one is one of them.
+    let linear = spoc
+        .walk_mode(&ray, f32::INFINITY, WalkMode::Linear)
+        .unwrap();
+    assert_eq!(linear.0, spoc.walk(&ray, f32::INFINITY).0);
+    let exact = Bvh::build(vec![s.target.clone()]);
+    assert!(trompe::eval::fidelity::check_with(&spoc, &exact, &[ray], WalkMode::Exact).is_err());
 }

@@ -643,20 +643,31 @@ impl Projection for FrustumProjection<'_> {
     fn clip_distance(&self, p: DVec3) -> f64 {
         (self.camera.frusta[self.index].matrix * p.extend(1.0)).w - 1e-9
     }
+
+    /// One frustum is projective: it images a segment straight.
+    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
+        0.0
+    }
 }
 
-impl Projection for GraphCamera {
-    fn resolution(&self) -> (u32, u32) {
+/// A graph camera is not a [`Projection`]: its image is one, but its near boundary is no single
+/// plane, so no clip distance affine in the world point exists, and a segment crossing a shared
+/// face bends there. Only one frustum at a time ([`FrustumProjection`]) is a projection; these
+/// are what the whole camera answers.
+impl GraphCamera {
+    /// Image size in pixels `(width, height)` (the root's).
+    pub fn resolution(&self) -> (u32, u32) {
         self.root.resolution()
     }
 
-    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+    /// Projects a world point through the frustum that holds it; `None` outside every frustum.
+    pub fn project(&self, p: DVec3) -> Option<ImagePoint> {
         self.project_in(self.locate(p)?, p)
     }
 
     /// The point of the frustum whose inverse matrix lands inside it (rays are disjoint, so at
     /// most one does, up to rounding on shared faces).
-    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+    pub fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
         let w = 1.0 / gd;
         let h = DVec4::new(uv.x * w, uv.y * w, 1.0, w);
         let candidate = |f: &Frustum| {
@@ -668,16 +679,6 @@ impl Projection for GraphCamera {
             .map(|f| (f, candidate(f)))
             .find(|(f, x)| f.contains(*x, 1e-9 * (1.0 + x.length())))
             .map_or_else(|| candidate(&self.frusta[0]), |(_, x)| x)
-    }
-
-    fn clip_distance(&self, p: DVec3) -> f64 {
-        self.root.clip_distance(p)
-    }
-
-    /// A segment crossing a shared face bends there: no bound. (Construction clips triangles
-    /// to each frustum and draws them through [`FrustumProjection`], which is projective.)
-    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
-        f64::INFINITY
     }
 }
 

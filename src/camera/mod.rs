@@ -59,14 +59,12 @@ pub trait Projection: Sync {
     /// (two for an edge, three for all edges of a triangle at once) and computed from those
     /// images alone; `INFINITY` when the camera has no such bound.
     ///
-    /// The default, 0, is for cameras projective on planes (pinhole, orthographic, one frustum
-    /// of a graph camera): they image a segment straight, and the rasterizer's perspective-
-    /// correct interpolation puts its midpoint exactly where the camera does, so a triangle
-    /// never needs splitting. A curved camera must override it.
-    fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
-        let _ = ends;
-        0.0
-    }
+    /// Cameras projective on planes (pinhole, orthographic, one frustum of a graph camera)
+    /// answer 0: they image a segment straight, and the rasterizer's perspective-correct
+    /// interpolation puts its midpoint exactly where the camera does, so a triangle never needs
+    /// splitting. Every camera must say which it is: there is no default, so a new curved camera
+    /// cannot silently skip tessellation.
+    fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64;
 
     /// [`Projection::clip_distance`] of `p`, and its projection where that is `≥ 0`: what the
     /// rasterizer asks of every mesh vertex. One call, so that a camera chosen at run time

@@ -142,6 +142,11 @@ impl Projection for Orthographic {
     fn clip_distance(&self, p: DVec3) -> f64 {
         (p - self.corner).dot(self.dir)
     }
+
+    /// Projective: a segment images straight.
+    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
+        0.0
+    }
 }
 
 #[cfg(test)]

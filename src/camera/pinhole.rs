@@ -168,6 +168,11 @@ impl Projection for Pinhole {
     fn clip_distance(&self, p: DVec3) -> f64 {
         (p - self.c).dot(self.forward) - self.near
     }
+
+    /// Projective: a segment images straight.
+    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
+        0.0
+    }
 }
 
 #[cfg(test)]

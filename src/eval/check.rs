@@ -111,6 +111,9 @@ pub enum CheckError {
     /// The impostor's maps could not be allocated.
     #[error("building the impostor: {0}")]
     Build(#[from] FrameError),
+    /// A walk does not go with the impostor's camera.
+    #[error(transparent)]
+    Walk(#[from] crate::impostor::WalkError),
     /// A setting is out of its range.
     #[error("{setting} {value}: {reason}")]
     Setting {
@@ -344,11 +347,13 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         }
         None => None,
     };
-    let algorithm_1 = matches!(impostor.camera, ImpostorCamera::Graph(_)).then(|| {
-        timings.time("check (algorithm 1)", || {
-            fidelity::check_with(&impostor, &exact, &rays, WalkMode::Linear)
+    let algorithm_1 = matches!(impostor.camera, ImpostorCamera::Graph(_))
+        .then(|| {
+            timings.time("check (algorithm 1)", || {
+                fidelity::check_with(&impostor, &exact, &rays, WalkMode::Linear)
+            })
         })
-    });
+        .transpose()?;
     Ok(CheckReport {
         impostor,
         fidelity,

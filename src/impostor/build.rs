@@ -625,30 +625,65 @@ impl ImpostorBuilder {
         color: &F,
         before: MapsBefore,
     ) -> Result<(), FrameError> {
-        if matches!(impostor.camera, ImpostorCamera::Graph(_)) {
-            return self.build_graph_into(impostor, (mesh, object), color, before);
+        // One match, then everything runs monomorphised through the concrete camera.
+        let camera = impostor.camera.clone();
+        match &camera {
+            ImpostorCamera::Pinhole(c) => {
+                self.build_through(c, impostor, (mesh, object), color, before)
+            }
+            ImpostorCamera::Orthographic(c) => {
+                self.build_through(c, impostor, (mesh, object), color, before)
+            }
+            ImpostorCamera::Spoc(c) => {
+                self.build_through(c, impostor, (mesh, object), color, before)
+            }
+            ImpostorCamera::Graph(_) => {
+                self.build_graph_into(impostor, (mesh, object), color, before)
+            }
         }
+    }
+
+    /// [`Self::build_into`] through one camera model `P`, the impostor's own.
+    fn build_through<P: Projection, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        projection: &P,
+        impostor: &mut Impostor,
+        (mesh, object): (&Mesh, u32),
+        color: &F,
+        before: MapsBefore,
+    ) -> Result<(), FrameError> {
         // Detailed meshes rarely need splitting (paper 1 §3.1): the mesh is drawn as it is
         // unless, through a curved camera, set-up finds triangles the camera may curve by more
         // than the tolerance, or that it had to clip. Then, before anything is drawn, the mesh
         // is tessellated, and when some edge does need splitting (set-up's test is a bound)
         // the tessellation is drawn instead of the mesh.
-        let camera = impostor.camera.clone();
+        let curved = impostor.camera.is_curved();
         let scratch = &mut self.tessellation;
         let mut pieces = None;
         let mut unless_tessellated = |stats: &RasterStats| {
-            if camera.is_curved() && stats.has_curved_or_clipped() {
-                pieces = tessellate_with(&camera, mesh, scratch);
+            if curved && stats.has_curved_or_clipped() {
+                pieces = tessellate_with(projection, mesh, scratch);
             }
             pieces.is_none()
         };
         let raster = &mut self.raster;
         let source = (mesh, object);
         let ask = Some(&mut unless_tessellated as &mut dyn FnMut(&RasterStats) -> bool);
-        draw_and_resolve(raster, impostor, source, (mesh, None), color, before, ask)?;
+        draw_and_resolve(
+            raster,
+            projection,
+            impostor,
+            source,
+            (mesh, None),
+            color,
+            before,
+            ask,
+        )?;
         if let Some(t) = pieces {
             let drawn = (&t.mesh, Some(t.source.as_slice()));
-            draw_and_resolve(raster, impostor, source, drawn, color, before, None)?;
+            draw_and_resolve(
+                raster, projection, impostor, source, drawn, color, before, None,
+            )?;
         }
         finish_resolve(impostor, mesh);
         Ok(())
@@ -709,12 +744,14 @@ impl ImpostorBuilder {
 }
 
 /// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle) through
-/// the impostor's camera into its `gd`, with the working memory `raster`, resolving each band
+/// `projection`, the impostor's camera, into its `gd`, with the working memory `raster`, resolving each band
 /// of the visibility buffer into its other maps (surface points of `mesh`; the maps hold
 /// `before`) as soon as the band is drawn — unless `draw_if`, asked after set-up, refuses:
 /// then every map is left as it was ([`DepthTarget::draw_if`]).
-fn draw_and_resolve<'a, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+#[allow(clippy::too_many_arguments)]
+fn draw_and_resolve<'a, P: Projection, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     raster: &'a mut RasterMemory<Vec2>,
+    projection: &P,
     impostor: &'a mut Impostor,
     (mesh, object): (&Mesh, u32),
     (drawn, source): (&Mesh, Option<&[SourceTriangle]>),
@@ -759,7 +796,7 @@ fn draw_and_resolve<'a, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     };
     let meshes = [drawn];
     rasterize_depth_then(
-        &camera,
+        projection,
         &meshes,
         &Barycentrics,
         Vec2::ZERO,

@@ -154,7 +154,7 @@ fn pinhole_bound(c: &Pinhole, p: DVec3, n: DVec3, corners: [DVec2; 4]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{Projection, Spoc};
+    use crate::camera::Spoc;
     use crate::geom::SplitMix64;
     use glam::Vec3;
 

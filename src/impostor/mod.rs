@@ -34,7 +34,7 @@ pub use front::front_bounds;
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
 pub use subject::{CameraChoice, Paired, Subject, SubjectError, is_maze};
-pub use walk::{HIERARCHICAL_MIN_SIDE, WalkMode, WalkStats};
+pub use walk::{HIERARCHICAL_MIN_SIDE, WalkError, WalkMode, WalkStats};
 
 use crate::camera::{GraphCamera, ImagePoint, Orthographic, Pinhole, Projection, Spoc};
 use crate::frame::Image;
@@ -276,8 +276,13 @@ impl ImpostorCamera {
     }
 }
 
-impl Projection for ImpostorCamera {
-    fn resolution(&self) -> (u32, u32) {
+/// An impostor camera is not itself a [`Projection`]: a graph camera has no near boundary
+/// affine in the world point (its frusta bend), so it cannot keep that trait's promise. What
+/// every impostor camera can answer — its size, where a point lands, the point at a texel — is
+/// here; the builder and the walks match once and run through the concrete camera.
+impl ImpostorCamera {
+    /// Image size in texels `(width, height)`.
+    pub fn resolution(&self) -> (u32, u32) {
         match self {
             ImpostorCamera::Pinhole(c) => c.resolution(),
             ImpostorCamera::Orthographic(c) => c.resolution(),
@@ -285,7 +290,10 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Graph(c) => c.resolution(),
         }
     }
-    fn project(&self, p: DVec3) -> Option<ImagePoint> {
+
+    /// Where a world point lands ([`Projection::project`]; for a graph camera, in the frustum
+    /// that holds it).
+    pub fn project(&self, p: DVec3) -> Option<ImagePoint> {
         match self {
             ImpostorCamera::Pinhole(c) => c.project(p),
             ImpostorCamera::Orthographic(c) => c.project(p),
@@ -293,7 +301,9 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Graph(c) => c.project(p),
         }
     }
-    fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
+
+    /// The world point at image coordinates `uv` and generalized depth `gd > 0`.
+    pub fn unproject(&self, uv: DVec2, gd: f64) -> DVec3 {
         match self {
             ImpostorCamera::Pinhole(c) => c.unproject(uv, gd),
             ImpostorCamera::Orthographic(c) => c.unproject(uv, gd),
@@ -301,29 +311,10 @@ impl Projection for ImpostorCamera {
             ImpostorCamera::Graph(c) => c.unproject(uv, gd),
         }
     }
-    fn clip_distance(&self, p: DVec3) -> f64 {
-        match self {
-            ImpostorCamera::Pinhole(c) => c.clip_distance(p),
-            ImpostorCamera::Orthographic(c) => c.clip_distance(p),
-            ImpostorCamera::Spoc(c) => c.clip_distance(p),
-            ImpostorCamera::Graph(c) => c.clip_distance(p),
-        }
-    }
-    fn clip_and_project(&self, p: DVec3) -> (f64, Option<ImagePoint>) {
-        match self {
-            ImpostorCamera::Pinhole(c) => c.clip_and_project(p),
-            ImpostorCamera::Orthographic(c) => c.clip_and_project(p),
-            ImpostorCamera::Spoc(c) => c.clip_and_project(p),
-            ImpostorCamera::Graph(c) => c.clip_and_project(p),
-        }
-    }
-    fn midpoint_deviation_bound(&self, ends: &[ImagePoint]) -> f64 {
-        match self {
-            ImpostorCamera::Pinhole(c) => c.midpoint_deviation_bound(ends),
-            ImpostorCamera::Orthographic(c) => c.midpoint_deviation_bound(ends),
-            ImpostorCamera::Spoc(c) => c.midpoint_deviation_bound(ends),
-            ImpostorCamera::Graph(c) => c.midpoint_deviation_bound(ends),
-        }
+
+    /// [`ImpostorCamera::project`] of an `f32` point.
+    pub fn project_f32(&self, p: Vec3) -> Option<ImagePoint> {
+        self.project(p.as_dvec3())
     }
 }
 
@@ -571,7 +562,9 @@ impl Impostor {
                 let j = g.locate(g.unproject(uv, gd)).unwrap_or(0);
                 size(&g.frustum(j), uv, gd)
             }
-            camera => size(camera, uv, gd),
+            ImpostorCamera::Pinhole(c) => size(c, uv, gd),
+            ImpostorCamera::Orthographic(c) => size(c, uv, gd),
+            ImpostorCamera::Spoc(c) => size(c, uv, gd),
         }
     }
 

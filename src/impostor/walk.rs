@@ -54,8 +54,23 @@ pub enum WalkMode {
     /// hits of [`WalkMode::Linear`].
     Hierarchical,
     /// Every texel the image path crosses, once, in order (`impostor/straight.rs`); for
-    /// projective cameras (pinhole, orthographic). A SPOC impostor walks by sampling instead.
+    /// projective cameras (pinhole, orthographic) and, frustum by frustum, the graph camera
+    /// (§4.6's algorithm 2). Refused for a SPOC, whose image path is curved.
     Exact,
+}
+
+/// A walk that cannot be done as asked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum WalkError {
+    /// [`WalkMode::Exact`] through a camera whose image paths are curved.
+    #[error(
+        "an exact (texel-by-texel) walk needs straight image paths; a {camera} impostor's are curved: walk it linearly or hierarchically"
+    )]
+    ExactOnCurved {
+        /// The camera's kind.
+        camera: &'static str,
+    },
 }
 
 /// Work done by one ray walk.
@@ -124,7 +139,7 @@ impl Impostor {
             // Pinhole, orthographic, and the graph camera (algorithm 2).
             WalkMode::Exact
         };
-        self.walk_mode(ray, t_max, mode)
+        self.walk_unchecked(ray, t_max, mode)
     }
 
     /// The stretch `[t0, t1]` of `ray` a walk covers: from where it enters the box of the
@@ -141,8 +156,24 @@ impl Impostor {
         Some((t0, t1))
     }
 
-    /// [`Impostor::walk`] with a chosen mode.
-    pub fn walk_mode(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
+    /// [`Impostor::walk`] with a chosen mode; [`WalkMode::Exact`] is refused for a curved
+    /// camera.
+    pub fn walk_mode(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mode: WalkMode,
+    ) -> Result<(Option<Hit>, WalkStats), WalkError> {
+        if mode == WalkMode::Exact && self.camera.is_curved() {
+            return Err(WalkError::ExactOnCurved {
+                camera: self.camera.kind(),
+            });
+        }
+        Ok(self.walk_unchecked(ray, t_max, mode))
+    }
+
+    /// The walk in `mode`, which goes with the camera.
+    fn walk_unchecked(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
         match &self.camera {
             ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max, mode),
             ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max, mode),
@@ -238,8 +269,13 @@ impl Impostor {
         (None, stats)
     }
 
-    fn sample<P: Projection>(&self, camera: &P, s: DVec3, stats: &mut WalkStats) -> Option<Sample> {
-        let p = camera.project(s)?;
+    fn sample<P: ProjectPoint>(
+        &self,
+        camera: &P,
+        s: DVec3,
+        stats: &mut WalkStats,
+    ) -> Option<Sample> {
+        let p = camera.land(s)?;
         stats.texel_visits += 1;
         let texel = self.texel(p.uv);
         let (stored, delta) = match texel {
@@ -273,7 +309,7 @@ impl Impostor {
         let (Some(pc), Some(pe)) = (camera.project(c), camera.project(e)) else {
             return (None, stats);
         };
-        if mode == WalkMode::Exact && !self.camera.is_curved() {
+        if mode == WalkMode::Exact {
             let hit = self.walk_straight(camera, ray, c, e, &mut stats);
             return (hit, stats);
         }
@@ -588,6 +624,26 @@ fn clip_to_domain<P: Projection>(camera: &P, c: DVec3, e: DVec3) -> Option<(DVec
     let inward = if dc < 0.0 { e - cut } else { c - cut };
     let cut = cut + inward * 1e-9;
     Some(if dc < 0.0 { (cut, e) } else { (c, cut) })
+}
+
+/// What a sampled walk asks of a camera: where a point lands. Every [`Projection`] answers it,
+/// and so does a whole graph camera (through the frustum holding the point), which is not one.
+trait ProjectPoint {
+    fn land(&self, p: DVec3) -> Option<crate::camera::ImagePoint>;
+}
+
+impl<P: Projection> ProjectPoint for P {
+    #[inline]
+    fn land(&self, p: DVec3) -> Option<crate::camera::ImagePoint> {
+        self.project(p)
+    }
+}
+
+impl ProjectPoint for crate::camera::GraphCamera {
+    #[inline]
+    fn land(&self, p: DVec3) -> Option<crate::camera::ImagePoint> {
+        crate::camera::GraphCamera::project(self, p)
+    }
 }
 
 #[cfg(test)]

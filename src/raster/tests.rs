@@ -25,6 +25,9 @@ impl Projection for ScreenSpace {
     fn clip_distance(&self, p: DVec3) -> f64 {
         p.z - 1e-3
     }
+    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
+        0.0
+    }
 }
 
 fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Mesh {
@@ -185,6 +188,9 @@ impl Projection for Persp {
     }
     fn clip_distance(&self, p: DVec3) -> f64 {
         p.z - 1e-3
+    }
+    fn midpoint_deviation_bound(&self, _: &[ImagePoint]) -> f64 {
+        0.0
     }
 }
 

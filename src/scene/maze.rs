@@ -450,7 +450,6 @@ fn turn_normal(d: usize, t: usize) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Projection;
 
     const MAZE: &str =
         "; a test maze\n#######\nS.....#\n#####.#\n#.....#\n#.#####\n#.....#\n#######\n";
