@@ -13,7 +13,7 @@ use crate::geom::NO_OBJECT;
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{
     BAND_ROWS, DepthTarget, FinishedBand, Fragment, FragmentShader, ItemId, RasterMemory,
-    RasterStats, RasterTarget, rasterize_depth_then, rasterize_over,
+    RasterTarget, SetUp, draw_depth_then, rasterize_over, set_up,
 };
 use glam::{DVec2, Vec2, Vec3};
 use rayon::prelude::*;
@@ -658,33 +658,21 @@ impl ImpostorBuilder {
         // is tessellated, and when some edge does need splitting (set-up's test is a bound)
         // the tessellation is drawn instead of the mesh.
         let curved = impostor.camera.is_curved();
-        let scratch = &mut self.tessellation;
-        let mut pieces = None;
-        let mut unless_tessellated = |stats: &RasterStats| {
-            if curved && stats.has_curved_or_clipped() {
-                pieces = tessellate_with(projection, mesh, scratch);
-            }
-            pieces.is_none()
-        };
-        let raster = &mut self.raster;
         let source = (mesh, object);
-        let ask = Some(&mut unless_tessellated as &mut dyn FnMut(&RasterStats) -> bool);
-        draw_and_resolve(
-            raster,
-            projection,
-            impostor,
-            source,
-            (mesh, None),
-            color,
-            before,
-            ask,
-        )?;
-        if let Some(t) = pieces {
-            let drawn = (&t.mesh, Some(t.source.as_slice()));
-            draw_and_resolve(
-                raster, projection, impostor, source, drawn, color, before, None,
-            )?;
-        }
+        let setup = set_up(projection, &[mesh], &mut self.raster);
+        let pieces = if curved && setup.stats().has_curved_or_clipped() {
+            tessellate_with(projection, mesh, &mut self.tessellation)
+        } else {
+            None
+        };
+        match &pieces {
+            None => draw_and_resolve(setup, impostor, source, None, color, before)?,
+            Some(t) => {
+                let setup = set_up(projection, &[&t.mesh], &mut self.raster);
+                let drawn = Some(t.source.as_slice());
+                draw_and_resolve(setup, impostor, source, drawn, color, before)?
+            }
+        };
         finish_resolve(impostor, mesh);
         Ok(())
     }
@@ -743,22 +731,18 @@ impl ImpostorBuilder {
     }
 }
 
-/// Rasterizes `drawn` (a mesh, and for a tessellation the source of each sub-triangle) through
-/// `projection`, the impostor's camera, into its `gd`, with the working memory `raster`, resolving each band
-/// of the visibility buffer into its other maps (surface points of `mesh`; the maps hold
-/// `before`) as soon as the band is drawn — unless `draw_if`, asked after set-up, refuses:
-/// then every map is left as it was ([`DepthTarget::draw_if`]).
-#[allow(clippy::too_many_arguments)]
-fn draw_and_resolve<'a, P: Projection, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
-    raster: &'a mut RasterMemory<Vec2>,
-    projection: &P,
-    impostor: &'a mut Impostor,
+/// Draws `setup` — a mesh set up through the impostor's camera, or its tessellation, whose
+/// sub-triangles' sources `drawn` names — into its `gd`, resolving each band of the visibility
+/// buffer into its other maps (surface points of `mesh`; the maps hold `before`) as soon as the
+/// band is drawn.
+fn draw_and_resolve<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    setup: SetUp<'_, Vec2>,
+    impostor: &mut Impostor,
     (mesh, object): (&Mesh, u32),
-    (drawn, source): (&Mesh, Option<&[SourceTriangle]>),
+    source: Option<&[SourceTriangle]>,
     color: &F,
     before: MapsBefore,
-    draw_if: Option<&'a mut dyn FnMut(&RasterStats) -> bool>,
-) -> Result<RasterStats, FrameError> {
+) -> Result<crate::raster::RasterStats, FrameError> {
     let w = impostor.camera.resolution().0;
     let camera = impostor.camera.clone();
     let inputs = ResolveInputs {
@@ -791,19 +775,8 @@ fn draw_and_resolve<'a, P: Projection, F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     let target = DepthTarget {
         gd,
         zeroed: before == MapsBefore::Zeroed,
-        memory: raster,
-        draw_if,
     };
-    let meshes = [drawn];
-    rasterize_depth_then(
-        projection,
-        &meshes,
-        &Barycentrics,
-        Vec2::ZERO,
-        target,
-        runs,
-        finish,
-    )
+    draw_depth_then(setup, &Barycentrics, Vec2::ZERO, target, runs, finish)
 }
 
 /// Triangles per group whose box is tested against a frustum's planes before its triangles are

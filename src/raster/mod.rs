@@ -247,7 +247,7 @@ pub fn rasterize_over<P: Projection, S: FragmentShader>(
     ))
 }
 
-/// One band of rows just drawn, handed to the `finish` callback of [`rasterize_depth_then`].
+/// One band of rows just drawn, handed to the `finish` callback of [`draw_depth_then`].
 pub struct FinishedBand<'a, T> {
     /// Index of the band's first pixel in the row-major image (`first row × width`).
     pub first_pixel: usize,
@@ -265,7 +265,7 @@ pub struct FinishedBand<'a, T> {
 }
 
 /// Working memory that one rasterization leaves to the next: the set-up triangles and the
-/// scratch rows of [`rasterize_depth_then`]. Keep it to draw again without allocating.
+/// scratch rows of [`draw_depth_then`]. Keep it to draw again without allocating.
 pub struct RasterMemory<T> {
     binned: setup::Binned,
     /// Item and attribute rows of one band each, lent to the bands being drawn.
@@ -284,52 +284,73 @@ impl<T> Default for RasterMemory<T> {
 /// The item and attribute rows of one band, as scratch.
 type BandScratch<T> = (Vec<ItemId>, Vec<T>);
 
-/// A depth image to rasterize into, and what it holds.
-pub struct DepthTarget<'a, T> {
+/// Triangles set up through one camera — projected, clipped, snapped and binned into bands —
+/// held in a [`RasterMemory`], with set-up's counters: the first half of a depth pass. A caller
+/// reads [`SetUp::stats`] and then draws it ([`draw_depth_then`]) or drops it and sets up
+/// something else (a builder tessellates what a curved camera would misplace,
+/// [`RasterStats::has_curved_or_clipped`], without drawing the mesh as it is first).
+pub struct SetUp<'a, T> {
+    memory: &'a mut RasterMemory<T>,
+    stats: RasterStats,
+    size: (u32, u32),
+}
+
+impl<T> SetUp<'_, T> {
+    /// Set-up's counters: triangles kept, clipped, and that the camera may curve.
+    pub fn stats(&self) -> RasterStats {
+        self.stats
+    }
+}
+
+/// Sets up `objects` (object id = index) through `camera` into `memory`.
+pub fn set_up<'a, P: Projection, T>(
+    camera: &P,
+    objects: &[&Mesh],
+    memory: &'a mut RasterMemory<T>,
+) -> SetUp<'a, T> {
+    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut memory.binned);
+    SetUp {
+        memory,
+        stats,
+        size: camera.resolution(),
+    }
+}
+
+/// A depth image to draw into, and what it holds.
+pub struct DepthTarget<'a> {
     /// Generalized depth, of the camera's size.
     pub gd: &'a mut Image<f32>,
     /// True when `gd` is all zeros (for example fresh from [`Image::zeroed`]): its rows are
     /// then drawn without being cleared, and rows nothing covers are never written.
     pub zeroed: bool,
-    /// Working memory, kept between rasterizations.
-    pub memory: &'a mut RasterMemory<T>,
-    /// Asked once set-up is done, before any pixel is drawn, with set-up's counters; `None`
-    /// draws always. When it answers `false`, nothing is drawn: the depth image and the
-    /// outputs are left as they were, `finish` is never called, and set-up's counters are
-    /// returned. A caller that tessellates what a curved camera would misplace
-    /// ([`RasterStats::has_curved_or_clipped`]) decides here, and draws the tessellation
-    /// instead, without drawing the mesh as it is first.
-    pub draw_if: Option<&'a mut dyn FnMut(&RasterStats) -> bool>,
 }
 
-/// Rasterizes into a depth image alone: each band's item and attribute rows exist only while
-/// it is drawn and finished. `finish` is called on each band of [`BAND_ROWS`] rows as soon as
-/// it is drawn, while its pixels are in cache, with `outputs[band]` — for instance that band's
-/// rows of other images: the deferred shading of a visibility buffer that is never whole in
-/// memory (a whole one cost more in memory traffic than the rasterization itself).
+/// Draws what was set up into a depth image alone: each band's item and attribute rows exist
+/// only while it is drawn and finished. `finish` is called on each band of [`BAND_ROWS`] rows
+/// as soon as it is drawn, while its pixels are in cache, with `outputs[band]` — for instance
+/// that band's rows of other images: the deferred shading of a visibility buffer that is never
+/// whole in memory (a whole one cost more in memory traffic than the rasterization itself).
 ///
 /// # Errors
-/// When `target.gd` is not of the camera's size.
+/// When `target.gd` is not of the set-up camera's size.
 ///
 /// # Panics
 /// When `outputs` does not hold one entry per band (`height.div_ceil(BAND_ROWS)`): a caller's
 /// bug, not bad input.
-pub fn rasterize_depth_then<P, S, O, F>(
-    camera: &P,
-    objects: &[&Mesh],
+pub fn draw_depth_then<S, O, F>(
+    setup: SetUp<'_, S::Output>,
     shader: &S,
     empty: S::Output,
-    target: DepthTarget<'_, S::Output>,
+    target: DepthTarget<'_>,
     outputs: Vec<O>,
     finish: F,
 ) -> Result<RasterStats, FrameError>
 where
-    P: Projection,
     S: FragmentShader,
     O: Send,
     F: Fn(FinishedBand<'_, S::Output>, &mut O) + Sync,
 {
-    let (w, h) = camera.resolution();
+    let (w, h) = setup.size;
     if target.gd.size() != (w, h) {
         let (gw, gh) = target.gd.size();
         return Err(FrameError::InvalidSize {
@@ -338,13 +359,7 @@ where
             reason: "the depth image is not of the camera's size",
         });
     }
-    let RasterMemory { binned, rows } = target.memory;
-    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, binned);
-    if let Some(draw_if) = target.draw_if {
-        if !draw_if(&stats) {
-            return Ok(stats);
-        }
-    }
+    let RasterMemory { binned, rows } = setup.memory;
     let pass = BandPass {
         shader,
         empty,
@@ -357,7 +372,7 @@ where
         binned,
     };
     Ok(pass.draw(
-        stats,
+        setup.stats,
         target.gd.pixels_mut(),
         BandRows::Scratch(rows),
         outputs,

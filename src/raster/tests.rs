@@ -398,12 +398,9 @@ fn each_band_is_finished_with_its_own_output() {
         let target = DepthTarget {
             gd: &mut gd,
             zeroed: false,
-            memory: &mut memory,
-            draw_if: None,
         };
-        rasterize_depth_then(
-            &cam,
-            &[&mesh],
+        draw_depth_then(
+            set_up(&cam, &[&mesh], &mut memory),
             &StoreFragment,
             None,
             target,
@@ -436,13 +433,10 @@ fn each_band_is_finished_with_its_own_output() {
     let target = DepthTarget {
         gd: &mut fresh,
         zeroed: true,
-        memory: &mut memory,
-        draw_if: None,
     };
     let outputs = vec![(); bands];
-    rasterize_depth_then(
-        &cam,
-        &[&m],
+    draw_depth_then(
+        set_up(&cam, &[&m], &mut memory),
         &StoreFragment,
         None,
         target,
@@ -456,19 +450,18 @@ fn each_band_is_finished_with_its_own_output() {
     let target = DepthTarget {
         gd: &mut small,
         zeroed: false,
-        memory: &mut RasterMemory::default(),
-        draw_if: None,
     };
     let outputs = vec![(); bands];
-    assert!(
-        rasterize_depth_then(&cam, &[&m], &NoAttributes, (), target, outputs, |_, _| {}).is_err()
-    );
+    let mut memory = RasterMemory::default();
+    let setup = set_up(&cam, &[&m], &mut memory);
+    assert!(draw_depth_then(setup, &NoAttributes, (), target, outputs, |_, _| {}).is_err());
 }
 
 #[test]
-fn a_depth_pass_asked_first_draws_nothing_when_told_not_to() {
+fn a_depth_pass_set_up_first_draws_nothing_when_the_caller_declines() {
     // One triangle crosses the near plane (set-up clips it), the other does not; the caller
-    // draws only when set-up clipped nothing.
+    // reads set-up's counters and draws only when set-up clipped nothing (or always, when it
+    // does not ask).
     let cam = ScreenSpace(16, 16);
     let m = mesh(
         vec![
@@ -487,37 +480,28 @@ fn a_depth_pass_asked_first_draws_nothing_when_told_not_to() {
     for (objects, ask) in [(&m, true), (&m, false), (&unclipped, true)] {
         let mut gd = Image::new(16, 16, 0.25f32).unwrap();
         let finished = std::sync::atomic::AtomicUsize::new(0);
-        let mut asked = None;
-        let mut unless_clipped = |stats: &RasterStats| {
-            asked = Some(*stats);
-            !stats.has_curved_or_clipped()
-        };
-        let target = DepthTarget {
-            gd: &mut gd,
-            zeroed: false,
-            memory: &mut memory,
-            draw_if: if ask { Some(&mut unless_clipped) } else { None },
-        };
-        let stats = rasterize_depth_then(
-            &cam,
-            &[objects],
-            &NoAttributes,
-            (),
-            target,
-            vec![(); bands],
-            |_, _| {
+        let setup = set_up(&cam, &[objects], &mut memory);
+        let counted = setup.stats();
+        let stats = if ask && counted.has_curved_or_clipped() {
+            // Declined: the set-up is dropped, nothing is drawn.
+            counted
+        } else {
+            let target = DepthTarget {
+                gd: &mut gd,
+                zeroed: false,
+            };
+            let finish = |_: FinishedBand<'_, ()>, _: &mut ()| {
                 finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            },
-        )
-        .unwrap();
+            };
+            let stats =
+                draw_depth_then(setup, &NoAttributes, (), target, vec![(); bands], finish).unwrap();
+            // Drawing keeps set-up's counters.
+            assert_eq!(counted.clipped, stats.clipped);
+            assert_eq!(counted.screen_triangles, stats.screen_triangles);
+            stats
+        };
         let finished = finished.into_inner();
         let untouched = gd.pixels().iter().all(|&g| g == 0.25);
-        if ask {
-            // Asked once, with set-up's counters.
-            let asked = asked.expect("asked");
-            assert_eq!(asked.clipped, stats.clipped);
-            assert_eq!(asked.screen_triangles, stats.screen_triangles);
-        }
         if ask && stats.has_curved_or_clipped() {
             // Counted by set-up, then left: nothing drawn, nothing finished.
             assert_eq!(stats.clipped, 1, "{stats:?}");
