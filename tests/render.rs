@@ -185,3 +185,106 @@ fn a_reflector_inside_an_object_sees_it_through_a_cube_of_pinholes() {
         assert!(e.contains("invalid image size"), "{e}");
     }
 }
+
+/// A scene object that names a baked impostor renders as the scene that builds one: the
+/// impostor baked through the camera the method places, lit by the scene's lights on load.
+#[test]
+fn a_scene_naming_a_baked_impostor_renders_the_frame_that_builds_it() {
+    use trompe::impostor::{albedo_of, build, file};
+    let d = common::scratch("render_baked_impostor");
+    let teapot = common::asset("meshes/teapot.obj");
+    let scene_text = |impostor: &str| {
+        format!(
+            r#"
+[camera]
+position = [45.0, 12.0, 50.0]
+look_at = [-12.0, 0.0, -40.0]
+fov_y = 40.0
+resolution = [240, 160]
+
+[light]
+direction = [-0.3, 1.0, -0.8]
+
+[[object]]
+mesh = "{}"
+{impostor}
+
+[[object]]
+shape = "plane"
+scale = 70.0
+rotate = [90.0, 0.0, 0.0]
+translate = [0.0, 0.0, -40.0]
+material = {{ type = "mirror", tint = [0.9, 0.9, 0.9] }}
+"#,
+            teapot.display()
+        )
+    };
+    let built_path = d.join("built.toml");
+    std::fs::write(&built_path, scene_text("")).unwrap();
+    let built = Scene::load(&built_path).unwrap();
+    // Bake the teapot as the scene places it (no transform) through the method's camera.
+    let view = built.view(0.0).unwrap();
+    let cameras = trompe::render::placed_cameras(&view.meshes[0], &view.meshes[1], 128).unwrap();
+    assert_eq!(
+        cameras.len(),
+        1,
+        "one SPOC for an object outside the reflector"
+    );
+    let mesh = &view.meshes[0];
+    let imp = build(cameras[0].clone(), mesh, 0, &albedo_of(mesh)).unwrap();
+    file::save(&imp, &d.join("teapot.json")).unwrap();
+    let baked_path = d.join("baked.toml");
+    std::fs::write(&baked_path, scene_text("impostor = \"teapot.json\"")).unwrap();
+    let baked = Scene::load(&baked_path).unwrap();
+
+    let (a, _) = render(&built, Method::Impostor(128), &()).unwrap();
+    let (b, _) = render(&baked, Method::Impostor(128), &()).unwrap();
+    assert!(a.object_id == b.object_id && a.depth == b.depth);
+    let mirror = a.object_id.map(|id| id == 1);
+    let (mut seen, mut worst) = (0, 0.0f32);
+    for ((ca, cb), m) in a
+        .color
+        .pixels()
+        .iter()
+        .zip(b.color.pixels())
+        .zip(mirror.pixels())
+    {
+        if !*m {
+            assert_eq!(ca, cb, "a pixel off the mirror differs");
+            continue;
+        }
+        seen += 1;
+        worst = worst.max((*ca - *cb).abs().max_element());
+    }
+    eprintln!("mirror pixels {seen}, largest channel difference {worst:.2e}");
+    assert!(seen > 200, "the mirror covers {seen} pixels");
+    // And the teapot is what the mirror shows there: moved far away, most of those pixels change.
+    let away = d.join("away.toml");
+    let text = scene_text("translate = [0.0, -1000.0, 0.0]");
+    std::fs::write(&away, text).unwrap();
+    let (c, _) = render(&Scene::load(&away).unwrap(), Method::Impostor(128), &()).unwrap();
+    let changed = (a.color.pixels().iter().zip(c.color.pixels()))
+        .zip(mirror.pixels())
+        .filter(|((x, y), m)| **m && (**x - **y).abs().max_element() > 1e-2)
+        .count();
+    eprintln!("the teapot shows in {changed} of {seen} mirror pixels");
+    assert!(
+        changed > 300,
+        "the teapot shows in {changed} of {seen} mirror pixels"
+    );
+    // The baked file stores albedo in half floats and normals in 16-bit octahedral codes, and
+    // is lit on load; the built impostor is lit at full precision, then stored: the two differ
+    // by that rounding only.
+    assert!(worst < 2e-3, "largest channel difference {worst}");
+    // A baked impostor of another object is refused, naming both boxes.
+    let other = d.join("other.toml");
+    let moved = scene_text("impostor = \"teapot.json\"\ntranslate = [0.0, 5.0, 0.0]");
+    std::fs::write(&other, moved).unwrap();
+    let e = render(&Scene::load(&other).unwrap(), Method::Impostor(128), &())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("teapot.json") && e.contains("was not baked from"),
+        "{e}"
+    );
+}

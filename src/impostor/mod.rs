@@ -418,6 +418,31 @@ impl Impostor {
         }
     }
 
+    /// Replaces the colour of every covered texel by `shade(colour, shading normal, position)`
+    /// — for instance an albedo baked by `trompe impostor bake` lit by a scene's lights, as the
+    /// impostor method lights the impostors it builds. Empty texels keep theirs. Rows are shaded
+    /// in parallel; the result does not depend on the thread count.
+    pub fn relight<F: Fn(Vec3, Vec3, Vec3) -> Vec3 + Sync>(&mut self, shade: F) {
+        use rayon::prelude::*;
+        let (w, _) = self.gd.size();
+        let mut color = self.color.clone();
+        color
+            .pixels_mut()
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, texel) in row.iter_mut().enumerate() {
+                    let (x, y) = (x as u32, y as u32);
+                    if self.gd.get(x, y) > 0.0 {
+                        let c = self.color_at(x, y);
+                        let lit = shade(c.truncate(), self.normal_at(x, y), self.position_at(x, y));
+                        *texel = crate::frame::packed::pack_rgba(lit.extend(c.w));
+                    }
+                }
+            });
+        self.color = color;
+    }
+
     /// World position of the surface point texel `(x, y)` shows (zero where empty): the point
     /// of the camera's ray through the texel's centre at the texel's `gd`. The rasterizer
     /// interpolates `gd = 1/t` at pixel centres, so through a pinhole or orthographic camera

@@ -25,6 +25,7 @@ use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, 
 use crate::scene::{Lighting, RenderSettings, Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
 use glam::Vec3;
+use std::path::PathBuf;
 
 /// Impostor resolution (square) when none is asked for.
 pub const DEFAULT_IMPOSTOR_RESOLUTION: u32 = 512;
@@ -45,18 +46,24 @@ pub struct ReflectorImpostors {
 }
 
 impl ReflectorImpostors {
-    /// Builds, for every mirror or glass object of `view`, `resolution²` impostors of the
-    /// diffuse objects seen from its centre, shaded as the tracer shades them under `lighting`.
+    /// Builds, for every mirror or glass object of `view`, `inputs.resolution²` impostors of
+    /// the diffuse objects seen from its centre, shaded as the tracer shades them under
+    /// `lighting` — or, for an object `inputs.baked` names a file for, that baked impostor,
+    /// lit the same way, for every mirror and glass object.
     pub fn build(
         view: &View,
         lighting: &Lighting,
-        resolution: u32,
+        inputs: ImpostorInputs<'_>,
         timings: &mut Timings,
     ) -> Result<Self, RenderError> {
+        let resolution = inputs.resolution;
         // A size the maps can have, said as such rather than as a degenerate camera.
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
+        let baked = timings.time("load baked impostors", || {
+            load_baked(view, lighting, inputs.baked)
+        })?;
         let per_object = timings.time("build impostors", || {
-            reflector_impostors(view, lighting, resolution)
+            reflector_impostors(view, lighting, resolution, &baked)
         })?;
         Ok(timings.time("prepare walks, specular BVH", || {
             Self::from_impostors(view, per_object)
@@ -109,18 +116,28 @@ impl SecondaryQuery for ReflectorImpostors {
     }
 }
 
-/// Renders `view` by the impostor method, with `resolution²` impostors.
+/// What the impostor method is given besides the view: the resolution of the impostors it
+/// builds, and per object id the baked impostor to use instead (`None`, or a slice shorter
+/// than the objects: build one).
+#[derive(Clone, Copy, Debug)]
+pub struct ImpostorInputs<'a> {
+    /// Texels a side of every impostor built.
+    pub resolution: u32,
+    /// Per object id, a baked impostor's sidecar.
+    pub baked: &'a [Option<PathBuf>],
+}
+
+/// Renders `view` by the impostor method.
 pub fn render_impostor(
     view: &View,
     lighting: &Lighting,
     settings: &RenderSettings,
-    resolution: u32,
+    inputs: ImpostorInputs<'_>,
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
-    crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
     let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
-    let secondary = ReflectorImpostors::build(view, lighting, resolution, timings)?;
+    let secondary = ReflectorImpostors::build(view, lighting, inputs, timings)?;
     let tracer = Tracer {
         view,
         primary: &bvh,
@@ -131,12 +148,58 @@ pub fn render_impostor(
     timings.time("trace", || render_trace(&tracer, progress))
 }
 
+/// The baked impostors `files` names, per object id, each checked against the object as the
+/// view places it and lit as [`reflector_impostors`] lights the impostors it builds (the
+/// tracer's diffuse shading, the normal turned toward the impostor's viewpoint).
+fn load_baked(
+    view: &View,
+    lighting: &Lighting,
+    files: &[Option<PathBuf>],
+) -> Result<Vec<Option<Impostor>>, RenderError> {
+    let mut out = Vec::with_capacity(files.len());
+    for (object, file) in files.iter().enumerate() {
+        let (Some(path), Some(mesh)) = (file, view.meshes.get(object)) else {
+            out.push(None);
+            continue;
+        };
+        let mut imp = crate::impostor::file::load(path)
+            .map_err(|source| RenderError::BakedImpostor { object, source })?;
+        if !imp.was_built_from(mesh) {
+            let (ib, mb) = (imp.bounds, mesh.bounds());
+            return Err(RenderError::BakedMismatch {
+                object,
+                path: path.clone(),
+                impostor_box: [ib.min.to_array(), ib.max.to_array()],
+                object_box: [mb.min.to_array(), mb.max.to_array()],
+            });
+        }
+        let eye = imp.camera.viewpoint().as_vec3();
+        imp.relight(|albedo, normal, position| {
+            lambert(albedo, toward(normal, eye - position), lighting)
+        });
+        // The object's id in this scene, whatever id it was baked with.
+        imp.object.pixels_mut().iter_mut().for_each(|id| {
+            if *id != crate::geom::NO_OBJECT {
+                *id = object as u32;
+            }
+        });
+        out.push(Some(imp));
+    }
+    Ok(out)
+}
+
+/// `n`, or `−n` when it faces away from `to`.
+fn toward(n: Vec3, to: Vec3) -> Vec3 {
+    if n.dot(to) < 0.0 { -n } else { n }
+}
+
 /// Per object of `view`: for a mirror or glass object, an impostor of every diffuse object seen
 /// from its centre (built in parallel inside); nothing for a diffuse object.
 fn reflector_impostors(
     view: &View,
     lighting: &Lighting,
     resolution: u32,
+    baked: &[Option<Impostor>],
 ) -> Result<Vec<Vec<Impostor>>, RenderError> {
     let diffuse: Vec<usize> = (0..view.surfaces.len())
         .filter(|&o| matches!(view.surfaces[o], Surface::Diffuse(_)))
@@ -153,6 +216,10 @@ fn reflector_impostors(
         let (eye, region) = (reflector.center(), reflector.radius() as f64);
         let mut seen = Vec::with_capacity(diffuse.len());
         for &o in &diffuse {
+            if let Some(Some(imp)) = baked.get(o) {
+                seen.push(imp.clone());
+                continue;
+            }
             let mesh = &view.meshes[o];
             let cameras = impostor_cameras(mesh, eye, region, resolution).map_err(|reason| {
                 RenderError::Impostor {
@@ -164,11 +231,7 @@ fn reflector_impostors(
             let surface = &view.surfaces[o];
             // The tracer's diffuse shading, with the normal turned toward the reflector.
             let color = |s: &SurfaceSample| {
-                let n = if s.normal.dot(eye - s.position) < 0.0 {
-                    -s.normal
-                } else {
-                    s.normal
-                };
+                let n = toward(s.normal, eye - s.position);
                 lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
             };
             for camera in cameras {
@@ -178,6 +241,18 @@ fn reflector_impostors(
         out.push(seen);
     }
     Ok(out)
+}
+
+/// The cameras of the impostors the impostor method builds of `mesh` for the mirror or glass
+/// object `reflector` ([`impostor_cameras`] from the reflector's centre, for rays from within its
+/// bounding radius): what to bake through so that a baked impostor is the one it would build.
+pub fn placed_cameras(
+    mesh: &Mesh,
+    reflector: &Mesh,
+    resolution: u32,
+) -> Result<Vec<ImpostorCamera>, &'static str> {
+    let b = reflector.bounds();
+    impostor_cameras(mesh, b.center(), b.radius() as f64, resolution)
 }
 
 /// The cameras of the impostors of `mesh` seen from `eye`, whose secondary rays come from a

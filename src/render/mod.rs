@@ -17,8 +17,8 @@ mod raster;
 pub mod shading;
 mod trace;
 
-pub use impostor::ReflectorImpostors;
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
+pub use impostor::{ImpostorInputs, ReflectorImpostors, placed_cameras};
 pub use raster::render_raster;
 pub use trace::{Tracer, render_trace};
 
@@ -71,6 +71,28 @@ pub enum RenderError {
         /// Why not.
         reason: &'static str,
     },
+    /// A baked impostor a scene object names could not be loaded.
+    #[error("object {object}: {source}")]
+    BakedImpostor {
+        /// The object (ids count from 0 in the scene file's order).
+        object: usize,
+        /// Why.
+        source: crate::impostor::file::ImpostorFileError,
+    },
+    /// A baked impostor was not baked from the object as the scene places it.
+    #[error(
+        "object {object}: {path} was not baked from the object as the scene places it (the impostor's box {impostor_box:?} is not the object's {object_box:?}); bake the mesh as the scene places it, or place it with no fit, translate, rotate or scale"
+    )]
+    BakedMismatch {
+        /// The object.
+        object: usize,
+        /// The impostor's sidecar.
+        path: std::path::PathBuf,
+        /// The impostor's box, min and max.
+        impostor_box: [[f32; 3]; 2],
+        /// The object's box in the scene, min and max.
+        object_box: [[f32; 3]; 2],
+    },
 }
 
 /// Renders `scene` at its default time with `method`.
@@ -91,14 +113,31 @@ pub fn render_at(
 ) -> Result<(Frame, Timings), RenderError> {
     let mut timings = Timings::default();
     let view = timings.time("evaluate scene", || scene.view(t))?;
-    let frame = render_view(
-        &view,
-        &scene.lighting,
-        &scene.render,
-        method,
-        progress,
-        &mut timings,
-    )?;
+    let frame = match method {
+        Method::Impostor(resolution) => {
+            let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
+            let inputs = impostor::ImpostorInputs {
+                resolution,
+                baked: &baked,
+            };
+            render_impostor(
+                &view,
+                &scene.lighting,
+                &scene.render,
+                inputs,
+                progress,
+                &mut timings,
+            )?
+        }
+        _ => render_view(
+            &view,
+            &scene.lighting,
+            &scene.render,
+            method,
+            progress,
+            &mut timings,
+        )?,
+    };
     Ok((frame, timings))
 }
 
@@ -125,7 +164,11 @@ pub fn render_view(
             timings.time("trace", || render_trace(&tracer, progress))
         }
         Method::Impostor(resolution) => {
-            render_impostor(view, lighting, settings, resolution, progress, timings)
+            let inputs = impostor::ImpostorInputs {
+                resolution,
+                baked: &[],
+            };
+            render_impostor(view, lighting, settings, inputs, progress, timings)
         }
     }
 }

@@ -151,6 +151,9 @@ pub struct ObjectFile {
     pub material: Option<MaterialFile>,
     /// Motion over time.
     pub animate: Option<AnimateFile>,
+    /// A baked impostor (its JSON sidecar, relative to the scene file) that stands in for this
+    /// diffuse object in what mirrors and glass see, instead of one built for each of them.
+    pub impostor: Option<String>,
 }
 
 /// A uniform or per-axis scale.

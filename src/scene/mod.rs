@@ -135,6 +135,10 @@ pub struct SceneObject {
     pub world_from_object: Mat4,
     /// Motion, if any.
     pub animation: Option<Animation>,
+    /// A baked impostor's sidecar that stands in for the object in mirrors and glass
+    /// (`render --method impostor`); it must have been baked from the object as the scene
+    /// places it.
+    pub impostor: Option<PathBuf>,
 }
 
 /// A camera keyframe.
@@ -557,12 +561,19 @@ fn load_object(
             })
         }
     };
+    if o.impostor.is_some() && !matches!(surface, Surface::Diffuse(_)) {
+        return Err(invalid(
+            ".impostor",
+            "only a diffuse object stands in as an impostor (mirrors and glass are traced)".into(),
+        ));
+    }
     Ok(SceneObject {
         name: o.name.clone().unwrap_or(default_name),
         mesh: Arc::new(mesh),
         surface,
         world_from_object,
         animation,
+        impostor: o.impostor.as_ref().map(|p| dir.join(p)),
     })
 }
 
