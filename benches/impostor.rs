@@ -1,4 +1,4 @@
-//! Impostor construction and ray walks (issue 3): a SPOC impostor of the bunny beside a pinhole
+//! Impostor construction and ray walks: a SPOC impostor of the bunny beside a pinhole
 //! impostor, a plain rasterization and a raster-method render of the same mesh, framed on its
 //! bounding sphere and, as `trompe impostor bake` frames them, on the mesh; walks of reflected
 //! rays per resolution; a SPOC impostor of a textured mesh (the Duck) beside the same build

@@ -1,11 +1,11 @@
 //! Benchmark workloads shared by `cargo bench` (criterion, `benches/`) and `trompe bench`: each
 //! is timed beside a peer measured in the same run, so figures come with a ratio.
 //!
-//! Workloads (issue 2): rasterizer throughput on the 56k-triangle bunny (peer: a `memcpy` of the
+//! Foundation workloads: rasterizer throughput on the 56k-triangle bunny (peer: a `memcpy` of the
 //! bytes the rasterizer writes); BVH build; primary and incoherent (reflected) rays per second
 //! through the BVH (peer: brute force over every triangle, on a sample of the same rays).
 //!
-//! Workloads (issue 3): SPOC impostor construction beside pinhole rasterizations of the same
+//! Impostor workloads: SPOC impostor construction beside pinhole rasterizations of the same
 //! mesh, for the bunny and for a textured mesh; SPOC walks per resolution; graph-camera
 //! impostor construction of a maze with bunnies in its corridors beside a rasterization
 //! through the camera's root.
@@ -271,7 +271,7 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     out
 }
 
-/// Side of the goal's SPOC impostor (issue 3: a 512² SPOC impostor of the bunny).
+/// Side of the goal's SPOC impostor (a 512² SPOC impostor of the bunny).
 pub const GOAL_SIZE: u32 = 512;
 
 /// The SPOC of the goal's line and of [`impostors`]' builds: strength 0.8 around the bounding
@@ -300,7 +300,7 @@ pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> (Duration, Duration) {
     time_pair_median(min_time, fresh_spoc_build, || plain_raster(&plain, mesh))
 }
 
-/// Impostor workloads (issue 3): building a SPOC impostor of `mesh` beside a plain pinhole
+/// Impostor workloads: building a SPOC impostor of `mesh` beside a plain pinhole
 /// rasterization of it at the same resolution (depth and ids only: the strict peer of the
 /// ≤ 1.5× goal) and beside its render by the raster method (the same maps a user gets from a
 /// pinhole); and walking reflected rays through SPOC
@@ -593,7 +593,7 @@ pub fn without_textures(mesh: &Mesh) -> Mesh {
     }
 }
 
-/// A textured mesh's SPOC impostor (issue 3's maps for what a technical artist bakes): a fresh
+/// A textured mesh's SPOC impostor (the maps of what a technical artist bakes): a fresh
 /// [`GOAL_SIZE`]² build of `mesh` framed as the goal's ([`goal_spoc`]), its colour sampled from
 /// its textures texel by texel, beside a depth + id rasterization through the SPOC's reference
 /// pinhole (the goal's peer) and beside the same build with its textures left out — what

@@ -95,7 +95,7 @@ pub enum Command {
         /// Mesh to measure on (default: the shipped 56k-triangle bunny).
         #[arg(long)]
         mesh: Option<PathBuf>,
-        /// Time only the goal's line of issue 3 (a fresh 512² SPOC impostor beside a depth +
+        /// Time only the SPOC build's goal line (a fresh 512² SPOC impostor beside a depth +
         /// id rasterization through its reference pinhole), this many times, 3 s each; prints
         /// each ratio, then their range and median.
         #[arg(long, value_name = "RUNS",

@@ -5,16 +5,36 @@
 //! objects re-rendered only now and then, photo-textured models seen from new viewpoints. It runs
 //! on the CPU, on every core, and gives the same pixels for any thread count.
 //!
+//! ```
+//! use trompe::{Bvh, Impostor, Ray, RayQuery, glam::Vec3};
+//! use std::sync::Arc;
+//!
+//! // A SPOC impostor of a mesh, seen from a point, and a ray answered by it and by the exact BVH.
+//! let mesh = trompe::geom::icosphere(3);
+//! let eye = Vec3::new(0.0, 0.4, 2.0);
+//! let impostor = Impostor::spoc(&mesh).from(eye).resolution(128).build()?;
+//! let ray = Ray::new(eye, (Vec3::ZERO - eye).normalize());
+//! let exact = Bvh::build(vec![Arc::new(mesh)]);
+//! let (a, b) = (impostor.closest_hit(&ray, f32::INFINITY), exact.closest_hit(&ray, f32::INFINITY));
+//! assert!((a.unwrap().position - b.unwrap().position).length() < 0.01);
+//! # Ok::<(), trompe::impostor::ImpostorError>(())
+//! ```
+//!
 //! Data flows one way: **scene → impostors → ray queries → frame**.
 //!
-//! * [`geom`] — rays, boxes, triangles, meshes; loaders for OBJ + MTL, PLY, glTF.
+//! * [`geom`] — rays, boxes, triangles, meshes, optics; loaders for OBJ + MTL, PLY, glTF.
 //! * [`frame`] — image buffers, PNG / EXR / HDR files, environment maps, PSNR / SSIM / FLIP.
 //! * [`camera`] — the [`Projection`] trait (world point → `(u, v, gd)`) and its cameras.
 //! * [`raster`] — a watertight rasterizer generic over any [`Projection`].
-//! * [`trace`] — the [`RayQuery`] trait, the exact BVH (ground truth), the environment at infinity.
-//! * [`scene`] — TOML scene files, camera paths, animation.
-//! * [`render`] — the ground-truth renderers: raster and Whitted ray tracing.
-//! * [`report`], [`validate`], [`bench`](mod@bench) — the demo report, cross-method checks, benchmarks.
+//! * [`trace`] — the [`RayQuery`] and [`SecondaryQuery`] traits, the exact BVH (ground truth),
+//!   the environment at infinity.
+//! * [`scene`] — TOML scene files, camera paths, animation, maze floor plans.
+//! * [`impostor`] — impostors through pinhole, orthographic, SPOC and graph cameras: build,
+//!   walk, bake, save and load.
+//! * [`render`](mod@render) — one Whitted tracer generic over what answers primary and secondary rays, and
+//!   the raster, trace and impostor methods built on it.
+//! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.
+//! * [`progress`] — progress reports and step timings of long work.
 //!
 //! ## Conventions (said once, here)
 //!
@@ -23,7 +43,7 @@
 //!   sampled at its centre `(i + 0.5, j + 0.5)` ([`frame::PIXEL_CENTER`]).
 //! * Colours are linear `f32` inside trompe; sRGB exists only in PNG files ([`frame::io`]).
 //! * Depth in images built through a camera is **generalized depth** `gd = 1/t`
-//!   (algorithms.md §1.2): larger is nearer, empty is `0`, and the z-test keeps the larger.
+//!   (`docs/conventions.md`): larger is nearer, empty is `0`, and the z-test keeps the larger.
 //!   Renderers' [`Frame::depth`] is Euclidean distance along the pixel's ray.
 //! * Cameras take a vertical field of view (full angle, degrees), a position, a look-at point and
 //!   an up vector. Equirectangular maps use Mitsuba's mapping ([`frame::envmap`]).
@@ -33,25 +53,39 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod bench;
 pub mod camera;
 pub mod eval;
 pub mod frame;
 pub mod geom;
+pub mod impostor;
+pub mod progress;
 pub mod raster;
 pub mod render;
-pub mod report;
 pub mod scene;
 pub mod trace;
 
-pub use camera::{ImagePoint, Pinhole, Projection};
-pub use frame::{Frame, Image, Rgba};
-pub use geom::{Aabb, Mesh, Ray};
-pub use raster::{Fragment, FragmentShader, ItemId, rasterize};
-pub use scene::Scene;
-pub use trace::{Bvh, Hit, RayQuery};
-pub mod impostor;
+/// The workloads of `trompe bench` and `cargo bench`: for the command line and the benches,
+/// not a library interface.
+#[doc(hidden)]
+pub mod bench;
+/// The `trompe demo` report: for the command line, not a library interface.
+#[doc(hidden)]
+pub mod report;
+
 mod prefetch;
-pub mod progress;
 #[cfg(test)]
 mod test_scratch;
+
+/// The vector maths trompe speaks (points, directions, matrices): the `glam` crate, re-exported
+/// so a user's versions match.
+pub use glam;
+
+pub use camera::{ImagePoint, Orthographic, Pinhole, Projection, Spoc};
+pub use frame::{Frame, Image, Rgba};
+pub use geom::{Aabb, Mesh, Ray};
+pub use impostor::{Impostor, ImpostorCamera, ImpostorSettings, ViewCamera};
+pub use progress::{Progress, Timings};
+pub use raster::{Fragment, FragmentShader, ItemId, rasterize};
+pub use render::{Method, Tracer, render, render_trace};
+pub use scene::{Scene, View};
+pub use trace::{Bvh, EnvironmentOnly, Exact, Hit, RayQuery, SecondaryQuery};

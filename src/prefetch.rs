@@ -1,6 +1,6 @@
 //! A hint to the CPU to start loading an element it will read soon — the one place trompe
-//! uses `unsafe` (`../shared/STYLE.md` §11: switched from `forbid` to `deny` because a bench
-//! proved it necessary; see `docs/performance.md`, "sixth session").
+//! uses `unsafe`: the crate says `#![deny(unsafe_code)]` rather than `forbid` so that this module
+//! alone may, because the fresh build's benchmark showed the hint pays (`docs/performance.md`).
 //!
 //! Why: an impostor build resolves each covered texel from its triangle (the mesh's vertex
 //! indices, then the corners' positions and normals, then its material). Neighbouring texels

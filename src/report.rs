@@ -1,11 +1,11 @@
 //! The demo report: `trompe demo` renders the scenes shipped in `scenes/` and writes
 //! `index.html` with images and tables. Each issue adds its section here.
 //!
-//! Section "Foundation" (issue 2): every shipped scene by both methods, their agreement (PSNR,
+//! Section "Foundation": every shipped scene by both methods, their agreement (PSNR,
 //! SSIM, FLIP, object-id agreement) with the trace method as reference, and the FLIP heat map;
 //! the shipped models' counts; rasterized depth against BVH depth on the bunny.
 //!
-//! Section "Non-pinhole impostors" (issue 3): pinhole and SPOC impostors of the teapot (colour and
+//! Section "Non-pinhole impostors": pinhole and SPOC impostors of the teapot (colour and
 //! gd false colour), their fidelity against the BVH — on a reflector's rays, and baked as
 //! `impostor bake` does, on rays from around the viewpoint — and a mirror bunny whose reflected
 //! rays are answered by the BVH, each impostor, or the environment alone.
@@ -265,7 +265,7 @@ fn gd_false_color(gd: &crate::frame::Image<f32>) -> crate::frame::Image<crate::f
     }))
 }
 
-/// Section "Non-pinhole impostors" (issue 3; paper 1 Fig. 1, 6–7).
+/// Section "Non-pinhole impostors" (paper 1 Fig. 1, 6–7).
 /// The teapot in its own coordinates, baked as `trompe impostor bake` does by default (3 radii
 /// away along (0, 0.3, 1)) through a pinhole and a SPOC, checked on 20 000 rays from the sphere
 /// of 1/4, 1/2 and 1 bounding radius around the viewpoint (`trompe impostor check --impostor`).
@@ -325,7 +325,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
             reason: e.to_string(),
         })
     };
-    html.push_str("<h2>Non-pinhole impostors (paper 1)</h2>\n<p>The Utah teapot (largest extent 1) is replaced by a 512² depth image built from the centre of a reflective bunny beside it: a pinhole depth image, and a single-pole occlusion camera (SPOC, algorithms.md §3.2) whose strength k = 2Δ/z<sub>O</sub> comes from the reflector's size Δ and distance z<sub>O</sub>. The SPOC pushes deeper samples away from the pole, so it sees around the silhouette.</p>\n");
+    html.push_str("<h2>Non-pinhole impostors (paper 1)</h2>\n<p>The Utah teapot (largest extent 1) is replaced by a 512² depth image built from the centre of a reflective bunny beside it: a pinhole depth image, and a single-pole occlusion camera (SPOC, docs/conventions.md §3.2) whose strength k = 2Δ/z<sub>O</sub> comes from the reflector's size Δ and distance z<sub>O</sub>. The SPOC pushes deeper samples away from the pole, so it sees around the silhouette.</p>\n");
     let color = |s: &crate::impostor::SurfaceSample| teapot_color(s.normal);
     let setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 1024).map_err(camera_error)?;
     let exact = crate::trace::Bvh::build(vec![setup.target.clone()]);
@@ -378,7 +378,7 @@ fn impostor_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Resul
     html.push_str("</div>\n<h3>Fidelity against the exact BVH (reflected rays of the bunny that enter the teapot's box)</h3>\n");
     table.push_str("</table>\n");
     html.push_str(&table);
-    html.push_str("<p>A ray agrees when both miss, or both hit within 1.5 texel footprints. Issue 3's goal is SPOC ≥ 99 %. A missed ray is the walk's (in brackets) when the impostor holds the exact hit — its texel stores a point within 1.5 footprints of it — and the camera's otherwise. The paper reports that its SPOC captures “about half of the teapot”; ours captures the fractions above, measured two ways: a surface sample counts when its texel stores a point within 1.5 footprints of it (strict, the ray test's tolerance), or within 1.5 times the texel's extent on that surface (a texel on a grazing surface covers more of it). From one viewpoint a convex object shows at most half of its surface.</p>\n");
+    html.push_str("<p>A ray agrees when both miss, or both hit within 1.5 texel footprints. trompe's goal is SPOC ≥ 99 %. A missed ray is the walk's (in brackets) when the impostor holds the exact hit — its texel stores a point within 1.5 footprints of it — and the camera's otherwise. The paper reports that its SPOC captures “about half of the teapot”; ours captures the fractions above, measured two ways: a surface sample counts when its texel stores a point within 1.5 footprints of it (strict, the ray test's tolerance), or within 1.5 times the texel's extent on that surface (a texel on a grazing surface covers more of it). From one viewpoint a convex object shows at most half of its surface.</p>\n");
 
     // How agreement varies with the reflector's distance (nearer = wider spread of ray origins).
     let mut by_distance = String::from(
@@ -542,7 +542,7 @@ fn floor_hull(points: &[glam::DVec3]) -> Vec<glam::DVec3> {
         .collect()
 }
 
-/// Section "Graph camera" (issue 3; paper 1 Fig. 4 and 9): the maze's graph-camera impostor,
+/// Section "Graph camera" (paper 1 Fig. 4 and 9): the maze's graph-camera impostor,
 /// and a top view with the frusta drawn.
 fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<(), ReportError> {
     use crate::camera::{Orthographic, Projection};
@@ -687,7 +687,7 @@ fn maze_section(inputs: &DemoInputs, out: &Path, html: &mut String) -> Result<()
     io::write_png(&out.join("maze-frusta.png"), &view)?;
     let _ = writeln!(
         html,
-        "<h2>Graph camera (paper 1 §5)</h2>\n<p>A graph camera built from <code>scenes/maze.maze</code> by a breadth-first walk of its corridors from the entrance (algorithms.md §4): {} frusta — a bend at every turn, a split at each of the {} junctions. Left: the impostor it builds, every corridor the walk reached in one continuous image (deeper corridors get fewer pixels, as in the paper's Fig. 12). Right: the maze from above, each frustum outlined between its entry face and the faces of its children (root in yellow), and a few generalized rays in white (Fig. 9).</p>\n<div class=row><figure><img src=\"maze-graph-camera.png\"><figcaption>graph-camera impostor, {:.1} % of texels covered</figcaption></figure><figure><img src=\"maze-frusta.png\"><figcaption>frusta over the maze</figcaption></figure></div>\n<p>Reflected rays of a mirror bunny standing in the first corridor (Fig. 5), answered by the impostor and by the exact BVH (<code>trompe impostor check scenes/maze.maze --camera graph</code>):</p>\n<table><tr><th>walk</th><th>rays</th><th>agreement</th><th>on hits</th><th>error, mean / median (texel footprints)</th><th>texel visits / ray</th></tr>{}</table>",
+        "<h2>Graph camera (paper 1 §5)</h2>\n<p>A graph camera built from <code>scenes/maze.maze</code> by a breadth-first walk of its corridors from the entrance (docs/conventions.md §4): {} frusta — a bend at every turn, a split at each of the {} junctions. Left: the impostor it builds, every corridor the walk reached in one continuous image (deeper corridors get fewer pixels, as in the paper's Fig. 12). Right: the maze from above, each frustum outlined between its entry face and the faces of its children (root in yellow), and a few generalized rays in white (Fig. 9).</p>\n<div class=row><figure><img src=\"maze-graph-camera.png\"><figcaption>graph-camera impostor, {:.1} % of texels covered</figcaption></figure><figure><img src=\"maze-frusta.png\"><figcaption>frusta over the maze</figcaption></figure></div>\n<p>Reflected rays of a mirror bunny standing in the first corridor (Fig. 5), answered by the impostor and by the exact BVH (<code>trompe impostor check scenes/maze.maze --camera graph</code>):</p>\n<table><tr><th>walk</th><th>rays</th><th>agreement</th><th>on hits</th><th>error, mean / median (texel footprints)</th><th>texel visits / ray</th></tr>{}</table>",
         g.frusta().len(),
         splits,
         imp.coverage() * 100.0,

@@ -1,4 +1,4 @@
-//! Graph-camera impostors (paper 1 §5; algorithms.md §4): an L-shaped corridor seen around its
+//! Graph-camera impostors (paper 1 §5; docs/conventions.md §4): an L-shaped corridor seen around its
 //! corner.
 
 mod common;

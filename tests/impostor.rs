@@ -22,7 +22,7 @@ fn teapot_impostors_agree_with_the_bvh_on_reflected_rays() {
     let rays = s.rays();
     assert!(rays.len() > 5_000, "{}", rays.len());
     let exact = Bvh::build(vec![s.target.clone()]);
-    // Goal (issue 3): SPOC ≥ 99 % agreement; the pinhole depth image is measured beside it and
+    // Goal: SPOC ≥ 99 % agreement; the pinhole depth image is measured beside it and
     // must do worse (it captures less of the teapot).
     let mut failures = Vec::new();
     let mut missed = Vec::new();

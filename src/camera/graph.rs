@@ -1,4 +1,4 @@
-//! The graph camera (Popescu, Rosen and Adamo-Villani 2009; paper 1 §5; algorithms.md §4 — the
+//! The graph camera (Popescu, Rosen and Adamo-Villani 2009; paper 1 §5; docs/conventions.md §4 — the
 //! operations and matrices there are a proposal honouring everything the papers state,
 //! implemented as written): a tree of planar-pinhole frusta obtained from one pinhole camera by
 //! **bending** and **splitting**. Rays are piecewise linear: a ray changes direction where it
@@ -389,7 +389,7 @@ impl GraphCamera {
 
     /// Merges frusta `j1` and `j2` (§4.3): their cross-sections with one plane must be
     /// adjacent (share an edge) and form a convex polygon together; the merged child, with
-    /// apex `apex`, looks on through their union. As algorithms.md proposes, it is kept as two
+    /// apex `apex`, looks on through their union. As docs/conventions.md proposes, it is kept as two
     /// frusta `pyramid(apex, face₁)` (parent `j1`) and `pyramid(apex, face₂)` (parent `j2`),
     /// so every point keeps one path to the root; operations after a merge apply to each half.
     /// The image is continuous across each face; across the seam between the halves it is

@@ -1,14 +1,14 @@
 //! Cameras: the [`Projection`] trait every camera model implements; the pinhole, orthographic and
-//! single-pole occlusion cameras (paper 1 §3–4; algorithms.md §1, §3).
+//! single-pole occlusion cameras (paper 1 §3–4; docs/conventions.md §1, §3).
 //!
 //! A projection maps a world point to continuous image coordinates `(u, v)` (pixels, origin
-//! top-left, pixel centres at `+0.5`) and a **generalized depth** `gd` (algorithms.md §1.2):
+//! top-left, pixel centres at `+0.5`) and a **generalized depth** `gd` (docs/conventions.md §1.2):
 //! `gd = 1/t` where the point is `C + t·M·(u, v, 1)`. Larger `gd` is nearer; an empty pixel has
 //! `gd = 0`. The rasterizer interpolates `gd` linearly in image space and keeps the largest.
 //!
 //! Invariants: `unproject(project(X)) = X` wherever `project` succeeds; `clip_distance` is affine
 //! in the world point and non-negative exactly where `project` is valid. Projection arithmetic is
-//! `f64` (algorithms.md: "use f64 for all geometry").
+//! `f64` (docs/conventions.md: "use f64 for all geometry").
 
 mod graph;
 mod orthographic;
@@ -28,7 +28,7 @@ use thiserror::Error;
 pub struct ImagePoint {
     /// Pixel coordinates; `(i + 0.5, j + 0.5)` is the centre of pixel `(i, j)`.
     pub uv: DVec2,
-    /// Generalized depth `gd = 1/t` (algorithms.md §1.2): larger is nearer, never ≤ 0 for a
+    /// Generalized depth `gd = 1/t` (docs/conventions.md §1.2): larger is nearer, never ≤ 0 for a
     /// point the camera sees.
     pub gd: f64,
     /// Reciprocal of the homogeneous `w`: on a plane, attributes × `inv_w` are affine in image
@@ -55,7 +55,7 @@ pub trait Projection: Sync {
 
     /// An upper bound, in pixels, on how far the image of the midpoint of a world segment strays
     /// from the midpoint of the images of its ends — the tessellation criterion of
-    /// algorithms.md §2.2 — valid for every segment whose two ends have images among `ends`
+    /// docs/conventions.md §2.2 — valid for every segment whose two ends have images among `ends`
     /// (two for an edge, three for all edges of a triangle at once) and computed from those
     /// images alone; `INFINITY` when the camera has no such bound.
     ///

@@ -7,7 +7,7 @@ use glam::{DVec2, DVec3, Vec3};
 /// Parallel projection onto an image plane. Pixel `(u, v)` looks from `corner + u·a + v·b` along
 /// `dir`; `z` is the distance in front of the image plane.
 ///
-/// Depth convention: `gd = 1 − z/depth`, which keeps algorithms.md §1.2's order (larger is nearer,
+/// Depth convention: `gd = 1 − z/depth`, which keeps docs/conventions.md §1.2's order (larger is nearer,
 /// empty is 0 at `z = depth`) while staying affine in image space, as the rasterizer requires
 /// (`1/t` is not affine for parallel rays). `inv_w = 1`.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,4 +1,4 @@
-//! The planar pinhole camera in McMillan's form (McMillan 1997; algorithms.md §1.1).
+//! The planar pinhole camera in McMillan's form (McMillan 1997; docs/conventions.md §1.1).
 
 use super::{CameraError, ImagePoint, Projection};
 use crate::geom::Ray;
@@ -24,7 +24,7 @@ pub const DEFAULT_NEAR: f64 = 1e-3;
 
 impl Pinhole {
     /// A camera at `position` looking at `look_at`, `up` roughly up, full vertical field of view
-    /// `fov_y_deg` degrees, `width × height` pixels (the DESIGN.md convention).
+    /// `fov_y_deg` degrees, `width × height` pixels (`docs/conventions.md` §1.1).
     pub fn look_at(
         position: Vec3,
         look_at: Vec3,
@@ -61,7 +61,7 @@ impl Pinhole {
         Ok(Self::from_mcmillan(eye, a, b, c, width, height))
     }
 
-    /// A camera from McMillan's parameters directly (`a`, `b`, `c` as in algorithms.md §1.1).
+    /// A camera from McMillan's parameters directly (`a`, `b`, `c` as in docs/conventions.md §1.1).
     pub fn from_mcmillan(
         c_pos: DVec3,
         a: DVec3,

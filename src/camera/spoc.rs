@@ -1,5 +1,5 @@
 //! The single-pole occlusion camera (SPOC; Mei, Popescu and Sacks 2005; paper 1 §4;
-//! algorithms.md §3.2 — the distortion there is a proposal honouring everything the papers state,
+//! docs/conventions.md §3.2 — the distortion there is a proposal honouring everything the papers state,
 //! implemented as written).
 //!
 //! A planar pinhole projection followed by a radial push away from the pole `p0` (the image of
@@ -14,7 +14,7 @@
 use super::{CameraError, ImagePoint, Pinhole, Projection};
 use glam::{DVec2, DVec3, Vec3};
 
-/// Smallest and largest strength the selection rule returns (algorithms.md §3.2).
+/// Smallest and largest strength the selection rule returns (docs/conventions.md §3.2).
 pub const SPOC_STRENGTH_RANGE: (f64, f64) = (0.2, 1.5);
 
 /// A SPOC around a bounding sphere.
@@ -37,7 +37,7 @@ pub struct Spoc {
 impl Spoc {
     /// The distortion strength for secondary rays coming from a region of radius `delta` around
     /// the eye, the object's centre at depth `z_o`: `k ≈ 2Δ/z_O`, clamped to
-    /// [`SPOC_STRENGTH_RANGE`] (the parallax argument of algorithms.md §3.2).
+    /// [`SPOC_STRENGTH_RANGE`] (the parallax argument of docs/conventions.md §3.2).
     pub fn strength_for_region(delta: f64, z_o: f64) -> f64 {
         (2.0 * delta / z_o).clamp(SPOC_STRENGTH_RANGE.0, SPOC_STRENGTH_RANGE.1)
     }
@@ -95,7 +95,7 @@ impl Spoc {
             .project(center.as_dvec3())
             .map(|p| p.uv)
             .unwrap_or(DVec2::splat(size as f64 / 2.0));
-        // Eye-space depth of the centre, z_O = (O − C)·n̂ (algorithms.md §3.2).
+        // Eye-space depth of the centre, z_O = (O − C)·n̂ (docs/conventions.md §3.2).
         let z_o = (center.as_dvec3() - ppc.position()).dot(ppc.forward());
         Self::from_parts(ppc, pole, z_o - r, z_o + r, k)
     }

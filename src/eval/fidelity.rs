@@ -1,4 +1,4 @@
-//! Fidelity of an impostor against the exact BVH (paper 1 §4 and Fig. 6–7; issue 3): fire a set
+//! Fidelity of an impostor against the exact BVH (paper 1 §4 and Fig. 6–7): fire a set
 //! of rays at an object, compare every impostor answer with the BVH's, and measure how much of
 //! the surface the impostor captured.
 //!

@@ -1,6 +1,6 @@
 //! Equirectangular environment maps: radiance at infinity, looked up by direction.
 //!
-//! Mapping (DESIGN.md, Mitsuba's): direction `d` ↦ `u = atan2(d.x, −d.z) / 2π (mod 1)`,
+//! Mapping (`docs/conventions.md` §1.3, Mitsuba's): direction `d` ↦ `u = atan2(d.x, −d.z) / 2π (mod 1)`,
 //! `v = acos(d.y) / π`; the top row is `+y`, the image centre looks along `+z`. A map may be
 //! rotated about `y` by `rotation` radians. Invariant: [`EnvMap::direction`] inverts the lookup
 //! mapping, and [`EnvMap::irradiance`] of a constant map is that constant.

@@ -16,7 +16,7 @@ use glam::{Vec2, Vec3, Vec4};
 use std::ops::{Add, Mul};
 use thiserror::Error;
 
-/// Offset of a pixel's centre from its integer corner (algorithms.md §1.1).
+/// Offset of a pixel's centre from its integer corner (docs/conventions.md §1.1).
 pub const PIXEL_CENTER: f32 = 0.5;
 /// Object id of "nothing": an empty pixel or texel.
 pub const NO_OBJECT: u32 = u32::MAX;

@@ -4,7 +4,7 @@
 //! A fresh impostor takes as much new memory as its maps hold, and the system's cost of that
 //! memory (page faults, or clearing recycled pages) grows with it: packing the colour and the two
 //! normals of a texel into 8 + 4 + 4 bytes rather than 16 + 12 + 12 is what brings building a
-//! SPOC impostor near the cost of a plain rasterization (issue 3).
+//! SPOC impostor near the cost of a plain rasterization.
 //!
 //! Invariants:
 //! - [`unpack_rgba`]`(`[`pack_rgba`]`(c))` is `c` rounded to half precision (11 significant

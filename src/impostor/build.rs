@@ -1,4 +1,4 @@
-//! Impostor construction (paper 1 §3.1; algorithms.md §2.2): rasterize the mesh through the
+//! Impostor construction (paper 1 §3.1; docs/conventions.md §2.2): rasterize the mesh through the
 //! camera, keeping the largest `gd`; through a curved camera, when the rasterizer's set-up finds
 //! triangles curved beyond half a pixel, the mesh is tessellated adaptively before anything is
 //! drawn, and the tessellation drawn instead. Through a graph camera (§4.5), each frustum draws
@@ -67,7 +67,7 @@ pub struct Tessellation {
 }
 
 /// Splits triangles until every edge's projected midpoint lies within 0.5 px of the midpoint of
-/// its projected ends (algorithms.md §2.2). Whether an edge splits depends on that edge alone,
+/// its projected ends (docs/conventions.md §2.2). Whether an edge splits depends on that edge alone,
 /// and it splits at its midpoint, so two triangles sharing an edge split it identically: the
 /// tessellation has no T-junctions and the image no cracks.
 /// Returns `None` when no edge needs a split (the mesh can be rasterized as it is).
@@ -499,7 +499,7 @@ fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
 // Inlined, like the other per-texel calls of `resolve_run` (`gd_on_plane`, `pack_rgba`, the
 // prefetches, `toward_camera`): as calls, each handed its results back through memory and the
 // texel's work could not be scheduled as one; inlining them cut the fresh SPOC build by about
-// 7 % (docs/performance.md, eighth session).
+// 7 % (`trompe bench`, the fresh SPOC line).
 #[inline(always)]
 fn surface_sample(m: &Mesh, t: u32, b: Vec3) -> (SurfaceSample, Vec3, Vec3) {
     let [i0, i1, i2] = m.triangles[t as usize].map(|i| i as usize);

@@ -13,7 +13,7 @@
 //! `pole`, `z_near`, `z_far`, `k`), `orthographic` (`corner`, `a`, `b`, `dir`, `depth`), `graph`
 //! (the root's pinhole fields plus `frusta`: for every frustum but the root, in creation order,
 //! `{ "parent": i, "apex": [..], "face": [[..], ..] }` — its entry face; the matrices are
-//! recomputed on load, algorithms.md §4.4).
+//! recomputed on load, docs/conventions.md §4).
 //!
 //! `NAME.exr` channels (32-bit float, lossless ZIP compression in blocks of 16 rows): `R G B A`
 //! colour, `gd`, `N.X N.Y N.Z` shading normal, `Ng.X Ng.Y Ng.Z` face normal (toward the

@@ -1,4 +1,4 @@
-//! Front bounds (issue 3, beyond paper 1): for every texel, the largest `gd` a point can have
+//! Front bounds (beyond paper 1): for every texel, the largest `gd` a point can have
 //! while projecting into the texel and lying behind (or on) the texel's stored plane. A walk
 //! sample with a larger `gd` is in front of its texel's surface (`delta > 0` in
 //! [`super::walk`]), so no crossing can end there. The max pyramid of these bounds lets the

@@ -1,5 +1,5 @@
 //! Impostors: depth images built through any camera, answering rays (paper 1 §3–4;
-//! algorithms.md §2–3).
+//! docs/conventions.md §2–3).
 //!
 //! An [`Impostor`] is a camera plus per-texel maps — colour, generalized depth `gd`, normal,
 //! world position and object id — and the bounding box of what it replaces. [`build`] makes one
@@ -9,7 +9,7 @@
 //! front bounds (`pyramid`, `front`) and the texels packed as the walk reads them (`planes`);
 //! [`file`](mod@file) saves and loads it (OpenEXR channels + JSON sidecar).
 //!
-//! Invariants: texel `gd` follows algorithms.md §1.2 (0 = empty, larger = nearer); every non-empty
+//! Invariants: texel `gd` follows docs/conventions.md §1.2 (0 = empty, larger = nearer); every non-empty
 //! texel gives the world position of the surface point it shows ([`Impostor::position_at`]: the
 //! point of the texel's ray at its `gd`, on the plane of the stored triangle; a graph camera
 //! stores it), so a hit's position is exact up to the texel's footprint; the maps are compact
@@ -23,6 +23,7 @@ pub mod file;
 mod front;
 mod planes;
 mod pyramid;
+mod settings;
 mod straight;
 mod subject;
 mod walk;
@@ -33,6 +34,7 @@ pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, 
 pub use front::front_bounds;
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
+pub use settings::{ImpostorError, ImpostorSettings};
 pub use subject::{CameraChoice, Paired, Subject, SubjectError, is_maze};
 pub use walk::{HIERARCHICAL_MIN_SIDE, WalkError, WalkMode, WalkStats};
 
@@ -69,7 +71,7 @@ pub enum ViewCamera {
 impl ImpostorCamera {
     /// A camera at `eye` looking at the sphere (`center`, `radius`), `size²` texels. `region`
     /// is the radius of the region the secondary rays come from (the SPOC strength rule
-    /// k ≈ 2Δ/z_O, algorithms.md §3.2).
+    /// k ≈ 2Δ/z_O, docs/conventions.md §3.2).
     pub fn around(
         kind: ViewCamera,
         eye: Vec3,

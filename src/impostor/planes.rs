@@ -1,4 +1,4 @@
-//! What a walk reads of each texel, packed into one record (issue 3, beyond paper 1): the
+//! What a walk reads of each texel, packed into one record (beyond paper 1): the
 //! texel's `gd`, the plane of the triangle it stores (its point, [`Impostor::position_at`], and
 //! its unpacked face normal) and its front bound (`front.rs`). A walk sample first reads
 //! its texel's `gd` from the compact map — most samples lie over empty texels, sixteen to a

@@ -1,4 +1,4 @@
-//! A max pyramid (issue 3, beyond paper 1): level 0 is an image — for impostors, the texels'
+//! A max pyramid (beyond paper 1): level 0 is an image — for impostors, the texels'
 //! front bounds (`front.rs`; 0 where empty) — and each further level halves the resolution
 //! keeping the largest value of the texels a node covers. A ray whose image path stays inside a
 //! node while its `gd` exceeds the node's value is in front of every texel plane there and

@@ -14,7 +14,7 @@ use thiserror::Error;
 /// The camera an impostor is built through, as a user names it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CameraChoice {
-    /// A camera placed around a mesh ([`ImpostorCamera::fitted`]).
+    /// A camera placed around a mesh ([`super::ImpostorCamera::fitted`]).
     Placed(ViewCamera),
     /// The graph camera of a maze's corridors ([`Maze::graph_camera`]).
     Graph,

@@ -1,4 +1,4 @@
-//! Ray–impostor intersection (paper 1 §3.2; algorithms.md §2.3): clip the ray to the bounding
+//! Ray–impostor intersection (paper 1 §3.2; docs/conventions.md §2.3): clip the ray to the bounding
 //! box (its exit grown by the farthest a hit is placed from a stored point, `exit_margin`: the
 //! surface a texel stores may reach that far past the geometry's box), cut the clipped segment into sub-segments of about one pixel of image path (interpolated
 //! in 3-D, then projected, so the path may curve; twice as dense for the SPOC, §3.4), and stop at
@@ -47,7 +47,7 @@ const MAX_STEPS: usize = 1 << 16;
 /// How a walk advances along the ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WalkMode {
-    /// Every sub-segment in turn (algorithms.md §2.3).
+    /// Every sub-segment in turn (docs/conventions.md §2.3).
     Linear,
     /// Skips runs of samples that provably lie in front of their texels' planes (over empty
     /// texels, or in front of covered ones: the pyramid of front bounds); returns exactly the

@@ -1,5 +1,5 @@
 //! A triangle rasterizer generic over the camera's [`Projection`] (papers 1, 4, 5; the
-//! impostor construction of paper 1 §3.1 / algorithms.md §2.2 runs through it).
+//! impostor construction of paper 1 §3.1 / docs/conventions.md §2.2 runs through it).
 //!
 //! Pipeline: `setup` projects every mesh vertex once, clips each triangle where the camera's
 //! `clip_distance` is negative (in world space), clips to a guard band, snaps the corners to
@@ -7,13 +7,15 @@
 //! rasterized in parallel by `scan`, each owning its rows of every buffer. A [`RasterTarget`]
 //! keeps the set-up triangles' memory, so drawing into it again allocates nothing; drawing over
 //! it ([`rasterize_over`]) composes the images of several cameras (a graph camera's frusta).
-//! Or only a depth image is kept ([`rasterize_depth_then`]): each band's item and attribute
-//! rows are scratch, finished by a caller's pass as soon as the band is drawn.
+//! Or set-up and drawing are two calls ([`set_up`], then [`draw_depth_then`]): the caller reads
+//! set-up's counters before deciding what to draw, only a depth image is kept, and each band's
+//! item and attribute rows are scratch, finished by the caller's pass as soon as the band is
+//! drawn.
 //!
 //! Invariants:
 //! - **Watertight, top-left rule**: coverage uses exact integer edge functions on snapped
 //!   vertices; a pixel centre on an edge shared by two triangles belongs to exactly one of them.
-//! - **Depth**: `gd` (algorithms.md §1.2) is interpolated linearly in image space from the
+//! - **Depth**: `gd` (docs/conventions.md §1.2) is interpolated linearly in image space from the
 //!   unsnapped vertices; a fragment is kept when its `gd` is strictly larger (nearer) than the
 //!   stored one, so the earlier triangle wins a tie. Empty pixels hold `gd = 0`.
 //! - **Perspective-correct attributes**: `b/w` and `1/w` are interpolated linearly and divided,
@@ -37,7 +39,7 @@ pub const BAND_ROWS: u32 = 16;
 
 /// How far, in pixels, a curved camera's image of an edge may stray from the straight edge the
 /// rasterizer draws before the triangle counts as [`RasterStats::curved`] (the 0.5 px of
-/// algorithms.md §2.2).
+/// docs/conventions.md §2.2).
 pub const STRAIGHT_EDGE_TOLERANCE_PX: f64 = 0.5;
 
 /// Which triangle of which object covers a pixel.

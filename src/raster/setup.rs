@@ -126,8 +126,7 @@ impl BinnedChunk {
                 };
                 // Gathered one by one: as `corners.map(…)` this was a call writing the three
                 // corners to memory, and set-up then waited on reading them back — about a
-                // tenth of a plain rasterization of the bunny (docs/performance.md, ninth
-                // session).
+                // tenth of a plain rasterization of the bunny.
                 let seen = &seen[o];
                 let corner = |i: usize| (mesh.positions[i].as_dvec3(), seen[i]);
                 let corners = [corner(corners[0]), corner(corners[1]), corner(corners[2])];

@@ -244,8 +244,8 @@ fn reflector_impostors(
 }
 
 /// The cameras of the impostors the impostor method builds of `mesh` for the mirror or glass
-/// object `reflector` ([`impostor_cameras`] from the reflector's centre, for rays from within its
-/// bounding radius): what to bake through so that a baked impostor is the one it would build.
+/// object `reflector` (from the reflector's centre, for rays from within its bounding radius: a
+/// SPOC, a parallel projection of a flat object, or a cube map of one around it): what to bake through so that a baked impostor is the one it would build.
 pub fn placed_cameras(
     mesh: &Mesh,
     reflector: &Mesh,
