@@ -26,7 +26,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let mesh = trompe::geom::io::load(&model)?.mesh;
     let b = mesh.bounds();
     let eye = b.center() + Vec3::new(0.3, 0.4, 1.0).normalize() * 3.0 * b.radius();
-    let impostor = Impostor::spoc(&mesh).from(eye).resolution(resolution).build()?;
+    let impostor = Impostor::spoc(&mesh)
+        .from(eye)
+        .resolution(resolution)
+        .build()?;
     println!(
         "{}: {} impostor {resolution}², {:.1} % of texels covered",
         model.display(),

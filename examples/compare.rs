@@ -24,9 +24,15 @@ fn main() -> Result<(), Box<dyn Error>> {
         }
     };
     let s = metrics::compare(&reference, &test, None)?;
-    println!("PSNR {:.3} dB\nSSIM {:.5}\nFLIP {:.5}", s.psnr, s.ssim, s.flip);
+    println!(
+        "PSNR {:.3} dB\nSSIM {:.5}\nFLIP {:.5}",
+        s.psnr, s.ssim, s.flip
+    );
     if let Some(heat) = args.get(2) {
-        io::write_png(heat.as_ref(), &metrics::heat_map(&metrics::flip_map(&reference, &test)?))?;
+        io::write_png(
+            heat.as_ref(),
+            &metrics::heat_map(&metrics::flip_map(&reference, &test)?),
+        )?;
         println!("wrote {heat}");
     }
     Ok(())

@@ -59,9 +59,13 @@ impl ReflectorImpostors {
         let resolution = inputs.resolution;
         // A size the maps can have, said as such rather than as a degenerate camera.
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
-        let baked = timings.time("load baked impostors", || {
-            load_baked(view, lighting, inputs.baked)
-        })?;
+        let baked = if inputs.baked.iter().any(Option::is_some) {
+            timings.time("load baked impostors", || {
+                load_baked(view, lighting, inputs.baked)
+            })?
+        } else {
+            Vec::new()
+        };
         let per_object = timings.time("build impostors", || {
             reflector_impostors(view, lighting, resolution, &baked)
         })?;

@@ -1,0 +1,148 @@
+//! Section "Ground-truth renderers": every shipped scene by every method, each image beside its
+//! FLIP error map against the trace method, scores and per-step timings; the shipped models;
+//! the rasterizer against the exact BVH.
+
+use super::html::{Figure, Section, Table};
+use super::{DemoInputs, RenderRow, ReportError, fmt_psnr};
+use crate::frame::{io, metrics};
+use crate::render::{self, Method, Progress};
+use crate::scene::Scene;
+use std::path::Path;
+
+/// Renders the shipped scenes; returns the section and a row per render.
+pub(super) fn section(
+    inputs: &DemoInputs,
+    out: &Path,
+    progress: &dyn Fn(&str, u64) -> Box<dyn Progress>,
+) -> Result<(Section, Vec<RenderRow>), ReportError> {
+    let mut s = Section::new(
+        "renderers",
+        "Ground-truth renderers and the impostor method",
+    );
+    s.paragraph("**raster** rasterizes through the pinhole camera and shades each pixel once (mirrors and glass are looked up in the panorama); **trace** is a Whitted ray tracer through the exact BVH (mirror reflection, refraction with Fresnel). On the diffuse scene the two must agree: they share one shading model and differ only at silhouette pixels. **impostor** is paper 1's method: primary rays as **trace**, and what mirrors and glass send out answered by 512² impostors of the diffuse objects built from each one's centre — a SPOC of an object beside it, a parallel depth image of a floor, a cube map of a room around it — or by the panorama (`trompe render scenes/reflections.toml --method impostor`). Each image stands beside its FLIP error map against the trace image.");
+    let mut scores = Table::new([
+        "scene",
+        "method",
+        "time",
+        "PSNR (dB)",
+        "SSIM",
+        "FLIP",
+        "object ids equal",
+    ]);
+    let mut steps = Table::new(["scene", "method", "steps (ms)"]);
+    let mut rows = Vec::new();
+    for name in ["diffuse", "reflections", "room"] {
+        let path = inputs.scenes.join(format!("{name}.toml"));
+        let scene = Scene::load(&path).map_err(Box::new)?;
+        let h = scene.camera.height;
+        let mut methods = vec![Method::Trace, Method::Raster];
+        if name != "diffuse" {
+            methods.push(Method::Impostor(render::DEFAULT_IMPOSTOR_RESOLUTION));
+        }
+        let mut frames = Vec::new();
+        for method in methods {
+            let bar = progress(&format!("{name} ({method})"), h as u64);
+            let start = std::time::Instant::now();
+            let (frame, timings) = render::render(&scene, method, bar.as_ref())?;
+            frames.push((method, frame, start.elapsed(), timings));
+        }
+        let reference = frames[0].1.clone();
+        s.heading(format!("Scene `{name}.toml`"));
+        let mut figures = Vec::new();
+        for (method, frame, time, timings) in &frames {
+            let file = format!("{name}-{method}.png");
+            io::write_png(&out.join(&file), &frame.color)?;
+            figures.push(Figure::new(
+                &file,
+                format!("{method}, {:.0} ms", time.as_secs_f64() * 1e3),
+            ));
+            if *method != Method::Trace {
+                let heat = metrics::heat_map(&metrics::flip_map(&reference.color, &frame.color)?);
+                let heat_file = format!("{name}-{method}-flip.png");
+                io::write_png(&out.join(&heat_file), &heat)?;
+                figures.push(Figure::heat_map(
+                    heat_file,
+                    format!("FLIP error, {method} against trace"),
+                ));
+            }
+            let sc = metrics::compare(&reference.color, &frame.color, None)?;
+            let same = frame
+                .object_id
+                .pixels()
+                .iter()
+                .zip(reference.object_id.pixels())
+                .filter(|(a, b)| a == b)
+                .count() as f64
+                / reference.object_id.pixels().len() as f64;
+            scores.row([
+                name.to_string(),
+                method.to_string(),
+                format!("{:.0} ms", time.as_secs_f64() * 1e3),
+                fmt_psnr(sc.psnr),
+                format!("{:.4}", sc.ssim),
+                format!("{:.4}", sc.flip),
+                format!("{:.2} %", same * 100.0),
+            ]);
+            let listed: Vec<String> = timings
+                .0
+                .iter()
+                .map(|(step, d)| format!("{step} {:.1}", d.as_secs_f64() * 1e3))
+                .collect();
+            steps.row([name.to_string(), method.to_string(), listed.join(" · ")]);
+            rows.push(RenderRow {
+                scene: name.to_string(),
+                method: *method,
+                time: *time,
+                scores: sc,
+                id_agreement: same,
+            });
+        }
+        s.figures(figures);
+    }
+    s.heading("Scores against the trace image");
+    s.table(scores);
+    s.heading("Per-step timings");
+    s.table(steps);
+
+    s.heading("Shipped models");
+    let mut models = Table::new([
+        "file",
+        "vertices (file)",
+        "triangles (file)",
+        "triangles kept",
+        "materials",
+        "textured",
+    ]);
+    for rel in ["meshes/bunny.obj", "meshes/teapot.obj", "gltf/Duck.glb"] {
+        let loaded = crate::geom::io::load(&inputs.assets.join(rel))?;
+        let m = &loaded.mesh;
+        let textured = m.materials.iter().any(|x| x.texture.is_some());
+        models.row([
+            format!("`{rel}`"),
+            loaded.source.vertices.to_string(),
+            loaded.source.triangles.to_string(),
+            m.triangle_count().to_string(),
+            m.materials.len().to_string(),
+            if textured { "yes" } else { "no" }.to_string(),
+        ]);
+    }
+    s.table(models);
+
+    let bunny = crate::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
+    let a = crate::eval::validate::raster_vs_bvh(&bunny, 256)?;
+    s.heading("The rasterizer against the exact BVH (bunny, 256²)");
+    let mut t = Table::new([
+        "covered pixels",
+        "max relative depth error",
+        "item ids equal",
+        "coverage equal",
+    ]);
+    t.row([
+        a.covered.to_string(),
+        format!("{:.2e}", a.max_relative_depth_error),
+        format!("{:.3} %", a.id_agreement * 100.0),
+        format!("{:.3} %", a.coverage_agreement * 100.0),
+    ]);
+    s.table(t);
+    Ok((s, rows))
+}

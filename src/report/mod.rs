@@ -1,0 +1,245 @@
+//! The demo report: `trompe demo` renders the scenes shipped in `scenes/`, measures every method
+//! against the exact one, and writes `index.html` — run metadata, a table of contents, then one
+//! [`html::Section`] per capability (`foundation`, `impostors`, `maze`), each built as data and
+//! written by the one HTML writer in `html`. A new capability adds a section file and one line
+//! in [`demo`].
+
+mod foundation;
+pub mod html;
+mod impostors;
+mod maze;
+
+use crate::frame::metrics::{self, Scores};
+use crate::frame::{FrameError, io};
+use crate::render::{Method, Progress, RenderError};
+use crate::scene::SceneError;
+use html::{Report, Section, Table};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use thiserror::Error;
+
+/// Errors from building the report.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ReportError {
+    /// A shipped scene failed to load.
+    #[error(transparent)]
+    Scene(#[from] Box<SceneError>),
+    /// Rendering failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// An image could not be written or compared.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+    /// A shipped mesh failed to load.
+    #[error(transparent)]
+    Mesh(#[from] crate::geom::MeshError),
+    /// A walk was asked of a camera it does not go with.
+    #[error(transparent)]
+    Walk(#[from] crate::impostor::WalkError),
+    /// The output directory could not be written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+/// Where the report's inputs are: the repository's `scenes/` and `assets/`.
+#[derive(Clone, Debug)]
+pub struct DemoInputs {
+    /// Directory holding the demo scenes.
+    pub scenes: PathBuf,
+    /// Directory holding the shipped models.
+    pub assets: PathBuf,
+}
+
+impl DemoInputs {
+    /// `scenes/` and `assets/` in the current directory if present, else beside this crate's
+    /// manifest (so `cargo run -- demo` works from anywhere in the checkout).
+    pub fn locate() -> DemoInputs {
+        let here = PathBuf::from(".");
+        let root = if here.join("scenes/diffuse.toml").is_file() {
+            here
+        } else {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        };
+        DemoInputs {
+            scenes: root.join("scenes"),
+            assets: root.join("assets"),
+        }
+    }
+}
+
+/// One rendered scene/method pair.
+#[derive(Clone, Debug)]
+pub struct RenderRow {
+    /// Scene name.
+    pub scene: String,
+    /// Method.
+    pub method: Method,
+    /// Wall-clock time of the render.
+    pub time: Duration,
+    /// Scores against the trace render of the same scene.
+    pub scores: Scores,
+    /// Fraction of pixels with the same object id as the trace render.
+    pub id_agreement: f64,
+}
+
+/// What the demo measured (also printed by the CLI).
+#[derive(Clone, Debug, Default)]
+pub struct DemoSummary {
+    /// Renders.
+    pub renders: Vec<RenderRow>,
+    /// The report file.
+    pub index: PathBuf,
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
+    move |source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Writes the demo report into `out`; `progress(label, rows)` gives a progress sink per render.
+pub fn demo(
+    inputs: &DemoInputs,
+    out: &Path,
+    progress: &dyn Fn(&str, u64) -> Box<dyn Progress>,
+) -> Result<DemoSummary, ReportError> {
+    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    let started = std::time::Instant::now();
+    let mut report = Report {
+        title: "trompe — demo report".into(),
+        metadata: metadata(inputs),
+        sections: Vec::new(),
+    };
+    let mut summary = DemoSummary::default();
+    let mut steps = Table::new(["section", "time"]);
+    let mut timed = |name: &str, t: std::time::Instant| {
+        steps.row([
+            name.to_string(),
+            format!("{:.1} s", t.elapsed().as_secs_f64()),
+        ]);
+    };
+    let t = std::time::Instant::now();
+    let (renderers, rows) = foundation::section(inputs, out, progress)?;
+    timed("ground-truth renderers", t);
+    summary.renders = rows;
+    report.sections.push(renderers);
+    let t = std::time::Instant::now();
+    report.sections.push(impostors::section(inputs, out)?);
+    timed("non-pinhole impostors", t);
+    let t = std::time::Instant::now();
+    report.sections.push(maze::section(inputs, out)?);
+    timed("graph camera", t);
+    io::write_png(&out.join(html::SCALE_FILE), &flip_scale()?)?;
+    let mut run = Section::new("run", "This run");
+    run.paragraph(format!(
+        "Every figure above was measured while this page was written, in {:.1} s.",
+        started.elapsed().as_secs_f64()
+    ));
+    run.table(steps);
+    report.sections.push(run);
+    let index = out.join("index.html");
+    std::fs::write(&index, report.to_html()).map_err(io_err(&index))?;
+    summary.index = index;
+    Ok(summary)
+}
+
+/// The FLIP colour scale, 0 on the left to 1 on the right.
+fn flip_scale() -> Result<crate::frame::Image<crate::frame::Rgba>, FrameError> {
+    let mut ramp = crate::frame::Image::new(256, 1, 0.0f32)?;
+    for x in 0..256 {
+        ramp.set(x, 0, x as f32 / 255.0);
+    }
+    Ok(metrics::heat_map(&ramp))
+}
+
+/// Version, commit, machine, threads and date of this run.
+fn metadata(inputs: &DemoInputs) -> Vec<(String, String)> {
+    let root = inputs.scenes.parent().unwrap_or(Path::new("."));
+    let commit = std::process::Command::new("git")
+        .arg("-C")
+        .arg(root)
+        .args(["describe", "--always", "--dirty"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map_or_else(
+            || "unknown (not a git checkout)".to_string(),
+            |o| String::from_utf8_lossy(&o.stdout).trim().to_string(),
+        );
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find_map(|l| l.strip_prefix("model name"))
+                .map(|l| l.trim_start_matches([' ', '\t', ':']).to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    vec![
+        ("version".into(), env!("CARGO_PKG_VERSION").into()),
+        ("commit".into(), commit),
+        (
+            "machine".into(),
+            format!("{cpu}, {cores} cores, {}", std::env::consts::OS),
+        ),
+        ("threads".into(), rayon::current_num_threads().to_string()),
+        ("date".into(), utc_now()),
+    ]
+}
+
+/// The time now, UTC, as `YYYY-MM-DD HH:MM UTC`.
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rem) = (secs / 86_400, secs % 86_400);
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
+        rem / 3600,
+        (rem % 3600) / 60
+    )
+}
+
+fn fmt_psnr(p: f64) -> String {
+    if p.is_infinite() {
+        "∞".into()
+    } else {
+        format!("{p:.2}")
+    }
+}
+
+impl std::fmt::Display for DemoSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for r in &self.renders {
+            writeln!(
+                f,
+                "{:<12} {:<7} {:>8.0} ms  PSNR {:>6.2}  SSIM {:.4}  FLIP {:.4}  ids {:.2} %",
+                r.scene,
+                r.method.to_string(),
+                r.time.as_secs_f64() * 1e3,
+                r.scores.psnr,
+                r.scores.ssim,
+                r.scores.flip,
+                r.id_agreement * 100.0
+            )?;
+        }
+        write!(f, "wrote {}", self.index.display())
+    }
+}
