@@ -17,32 +17,7 @@
 use super::{CameraError, ImagePoint, Pinhole, Projection};
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
-/// An oriented plane `n·X + e = 0`; the inside is where `n·X + e ≥ 0`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Plane {
-    /// Normal (pointing inside).
-    pub n: DVec3,
-    /// Offset.
-    pub e: f64,
-}
-
-impl Plane {
-    /// The plane through `p` with normal `n` (inside along `n`).
-    pub fn through(p: DVec3, n: DVec3) -> Plane {
-        Plane { n, e: -n.dot(p) }
-    }
-    /// Signed distance (scaled by `|n|`).
-    pub fn eval(&self, x: DVec3) -> f64 {
-        self.n.dot(x) + self.e
-    }
-    /// The same plane, inside and outside swapped.
-    pub fn flipped(&self) -> Plane {
-        Plane {
-            n: -self.n,
-            e: -self.e,
-        }
-    }
-}
+pub use crate::geom::Plane;
 
 /// One planar-pinhole frustum of a graph camera.
 #[derive(Clone, Debug, PartialEq)]
@@ -137,20 +112,9 @@ pub fn face_map(p: Plane, from: DVec3, to: DVec3) -> Result<DMat4, CameraError> 
     ))
 }
 
-/// Clips the convex polygon `poly` to the inside of `plane`.
+/// Clips the convex polygon `poly` to the inside of `plane` ([`crate::geom::clip_polygon`]).
 fn clip(poly: &[DVec3], plane: &Plane) -> Vec<DVec3> {
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let (da, db) = (plane.eval(a), plane.eval(b));
-        if da >= 0.0 {
-            out.push(a);
-        }
-        if (da >= 0.0) != (db >= 0.0) {
-            out.push(a + (b - a) * (da / (da - db)));
-        }
-    }
-    out
+    crate::geom::clip_polygon(poly, |p| plane.eval(*p), |a, b, s| *a + (*b - *a) * s)
 }
 
 /// The area of the planar convex polygon `poly` with unit normal `n`.

@@ -11,6 +11,7 @@ mod hull;
 pub mod io;
 mod mesh;
 pub mod optics;
+mod plane;
 mod primitives;
 mod sampling;
 
@@ -18,6 +19,7 @@ mod sampling;
 pub use crate::frame::{ENVIRONMENT, NO_OBJECT};
 pub use hull::convex_hull;
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
+pub use plane::{Plane, clip_polygon};
 pub use primitives::{cube, icosphere, plane};
 pub use sampling::{SplitMix64, sample_surface};
 

@@ -295,7 +295,7 @@ fn setup_clipped<P: Projection>(
         if d.iter().all(|&x| x < 0.0) {
             return;
         }
-        poly = clip_polygon(
+        poly = crate::geom::clip_polygon(
             &poly,
             |c| camera.clip_distance(c.world),
             |a, b, s| Corner {
@@ -331,7 +331,7 @@ fn setup_clipped<P: Projection>(
     ];
     for (n, off) in bounds {
         if poly.iter().any(|c| n.dot(c.uv) + off < 0.0) {
-            poly = clip_polygon(
+            poly = crate::geom::clip_polygon(
                 &poly,
                 |c| n.dot(c.uv) + off,
                 |a, b, s| Corner {
@@ -351,32 +351,6 @@ fn setup_clipped<P: Projection>(
     for k in 1..poly.len() - 1 {
         out.extend(screen_triangle([poly[0], poly[k], poly[k + 1]], item, w, h));
     }
-}
-
-/// Sutherland–Hodgman against `dist ≥ 0`. New corners are always interpolated from the inside
-/// corner toward the outside one, so an edge shared by two triangles is cut at the same point.
-fn clip_polygon(
-    poly: &[Corner],
-    dist: impl Fn(&Corner) -> f64,
-    lerp: impl Fn(&Corner, &Corner, f64) -> Corner,
-) -> Vec<Corner> {
-    let mut out = Vec::with_capacity(poly.len() + 2);
-    for i in 0..poly.len() {
-        let (a, b) = (&poly[i], &poly[(i + 1) % poly.len()]);
-        let (da, db) = (dist(a), dist(b));
-        if da >= 0.0 {
-            out.push(*a);
-        }
-        if (da >= 0.0) != (db >= 0.0) {
-            let (inside, outside, di, dout) = if da >= 0.0 {
-                (a, b, da, db)
-            } else {
-                (b, a, db, da)
-            };
-            out.push(lerp(inside, outside, di / (di - dout)));
-        }
-    }
-    out
 }
 
 /// `x` on the sub-pixel grid, to the nearest step (ties away from zero, to within an ulp).
