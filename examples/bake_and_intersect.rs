@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!(
         "{}: {} impostor {resolution}², {:.1} % of texels covered",
         model.display(),
-        impostor.camera.kind(),
+        impostor.camera().kind(),
         impostor.coverage() * 100.0
     );
 

@@ -201,7 +201,7 @@ fn impostors_bake_to_files_that_load_back() {
         assert!(json.with_extension(ext).is_file(), "{ext}");
     }
     let back = trompe::impostor::file::load(&json).unwrap();
-    assert_eq!(back.camera.kind(), "spoc");
+    assert_eq!(back.camera().kind(), "spoc");
     assert!(back.coverage() > 0.01);
     // The maze's graph camera.
     let maze = d.join("maze.json");
@@ -218,7 +218,7 @@ fn impostors_bake_to_files_that_load_back() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let back = trompe::impostor::file::load(&maze).unwrap();
-    assert_eq!(back.camera.kind(), "graph");
+    assert_eq!(back.camera().kind(), "graph");
     // Wrong pairings and bad floor plans are clear errors.
     let out = d.join("x.json");
     let out = out.to_str().unwrap();

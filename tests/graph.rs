@@ -81,7 +81,7 @@ fn the_graph_impostor_sees_around_the_corner_and_is_self_consistent() {
         imp.position_image()
             .pixels()
             .iter()
-            .zip(imp.gd.pixels())
+            .zip(imp.gd().pixels())
             .filter(|(p, g)| {
                 **g > 0.0 && p.cmpge(tb.min - 1e-4).all() && p.cmple(tb.max + 1e-4).all()
             })
@@ -93,7 +93,7 @@ fn the_graph_impostor_sees_around_the_corner_and_is_self_consistent() {
     let mut checked = 0;
     for y in 0..256u32 {
         for x in 0..256u32 {
-            let gd = graph.gd.get(x, y);
+            let gd = graph.gd().get(x, y);
             if gd <= 0.0 {
                 continue;
             }
@@ -173,7 +173,8 @@ fn graph_impostors_save_and_load_exactly() {
     let path = dir.join("corridor.json");
     file::save(&imp, &path).unwrap();
     let back = file::load(&path).unwrap();
-    let (ImpostorCamera::Graph(a), ImpostorCamera::Graph(b)) = (&back.camera, &imp.camera) else {
+    let (ImpostorCamera::Graph(a), ImpostorCamera::Graph(b)) = (&back.camera(), &imp.camera())
+    else {
         panic!("the camera comes back as a graph camera");
     };
     assert_eq!(a.frusta().len(), b.frusta().len());
@@ -181,8 +182,8 @@ fn graph_impostors_save_and_load_exactly() {
         assert!(fa.matrix.abs_diff_eq(fb.matrix, 1e-9));
     }
     assert!(
-        back.gd == imp.gd
-            && back.color == imp.color
+        back.gd() == imp.gd()
+            && back.color() == imp.color()
             && back.position_image() == imp.position_image()
     );
     // The reloaded impostor answers rays as the original does, with both algorithms.
@@ -267,7 +268,7 @@ fn the_maze_graph_camera_shows_every_floor_cell() {
         .pixels()
         .iter()
         .zip(normal.pixels())
-        .zip(imp.gd.pixels())
+        .zip(imp.gd().pixels())
     {
         let (c, r) = (p.x.floor(), p.z.floor());
         if gd > 0.0 && p.y.abs() < 1e-3 && n.y > 0.5 && c >= 0.0 && r >= 0.0 {
@@ -312,16 +313,16 @@ fn a_rebuilt_graph_impostor_equals_a_fresh_build() {
             .unwrap();
         let fresh = build(camera.clone(), scene, 1, &albedo_of(scene)).unwrap();
         assert!(
-            imp.gd == fresh.gd
-                && imp.color == fresh.color
+            imp.gd() == fresh.gd()
+                && imp.color() == fresh.color()
                 && imp.position_image() == fresh.position_image()
         );
-        assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);
-        assert!(imp.object == fresh.object && imp.bounds == fresh.bounds);
+        assert!(imp.normal() == fresh.normal() && imp.face_normal() == fresh.face_normal());
+        assert!(imp.object() == fresh.object() && imp.bounds() == fresh.bounds());
     }
     // The spheres show, so the rebuilds had texels to clear and to fill again.
     let bare = build(camera, &without, 1, &albedo_of(&without)).unwrap();
-    assert!(imp.gd != bare.gd, "the spheres are not seen");
+    assert!(imp.gd() != bare.gd(), "the spheres are not seen");
 }
 
 #[test]

@@ -90,7 +90,7 @@ fn a_pinhole_impostor_returns_its_own_rasterized_depth() {
     for y in 0..128u32 {
         for x in 0..128u32 {
             let uv = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-            let gd = imp.gd.get(x, y);
+            let gd = imp.gd().get(x, y);
             if gd <= 0.0 {
                 continue;
             }
@@ -128,18 +128,18 @@ fn impostors_save_and_load_exactly() {
         let path = dir.join("teapot.json");
         file::save(&imp, &path).unwrap();
         let back = file::load(&path).unwrap();
-        assert_eq!(back.camera, imp.camera, "{kind:?}");
+        assert_eq!(back.camera(), imp.camera(), "{kind:?}");
         assert!(
-            back.gd == imp.gd
-                && back.color == imp.color
+            back.gd() == imp.gd()
+                && back.color() == imp.color()
                 && back.position_image() == imp.position_image()
         );
         assert!(
-            back.normal == imp.normal
-                && back.face_normal == imp.face_normal
-                && back.object == imp.object
+            back.normal() == imp.normal()
+                && back.face_normal() == imp.face_normal()
+                && back.object() == imp.object()
         );
-        assert_eq!(back.bounds, imp.bounds);
+        assert_eq!(back.bounds(), imp.bounds());
         for r in s.rays().iter().take(500) {
             assert_eq!(back.walk(r, f32::INFINITY).0, imp.walk(r, f32::INFINITY).0);
         }
@@ -202,7 +202,7 @@ fn corrupted_impostor_files_are_errors() {
         "cut.exr",
     );
     // An image without the channels an impostor needs.
-    trompe::frame::io::write_exr_depth(&dir.join("depth.exr"), &imp.gd).unwrap();
+    trompe::frame::io::write_exr_depth(&dir.join("depth.exr"), imp.gd()).unwrap();
     case(
         "channels.json",
         &json.replacen("good.exr", "depth.exr", 1),
@@ -262,7 +262,7 @@ fn a_billboard_shows_the_impostor_from_its_own_camera() {
     for y in 0..64u32 {
         for x in 0..64u32 {
             let ray = pin.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-            let covered = imp.gd.get(x, y) > 0.0;
+            let covered = imp.gd().get(x, y) > 0.0;
             agree += (board.closest_hit(&ray, f32::INFINITY).is_some() == covered) as u32;
         }
     }
@@ -292,7 +292,7 @@ fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
             match (e, i) {
                 (None, None) => good += 1,
                 (Some(e), Some(i)) => {
-                    let p = imp.camera.project(e.position.as_dvec3()).unwrap();
+                    let p = imp.camera().project(e.position.as_dvec3()).unwrap();
                     let d = e.position.distance(i.position) as f64;
                     err += d;
                     good += (d <= 1.5 * imp.footprint(p.uv, p.gd)) as usize;
@@ -329,12 +329,12 @@ fn a_rebuilt_impostor_equals_a_fresh_build() {
         .unwrap();
     let fresh = build(cam, &moved, 1, &albedo_of(&moved)).unwrap();
     assert!(
-        imp.gd == fresh.gd
-            && imp.color == fresh.color
+        imp.gd() == fresh.gd()
+            && imp.color() == fresh.color()
             && imp.position_image() == fresh.position_image()
     );
-    assert!(imp.normal == fresh.normal && imp.face_normal == fresh.face_normal);
-    assert!(imp.object == fresh.object && imp.bounds == fresh.bounds);
+    assert!(imp.normal() == fresh.normal() && imp.face_normal() == fresh.face_normal());
+    assert!(imp.object() == fresh.object() && imp.bounds() == fresh.bounds());
     for r in s.rays().iter().take(300) {
         let mode = trompe::impostor::WalkMode::Hierarchical;
         assert_eq!(
@@ -532,7 +532,12 @@ fn a_baked_spoc_answers_rays_from_around_its_viewpoint_better_than_a_pinhole() {
     });
     let rays = viewpoint_rays(&spoc, b.radius(), b, 20_000, 1);
     // From the same point: the pinhole sees from where the SPOC's reference pinhole does.
-    assert!(spoc.camera.viewpoint().distance(pinhole.camera.viewpoint()) < 1e-9);
+    assert!(
+        spoc.camera()
+            .viewpoint()
+            .distance(pinhole.camera().viewpoint())
+            < 1e-9
+    );
     let (rs, rp) = (check(&spoc, &exact, &rays), check(&pinhole, &exact, &rays));
     assert!(rs.exact_hits > 5_000, "{rs:?}");
     assert!(rs.agreement() >= 0.98, "{rs:?}");

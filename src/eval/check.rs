@@ -213,7 +213,7 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
     let impostor = timings.time("build impostor", || {
         build(camera, &setup.target, 0, &albedo_of(&setup.target))
     })?;
-    let pinhole_beside = match &impostor.camera {
+    let pinhole_beside = match &impostor.camera() {
         ImpostorCamera::Spoc(_) => Some(
             setup
                 .camera(ViewCamera::Pinhole, settings.resolution)
@@ -255,10 +255,10 @@ pub fn check_baked(
             reason: "must be a positive number of radii",
         });
     }
-    let graph = matches!(impostor.camera, ImpostorCamera::Graph(_));
+    let graph = matches!(impostor.camera(), ImpostorCamera::Graph(_));
     let wrong = |reason: String| CheckError::WrongInput {
         sidecar: sidecar.to_path_buf(),
-        kind: impostor.camera.kind(),
+        kind: impostor.camera().kind(),
         reason,
     };
     let (target, setup) = match (subject, graph) {
@@ -282,7 +282,7 @@ pub fn check_baked(
         }
     };
     if !impostor.was_built_from(&target) {
-        let (ib, tb) = (impostor.bounds, target.bounds());
+        let (ib, tb) = (impostor.bounds(), target.bounds());
         return Err(CheckError::Mismatch {
             sidecar: sidecar.to_path_buf(),
             mesh: subject.path().to_path_buf(),
@@ -296,15 +296,15 @@ pub fn check_baked(
         None => {
             let region = settings.region * b.radius();
             let rays = fidelity::viewpoint_rays(&impostor, region, b, settings.rays as usize, 1);
-            let pinhole = match &impostor.camera {
+            let pinhole = match &impostor.camera() {
                 ImpostorCamera::Spoc(_) => Some(
                     ImpostorCamera::fitted(
                         ViewCamera::Pinhole,
-                        impostor.camera.viewpoint().as_vec3(),
+                        impostor.camera().viewpoint().as_vec3(),
                         b.center(),
                         b.radius(),
                         f64::from(region),
-                        impostor.gd.size().0,
+                        impostor.gd().size().0,
                         &target.positions,
                     )
                     .map_err(camera_err("pinhole camera"))?,
@@ -347,7 +347,7 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         }
         None => None,
     };
-    let algorithm_1 = matches!(impostor.camera, ImpostorCamera::Graph(_))
+    let algorithm_1 = matches!(impostor.camera(), ImpostorCamera::Graph(_))
         .then(|| {
             timings.time("check (algorithm 1)", || {
                 fidelity::check_with(&impostor, &exact, &rays, WalkMode::Linear)
@@ -367,16 +367,16 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
 impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let imp = &self.impostor;
-        match &imp.camera {
+        match &imp.camera() {
             ImpostorCamera::Spoc(s) => writeln!(f, "SPOC strength k = {:.3}", s.strength())?,
             ImpostorCamera::Graph(g) => writeln!(f, "graph camera: {} frusta", g.frusta().len())?,
             _ => {}
         }
-        let (w, h) = imp.gd.size();
+        let (w, h) = imp.gd().size();
         writeln!(
             f,
             "impostor  {} {w}×{h}, {:.1} % of texels covered",
-            imp.camera.kind(),
+            imp.camera().kind(),
             imp.coverage() * 100.0
         )?;
         let (r, c) = (&self.fidelity, &self.captured);

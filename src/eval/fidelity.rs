@@ -117,7 +117,7 @@ where
                 (Some(e), Some(i)) => {
                     let err = e.position.distance(i.position) as f64;
                     let fp = impostor
-                        .camera
+                        .camera()
                         .project(e.position.as_dvec3())
                         .map_or(f64::INFINITY, |p| impostor.footprint(p.uv, p.gd));
                     one.err = err;
@@ -207,7 +207,7 @@ pub fn viewpoint_rays(
     count: usize,
     seed: u64,
 ) -> Vec<Ray> {
-    let eye = impostor.camera.viewpoint().as_vec3();
+    let eye = impostor.camera().viewpoint().as_vec3();
     sphere_rays(eye, region, target, count, seed)
 }
 
@@ -236,13 +236,13 @@ pub struct Held {
 /// Whether the impostor holds the surface point `p` ([`Held`]; neither when `p` is outside the
 /// camera's image or its texel is empty).
 pub fn holds(impostor: &Impostor, p: Vec3) -> Held {
-    let Some(q) = impostor.camera.project(p.as_dvec3()) else {
+    let Some(q) = impostor.camera().project(p.as_dvec3()) else {
         return Held::default();
     };
     let Some((x, y)) = impostor.texel(q.uv) else {
         return Held::default();
     };
-    if impostor.gd.get(x, y) <= 0.0 {
+    if impostor.gd().get(x, y) <= 0.0 {
         return Held::default();
     }
     let stored = impostor.position_at(x, y);
@@ -250,7 +250,7 @@ pub fn holds(impostor: &Impostor, p: Vec3) -> Held {
     let footprint = impostor.footprint(q.uv, q.gd);
     let n = impostor.face_normal_at(x, y).as_dvec3();
     let view = impostor
-        .camera
+        .camera()
         .toward_camera_along_ray(q.uv, q.gd, stored.as_dvec3());
     let cos = n.dot(view).abs().max(0.05);
     Held {

@@ -331,25 +331,25 @@ impl ImpostorCamera {
 #[derive(Clone, Debug)]
 pub struct Impostor {
     /// The camera it was built through.
-    pub camera: ImpostorCamera,
+    camera: ImpostorCamera,
     /// Linear radiance of the surface each texel shows, in half floats (alpha 1 where covered,
     /// 0 where empty).
-    pub color: Image<HalfRgba>,
+    color: Image<HalfRgba>,
     /// Generalized depth (0 = empty).
-    pub gd: Image<f32>,
+    gd: Image<f32>,
     /// Unit shading normal, packed.
-    pub normal: Image<OctUnit>,
+    normal: Image<OctUnit>,
     /// Unit geometric normal of the stored triangle, turned toward the camera, packed: with the
     /// texel's position, the texel's plane. The walk measures which side of it a ray sample is
     /// on, and places hits on it.
-    pub face_normal: Image<OctUnit>,
+    face_normal: Image<OctUnit>,
     /// World position of the surface point, for a graph camera only (see
     /// [`Impostor::position_at`]).
     position: Option<Image<Vec3>>,
     /// Object id ([`crate::geom::NO_OBJECT`] where empty).
-    pub object: Image<u32>,
+    object: Image<u32>,
     /// World box of the replaced geometry: rays are clipped to it.
-    pub bounds: Aabb,
+    bounds: Aabb,
     /// What the walks derive from the maps, built on first use: the max pyramid of the
     /// texels' front bounds (the largest `gd` of a point behind a texel's plane, 0 where empty;
     /// `front.rs`) and the packed [`TexelPlane`]s. Call [`Impostor::maps_changed`] after
@@ -391,6 +391,53 @@ impl Impostor {
             object,
             bounds,
             walk_index: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// The camera it was built through.
+    pub fn camera(&self) -> &ImpostorCamera {
+        &self.camera
+    }
+
+    /// The colour map: linear radiance (or albedo, as baked) in half floats, alpha 1 where
+    /// covered ([`Impostor::color_at`] reads one texel).
+    pub fn color(&self) -> &Image<HalfRgba> {
+        &self.color
+    }
+
+    /// The generalized-depth map (`gd = 1/t`, 0 = empty; `docs/conventions.md` §1.2).
+    pub fn gd(&self) -> &Image<f32> {
+        &self.gd
+    }
+
+    /// The shading normals, packed ([`Impostor::normal_at`] reads one).
+    pub fn normal(&self) -> &Image<OctUnit> {
+        &self.normal
+    }
+
+    /// The stored triangles' face normals, turned toward the camera, packed
+    /// ([`Impostor::face_normal_at`] reads one).
+    pub fn face_normal(&self) -> &Image<OctUnit> {
+        &self.face_normal
+    }
+
+    /// The object ids ([`crate::geom::NO_OBJECT`] where empty).
+    pub fn object(&self) -> &Image<u32> {
+        &self.object
+    }
+
+    /// World box of the replaced geometry: rays are clipped to it.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Gives every covered texel the object id `id` (an impostor baked with one id, placed in
+    /// a scene where its object has another).
+    pub fn set_object_id(&mut self, id: u32) {
+        for o in self.object.pixels_mut() {
+            if *o != crate::geom::NO_OBJECT {
+                *o = id;
+            }
         }
     }
 

@@ -169,7 +169,7 @@ fn load_baked(
         let mut imp = crate::impostor::file::load(path)
             .map_err(|source| RenderError::BakedImpostor { object, source })?;
         if !imp.was_built_from(mesh) {
-            let (ib, mb) = (imp.bounds, mesh.bounds());
+            let (ib, mb) = (imp.bounds(), mesh.bounds());
             return Err(RenderError::BakedMismatch {
                 object,
                 path: path.clone(),
@@ -177,16 +177,12 @@ fn load_baked(
                 object_box: [mb.min.to_array(), mb.max.to_array()],
             });
         }
-        let eye = imp.camera.viewpoint().as_vec3();
+        let eye = imp.camera().viewpoint().as_vec3();
         imp.relight(|albedo, normal, position| {
             lambert(albedo, toward(normal, eye - position), lighting)
         });
         // The object's id in this scene, whatever id it was baked with.
-        imp.object.pixels_mut().iter_mut().for_each(|id| {
-            if *id != crate::geom::NO_OBJECT {
-                *id = object as u32;
-            }
-        });
+        imp.set_object_id(object as u32);
         out.push(Some(imp));
     }
     Ok(out)

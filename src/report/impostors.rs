@@ -73,13 +73,13 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
             _ => "—".into(),
         };
         let imp = build(cam, &setup.target, 0, &color)?;
-        let name = imp.camera.kind();
+        let name = imp.camera().kind();
         let (c, g) = (
             format!("impostor-{name}-color.png"),
             format!("impostor-{name}-gd.png"),
         );
         io::write_png(&out.join(&c), &imp.color_image())?;
-        io::write_png(&out.join(&g), &gd_false_color(&imp.gd))?;
+        io::write_png(&out.join(&g), &gd_false_color(imp.gd()))?;
         figures.push(Figure::new(c, format!("{name}: colour")));
         figures.push(Figure::new(g, format!("{name}: gd (bright = near)")));
         let r = fidelity::check(&imp, &exact, &rays);
