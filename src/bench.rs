@@ -751,7 +751,7 @@ pub fn heading(path: &std::path::Path, mesh: &Mesh) -> String {
 pub fn run(
     path: &std::path::Path,
     mesh: &Mesh,
-    inputs: &crate::report::DemoInputs,
+    inputs: &crate::eval::fixtures::Shipped,
     quick: bool,
 ) -> Result<BenchReport, BenchError> {
     let assets = &inputs.assets;

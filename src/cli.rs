@@ -36,29 +36,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene file to an image.
-    Render {
-        /// Scene file (TOML; see scenes/README.md).
-        scene: PathBuf,
-        /// Output image: .png (sRGB) or .exr (linear float).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Renderer.
-        #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
-        method: MethodArg,
-        /// Impostor resolution (square), for --method impostor.
-        #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
-              value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
-        impostor_resolution: u32,
-        /// Time in seconds (camera path and animation); default: the scene's.
-        #[arg(long)]
-        time: Option<f32>,
-        /// Also write the depth (distance) as a float EXR.
-        #[arg(long)]
-        depth: Option<PathBuf>,
-        /// Also write the shading normals as a float EXR.
-        #[arg(long)]
-        normals: Option<PathBuf>,
-    },
+    Render(RenderArgs),
     /// Compare two images: PSNR, SSIM and FLIP, and optionally a FLIP heat map.
     Compare {
         /// Reference image (.png, .exr or .hdr).
@@ -109,30 +87,7 @@ pub enum Command {
 pub enum ImpostorCommand {
     /// Build an impostor of a mesh (or a maze, with --camera graph) and save it: a JSON
     /// sidecar, the EXR of its maps beside it, and a PNG preview of its colour.
-    Bake {
-        /// The object (.obj, .ply, .gltf, .glb), in its own coordinates; or a floor plan
-        /// (.maze) for --camera graph.
-        input: PathBuf,
-        /// Impostor camera.
-        #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
-        camera: CameraArg,
-        /// Impostor resolution (square).
-        #[arg(long, default_value_t = 512,
-              value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
-        resolution: u32,
-        /// Direction from the object's centre toward the camera, "x,y,z".
-        #[arg(long, default_value = "0,0.3,1", value_parser = parse_vec3)]
-        from: glam::Vec3,
-        /// Camera distance from the object's centre, in bounding-sphere radii.
-        #[arg(long, default_value_t = 3.0)]
-        distance: f32,
-        /// SPOC strength k (default: the rule k = 2Δ/z_O with Δ one bounding radius).
-        #[arg(long)]
-        k: Option<f64>,
-        /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    Bake(BakeArgs),
     /// Fire rays at an object and compare every impostor answer with the exact BVH.
     Check(CheckArgs),
 }
@@ -140,8 +95,8 @@ pub enum ImpostorCommand {
 /// `trompe impostor check`.
 #[derive(clap::Args, Debug)]
 pub struct CheckArgs {
-    /// The object (.obj, .ply, .gltf, .glb), scaled to largest extent 1; or a floor plan
-    /// (.maze) for --camera graph, with the reflector standing in its first corridor.
+    /// The object (.obj, .ply, .gltf, .glb), in its own coordinates; or a floor plan (.maze)
+    /// for --camera graph, with the reflector standing in its first corridor.
     mesh: PathBuf,
     /// Impostor camera.
     #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
@@ -185,6 +140,59 @@ pub struct CheckArgs {
     #[arg(long, default_value_t = 20_000, requires = "impostor",
           value_parser = clap::value_parser!(u32).range(1..=MAX_CHECK_RAYS))]
     rays: u32,
+}
+
+/// `trompe render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (TOML; see scenes/README.md).
+    scene: PathBuf,
+    /// Output image: .png (sRGB) or .exr (linear float).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Renderer.
+    #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
+    method: MethodArg,
+    /// Impostor resolution (square), for --method impostor.
+    #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
+          value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
+    impostor_resolution: u32,
+    /// Time in seconds (camera path and animation); default: the scene's.
+    #[arg(long)]
+    time: Option<f32>,
+    /// Also write the depth (distance) as a float EXR.
+    #[arg(long)]
+    depth: Option<PathBuf>,
+    /// Also write the shading normals as a float EXR.
+    #[arg(long)]
+    normals: Option<PathBuf>,
+}
+
+/// `trompe impostor bake`.
+#[derive(clap::Args, Debug)]
+pub struct BakeArgs {
+    /// The object (.obj, .ply, .gltf, .glb), in its own coordinates; or a floor plan
+    /// (.maze) for --camera graph.
+    input: PathBuf,
+    /// Impostor camera.
+    #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
+    camera: CameraArg,
+    /// Impostor resolution (square).
+    #[arg(long, default_value_t = 512,
+          value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
+    resolution: u32,
+    /// Direction from the object's centre toward the camera, "x,y,z".
+    #[arg(long, default_value = "0,0.3,1", value_parser = parse_vec3)]
+    from: glam::Vec3,
+    /// Camera distance from the object's centre, in bounding-sphere radii.
+    #[arg(long, default_value_t = 3.0)]
+    distance: f32,
+    /// SPOC strength k (default: the rule k = 2Δ/z_O with Δ one bounding radius).
+    #[arg(long)]
+    k: Option<f64>,
+    /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 /// `--camera` of `impostor`.
@@ -361,6 +369,62 @@ fn read_mask(path: Option<&Path>) -> Result<Option<trompe::Image<bool>>> {
     Ok(Some(img.map(|p| p.truncate().max_element() > 0.0)))
 }
 
+impl RenderArgs {
+    /// Loads the scene, renders it, writes the images; prints what it wrote.
+    fn render(self, verbose: bool) -> Result<()> {
+        let outputs = [
+            Some(&self.output),
+            self.depth.as_ref(),
+            self.normals.as_ref(),
+        ];
+        for o in outputs.into_iter().flatten() {
+            check_output(o, &[&self.scene])?;
+        }
+        let mut timings = Timings::default();
+        let s = timings
+            .time("load scene", || Scene::load(&self.scene))
+            .context("loading the scene")?;
+        s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
+        let method = self.method.method(self.impostor_resolution);
+        let pb = bar(&format!("{method}"), s.camera.height as u64);
+        let t = self.time.unwrap_or(s.render.time);
+        let (frame, steps) = render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
+        timings.0.extend(steps.0);
+        let (depth, normals) = (self.depth.as_deref(), self.normals.as_deref());
+        timings
+            .time("write", || {
+                write_frame(&frame, &self.output, depth, normals)
+            })
+            .context("writing the output")?;
+        eprintln!("wrote {}", self.output.display());
+        print_timings(verbose, &timings);
+        Ok(())
+    }
+}
+
+impl BakeArgs {
+    /// Refuses outputs that are inputs, loads the input, bakes.
+    fn bake(self) -> Result<trompe::impostor::BakeReport> {
+        for ext in ["json", "exr", "png"] {
+            check_output(&self.output.with_extension(ext), &[&self.input])?;
+        }
+        if let Some(dir) = self.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        let subject = load_subject(&self.input)?;
+        let settings = BakeSettings {
+            camera: self.camera.choice(self.k),
+            resolution: self.resolution,
+            from: self.from,
+            distance: self.distance,
+        };
+        let report = with_spinner("baking the impostor", || {
+            bake(&subject, &settings, &self.output)
+        })?;
+        Ok(report)
+    }
+}
+
 impl CheckArgs {
     /// Loads the inputs, checks, and returns what was measured.
     fn check(self) -> Result<trompe::eval::check::CheckReport> {
@@ -401,40 +465,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     }
     let verbose = cli.verbose;
     match cli.command {
-        Command::Render {
-            scene,
-            output,
-            method,
-            impostor_resolution,
-            time,
-            depth,
-            normals,
-        } => {
-            for o in [Some(&output), depth.as_ref(), normals.as_ref()]
-                .into_iter()
-                .flatten()
-            {
-                check_output(o, &[&scene])?;
-            }
-            let mut timings = Timings::default();
-            let s = timings
-                .time("load scene", || Scene::load(&scene))
-                .context("loading the scene")?;
-            s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
-            let method = method.method(impostor_resolution);
-            let pb = bar(&format!("{method}"), s.camera.height as u64);
-            let t = time.unwrap_or(s.render.time);
-            let (frame, steps) =
-                render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
-            timings.0.extend(steps.0);
-            timings
-                .time("write", || {
-                    write_frame(&frame, &output, depth.as_deref(), normals.as_deref())
-                })
-                .context("writing the output")?;
-            eprintln!("wrote {}", output.display());
-            print_timings(verbose, &timings);
-        }
+        Command::Render(args) => args.render(verbose)?,
         Command::Compare {
             reference,
             test,
@@ -471,7 +502,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 .for_each(|w| eprintln!("warning: {w}"));
         }
         Command::Demo { output } => {
-            let inputs = trompe::report::DemoInputs::locate();
+            let inputs = trompe::eval::fixtures::Shipped::locate();
             let summary = trompe::report::demo(&inputs, &output, &|label, rows| bar(label, rows))
                 .context("building the demo report")?;
             println!("{summary}");
@@ -489,36 +520,13 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             }
             print_timings(verbose, &report.timings);
         }
-        Command::Impostor(ImpostorCommand::Bake {
-            input,
-            camera,
-            resolution,
-            from,
-            distance,
-            k,
-            output,
-        }) => {
-            for ext in ["json", "exr", "png"] {
-                check_output(&output.with_extension(ext), &[&input])?;
-            }
-            if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir)
-                    .with_context(|| format!("creating {}", dir.display()))?;
-            }
-            let subject = load_subject(&input)?;
-            let settings = BakeSettings {
-                camera: camera.choice(k),
-                resolution,
-                from,
-                distance,
-            };
-            let report =
-                with_spinner("baking the impostor", || bake(&subject, &settings, &output))?;
+        Command::Impostor(ImpostorCommand::Bake(args)) => {
+            let report = args.bake()?;
             println!("{report}");
             print_timings(verbose, &report.timings);
         }
         Command::Bench { quick, mesh, goal } => {
-            let inputs = trompe::report::DemoInputs::locate();
+            let inputs = trompe::eval::fixtures::Shipped::locate();
             let path = mesh.unwrap_or_else(|| inputs.assets.join("meshes/bunny.obj"));
             let m = load_mesh(&path)?;
             match goal {

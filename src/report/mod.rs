@@ -47,31 +47,7 @@ pub enum ReportError {
     },
 }
 
-/// Where the report's inputs are: the repository's `scenes/` and `assets/`.
-#[derive(Clone, Debug)]
-pub struct DemoInputs {
-    /// Directory holding the demo scenes.
-    pub scenes: PathBuf,
-    /// Directory holding the shipped models.
-    pub assets: PathBuf,
-}
-
-impl DemoInputs {
-    /// `scenes/` and `assets/` in the current directory if present, else beside this crate's
-    /// manifest (so `cargo run -- demo` works from anywhere in the checkout).
-    pub fn locate() -> DemoInputs {
-        let here = PathBuf::from(".");
-        let root = if here.join("scenes/diffuse.toml").is_file() {
-            here
-        } else {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        };
-        DemoInputs {
-            scenes: root.join("scenes"),
-            assets: root.join("assets"),
-        }
-    }
-}
+pub use crate::eval::fixtures::Shipped as DemoInputs;
 
 /// One rendered scene/method pair.
 #[derive(Clone, Debug)]
