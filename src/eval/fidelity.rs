@@ -287,6 +287,19 @@ pub struct ReflectorSetup {
     pub view: Pinhole,
 }
 
+/// Refuses a mesh that cannot be placed: one with no finite, non-zero extent.
+fn has_extent(meshes: &[&Mesh]) -> Result<(), crate::camera::CameraError> {
+    for m in meshes {
+        let e = m.bounds().extent().max_element();
+        if !(e.is_finite() && e > 0.0) {
+            return Err(crate::camera::CameraError::Degenerate(
+                "a mesh with no extent cannot be placed",
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn fit(mesh: &Mesh, size: f32, at: Vec3) -> Mesh {
     let b = mesh.bounds();
     let s = size / b.extent().max_element().max(f32::MIN_POSITIVE);
@@ -307,19 +320,23 @@ impl ReflectorSetup {
         distance: f32,
         view_size: u32,
     ) -> Result<Self, crate::camera::CameraError> {
-        for m in [target, reflector] {
-            let e = m.bounds().extent().max_element();
-            if !(e.is_finite() && e > 0.0) {
-                return Err(crate::camera::CameraError::Degenerate(
-                    "a mesh with no extent cannot be placed",
-                ));
-            }
-        }
+        has_extent(&[target, reflector])?;
         let target = Arc::new(fit(target, 1.0, Vec3::ZERO));
         let reflector = Arc::new(fit(reflector, 0.8, Vec3::new(distance, 0.0, 0.0)));
+        Self::viewed(target, reflector, 1.0, view_size)
+    }
+
+    /// The setting with a viewer looking at the reflector from `scale · (−1.4, 0.4, 1.6)` off
+    /// its centre.
+    fn viewed(
+        target: Arc<Mesh>,
+        reflector: Arc<Mesh>,
+        scale: f32,
+        view_size: u32,
+    ) -> Result<Self, crate::camera::CameraError> {
         let rc = reflector.bounds().center();
         let view = Pinhole::look_at(
-            rc + Vec3::new(-1.4, 0.4, 1.6),
+            rc + Vec3::new(-1.4, 0.4, 1.6) * scale,
             rc,
             Vec3::Y,
             30.0,
@@ -344,39 +361,13 @@ impl ReflectorSetup {
         distance: f32,
         view_size: u32,
     ) -> Result<Self, crate::camera::CameraError> {
-        let mut s = 0.0;
-        for m in [target, reflector] {
-            let e = m.bounds().extent().max_element();
-            if !(e.is_finite() && e > 0.0) {
-                return Err(crate::camera::CameraError::Degenerate(
-                    "a mesh with no extent cannot be placed",
-                ));
-            }
-            if s == 0.0 {
-                s = e;
-            }
-        }
+        has_extent(&[target, reflector])?;
         let b = target.bounds();
+        let s = b.extent().max_element();
         let base = Vec3::new(b.center().x, b.min.y, b.center().z);
-        let reflector = Arc::new(fit(
-            reflector,
-            0.8 * s,
-            base + Vec3::new(distance * s, 0.0, 0.0),
-        ));
-        let rc = reflector.bounds().center();
-        let view = Pinhole::look_at(
-            rc + Vec3::new(-1.4, 0.4, 1.6) * s,
-            rc,
-            Vec3::Y,
-            30.0,
-            view_size,
-            view_size,
-        )?;
-        Ok(Self {
-            target: Arc::new(target.clone()),
-            reflector,
-            view,
-        })
+        let at = base + Vec3::new(distance * s, 0.0, 0.0);
+        let reflector = Arc::new(fit(reflector, 0.8 * s, at));
+        Self::viewed(Arc::new(target.clone()), reflector, s, view_size)
     }
 
     /// Paper 1's Fig. 5 setting: the reflector (largest extent 0.5) stands on the floor of the
@@ -387,12 +378,7 @@ impl ReflectorSetup {
         reflector: &Mesh,
         view_size: u32,
     ) -> Result<Self, crate::camera::CameraError> {
-        let e = reflector.bounds().extent().max_element();
-        if !(e.is_finite() && e > 0.0) {
-            return Err(crate::camera::CameraError::Degenerate(
-                "a mesh with no extent cannot be placed",
-            ));
-        }
+        has_extent(&[reflector])?;
         // The viewer stands 2.5 cells outside the entrance, wherever the camera's root is.
         let (root, dir) = maze.entrance_view();
         let entrance = root + dir * crate::scene::maze::ROOT_BACK;
