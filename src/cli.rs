@@ -7,6 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use trompe::eval::check::{BakedCheckSettings, CheckSettings, check_baked, check_built};
+use trompe::files::OutputPlan;
 use trompe::frame::{io, metrics};
 use trompe::impostor::{BakeSettings, CameraChoice, Subject, ViewCamera, bake};
 use trompe::render::{self, Method, Progress, Timings};
@@ -308,17 +309,9 @@ fn load_mesh(path: &Path) -> Result<trompe::Mesh> {
     Ok(loaded.mesh)
 }
 
-/// Refuses an output path that is one of the inputs: nothing a user gave is overwritten.
-fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    if let Some(o) = canon(output) {
-        for i in inputs {
-            if canon(i).as_ref() == Some(&o) {
-                bail!("{}: refusing to overwrite an input file", output.display());
-            }
-        }
-    }
-    Ok(())
+/// Checks a command's outputs against what it reads, before any work ([`OutputPlan::check`]).
+fn check_plan(plan: &OutputPlan) -> Result<()> {
+    Ok(plan.check()?)
 }
 
 /// Prints the steps' durations (with `--verbose`).
@@ -340,9 +333,17 @@ fn load_subject(path: &Path) -> Result<Subject> {
     Ok(subject)
 }
 
-/// A reflector given on the command line, or the built-in one.
-fn load_reflector(path: Option<&Path>) -> Result<Option<trompe::Mesh>> {
-    path.map(load_mesh).transpose()
+/// A reflector given on the command line (and the files it read), or the built-in one.
+fn load_reflector(path: Option<&Path>) -> Result<(Option<trompe::Mesh>, Vec<PathBuf>)> {
+    let Some(path) = path else {
+        return Ok((None, Vec::new()));
+    };
+    let label = format!("loading {}", path.display());
+    let loaded = with_spinner(&label, || trompe::geom::io::load(path))?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok((Some(loaded.mesh), loaded.files))
 }
 
 /// Writes a rendered frame: colour, and depth and normals when asked.
@@ -372,18 +373,19 @@ fn read_mask(path: Option<&Path>) -> Result<Option<trompe::Image<bool>>> {
 impl RenderArgs {
     /// Loads the scene, renders it, writes the images; prints what it wrote.
     fn render(self, verbose: bool) -> Result<()> {
-        let outputs = [
-            Some(&self.output),
-            self.depth.as_ref(),
-            self.normals.as_ref(),
-        ];
-        for o in outputs.into_iter().flatten() {
-            check_output(o, &[&self.scene])?;
+        // Checked before loading, then again with everything the scene reads.
+        let mut plan = OutputPlan::new();
+        plan.reads([&self.scene])
+            .writes(&self.output, &["png", "exr"]);
+        for extra in [&self.depth, &self.normals].into_iter().flatten() {
+            plan.writes(extra, &["exr"]);
         }
+        plan.check_overwrites()?;
         let mut timings = Timings::default();
         let s = timings
             .time("load scene", || Scene::load(&self.scene))
             .context("loading the scene")?;
+        check_plan(plan.reads(s.files.iter().cloned()))?;
         s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         let method = self.method.method(self.impostor_resolution);
         let pb = bar(&format!("{method}"), s.camera.height as u64);
@@ -405,13 +407,17 @@ impl RenderArgs {
 impl BakeArgs {
     /// Refuses outputs that are inputs, loads the input, bakes.
     fn bake(self) -> Result<trompe::impostor::BakeReport> {
-        for ext in ["json", "exr", "png"] {
-            check_output(&self.output.with_extension(ext), &[&self.input])?;
-        }
-        if let Some(dir) = self.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        }
+        let mut plan = OutputPlan::new();
+        plan.creating_folders()
+            .reads([&self.input])
+            .writes(&self.output, &["json"])
+            .writes(self.output.with_extension("exr"), &["exr"])
+            .writes(self.output.with_extension("png"), &["png"]);
+        plan.check_overwrites()?;
         let subject = load_subject(&self.input)?;
+        check_plan(plan.reads(subject.files()))?;
+        plan.make_folders()
+            .context("creating the output's folder")?;
         let settings = BakeSettings {
             camera: self.camera.choice(self.k),
             resolution: self.resolution,
@@ -429,7 +435,17 @@ impl CheckArgs {
     /// Loads the inputs, checks, and returns what was measured.
     fn check(self) -> Result<trompe::eval::check::CheckReport> {
         let subject = load_subject(&self.mesh)?;
-        let reflector = load_reflector(self.reflector.as_deref())?;
+        let (reflector, reflector_files) = load_reflector(self.reflector.as_deref())?;
+        let mut plan = OutputPlan::new();
+        plan.reads(subject.files()).reads(reflector_files);
+        if let Some(sidecar) = &self.impostor {
+            plan.reads([sidecar.clone(), sidecar.with_extension("exr")]);
+        }
+        if let Some(o) = &self.output {
+            plan.writes(o, &["json"])
+                .writes(o.with_extension("exr"), &["exr"]);
+        }
+        check_plan(&plan)?;
         let Some(path) = &self.impostor else {
             let settings = CheckSettings {
                 camera: self.camera.choice(self.k),
@@ -472,9 +488,12 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             heatmap,
             mask,
         } => {
+            let mut plan = OutputPlan::new();
+            plan.reads([&reference, &test]).reads(mask.iter());
             if let Some(h) = &heatmap {
-                check_output(h, &[&reference, &test])?;
+                plan.writes(h, &["png"]);
             }
+            check_plan(&plan)?;
             let read =
                 |p: &Path| io::read_color(p).with_context(|| format!("reading {}", p.display()));
             let (a, b) = (read(&reference)?, read(&test)?);
@@ -508,9 +527,6 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             println!("{summary}");
         }
         Command::Impostor(ImpostorCommand::Check(args)) => {
-            if let Some(o) = &args.output {
-                check_output(o, &[&args.mesh])?;
-            }
             let output = args.output.clone();
             let report = with_spinner("checking", || args.check())?;
             println!("{report}");

@@ -55,6 +55,7 @@
 
 pub mod camera;
 pub mod eval;
+pub mod files;
 pub mod frame;
 pub mod geom;
 pub mod impostor;

@@ -455,3 +455,186 @@ fn impostor_check_gives_the_same_figures_from_a_moved_binary() {
     );
     assert_eq!(here.stdout, moved.stdout);
 }
+
+/// Every file a command reads is safe from its outputs: an output that is an input — by any
+/// spelling, a derived output included — is refused before any work, and the input is left
+/// byte for byte as it was.
+#[test]
+fn no_command_overwrites_what_it_reads() {
+    let d = scratch("cli_outputs");
+    // A scene reading a textured OBJ (its MTL and texture), a panorama and a second texture.
+    let src = common::shared("meshes/bunny10k_textured");
+    let mut mesh = None;
+    for e in std::fs::read_dir(&src).unwrap() {
+        let e = e.unwrap();
+        let to = d.join(e.file_name());
+        std::fs::copy(e.path(), &to).unwrap();
+        if to.extension().is_some_and(|x| x == "obj") {
+            mesh = Some(to);
+        }
+    }
+    let mesh = mesh.expect("the textured bunny has an OBJ");
+    let texture = std::fs::read_dir(&d)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "png" || x == "jpg"))
+        .expect("and a texture");
+    std::fs::copy(common::asset("envmaps/studio.hdr"), d.join("studio.hdr")).unwrap();
+    std::fs::copy(common::asset("meshes/teapot.obj"), d.join("teapot.obj")).unwrap();
+    std::fs::write(d.join("wood.png"), std::fs::read(&texture).unwrap()).unwrap();
+    let scene = d.join("s.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[camera]\nposition = [0, 0.5, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [16, 16]\n\n[environment]\npath = \"studio.hdr\"\n\n[[object]]\nmesh = \"{}\"\n\n[[object]]\nmesh = \"teapot.obj\"\nmaterial = {{ type = \"diffuse\", texture = \"wood.png\" }}\n",
+            mesh.file_name().unwrap().to_string_lossy()
+        ),
+    )
+    .unwrap();
+    let sum = |p: &Path| std::fs::read(p).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let guarded = [
+        &scene,
+        &mesh,
+        &texture,
+        &d.join("studio.hdr"),
+        &d.join("wood.png"),
+    ];
+    let before: Vec<Vec<u8>> = guarded.iter().map(|p| sum(p)).collect();
+    let png_texture = if texture.extension().is_some_and(|x| x == "png") {
+        s(&texture)
+    } else {
+        s(&d.join("wood.png"))
+    };
+    // render: the colour over a texture, the depth over the mesh (by another spelling), the
+    // normals over the scene.
+    let dotted = d.join(".").join(mesh.file_name().unwrap());
+    let wood = s(&d.join("wood.png"));
+    for args in [
+        vec!["render", &s(&scene), "-o", &png_texture],
+        vec!["render", &s(&scene), "-o", &wood],
+        vec![
+            "render",
+            &s(&scene),
+            "-o",
+            &s(&d.join("o.png")),
+            "--depth",
+            &s(&dotted),
+        ],
+        vec![
+            "render",
+            &s(&scene),
+            "-o",
+            &s(&d.join("o.exr")),
+            "--depth",
+            &s(&d.join("o.exr")),
+        ],
+    ] {
+        let o = trompe(&args);
+        let e = stderr(&o);
+        assert!(
+            !o.status.success() && !e.contains("panicked"),
+            "{args:?}: {e}"
+        );
+        assert!(
+            e.contains("refusing to overwrite")
+                || e.contains("same file")
+                || e.contains("ending in"),
+            "{args:?}: {e}"
+        );
+    }
+    fails_cleanly(
+        &trompe(&["render", &s(&scene), "-o", &s(&d.join("studio.hdr"))]),
+        "refusing to overwrite",
+    );
+    // bake: the preview it derives from -o would land on the model's own texture.
+    let stem = texture.with_extension("json");
+    if texture.extension().is_some_and(|x| x == "png") {
+        fails_cleanly(
+            &trompe(&["impostor", "bake", &s(&mesh), "-o", &s(&stem)]),
+            "refusing to overwrite",
+        );
+    }
+    // compare: the heat map over the mask.
+    let mask = d.join("wood.png");
+    fails_cleanly(
+        &trompe(&[
+            "compare",
+            &wood,
+            &wood,
+            "--heatmap",
+            &s(&mask),
+            "--mask",
+            &s(&mask),
+        ]),
+        "refusing to overwrite",
+    );
+    // check: the saved impostor over the reflector's sidecar name.
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "check",
+            &s(&d.join("teapot.obj")),
+            "--reflector",
+            &s(&mesh),
+            "-o",
+            &s(&d.join("teapot.obj")),
+        ]),
+        "refusing to overwrite",
+    );
+    for (p, b) in guarded.iter().zip(&before) {
+        assert_eq!(&sum(p), b, "{} changed", p.display());
+    }
+    // An existing output with an extension render does not write is left alone.
+    let jpg = d.join("x.jpg");
+    std::fs::write(&jpg, b"a photo").unwrap();
+    fails_cleanly(
+        &trompe(&["render", &s(&scene), "-o", &s(&jpg)]),
+        "ending in",
+    );
+    assert_eq!(sum(&jpg), b"a photo");
+    // demo refuses a directory of the user's, and names what is in it.
+    fails_cleanly(&trompe(&["demo", "-o", &s(&d)]), "not empty");
+    assert_eq!(sum(&scene), before[0]);
+}
+
+/// Two identical bakes write identical bytes, and a sidecar is never read with another EXR.
+#[test]
+fn bakes_are_byte_identical_and_a_sidecar_keeps_to_its_own_maps() {
+    let d = scratch("cli_bake_bytes");
+    let teapot = common::asset("meshes/teapot.obj");
+    let bake = |name: &str, from: &str| {
+        let o = trompe(&[
+            "impostor",
+            "bake",
+            teapot.to_str().unwrap(),
+            "--resolution",
+            "64",
+            "--from",
+            from,
+            "-o",
+            d.join(name).to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    bake("a.json", "0,0.3,1");
+    bake("b.json", "0,0.3,1");
+    for ext in ["json", "exr", "png"] {
+        let (a, b) = (
+            d.join("a").with_extension(ext),
+            d.join("b").with_extension(ext),
+        );
+        let (a, b) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+        if ext == "json" {
+            let strip = |t: Vec<u8>| String::from_utf8(t).unwrap().replace("b.exr", "a.exr");
+            assert_eq!(strip(a), strip(b), "{ext}");
+        } else {
+            assert!(a == b, "{ext} differs");
+        }
+    }
+    // Another bake's maps under a's name: a's sidecar refuses them.
+    bake("c.json", "1,0.3,0");
+    std::fs::copy(d.join("c.exr"), d.join("a.exr")).unwrap();
+    let o = trompe(&["info", d.join("a.json").to_str().unwrap()]);
+    fails_cleanly(&o, "is not the EXR this sidecar was saved with");
+}

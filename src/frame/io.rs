@@ -28,17 +28,29 @@ pub fn to_srgb8(image: &Image<Rgba>) -> Vec<u8> {
     out
 }
 
-/// Writes a linear colour image as an sRGB PNG.
+/// Writes a linear colour image as an sRGB PNG, replacing `path` whole
+/// ([`crate::files::write_atomically`]).
 pub fn write_png(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
-    let bytes = to_srgb8(image);
-    image::save_buffer(
-        path,
-        &bytes,
-        image.width(),
-        image.height(),
-        image::ExtendedColorType::Rgba8,
-    )
-    .map_err(|e| codec(path, e))
+    use image::ImageEncoder as _;
+    let pixels = to_srgb8(image);
+    let mut encoded = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut encoded)
+        .write_image(
+            &pixels,
+            image.width(),
+            image.height(),
+            image::ExtendedColorType::Rgba8,
+        )
+        .map_err(|e| codec(path, e))?;
+    publish(path, &encoded)
+}
+
+/// Replaces `path` whole with `bytes`.
+fn publish(path: &Path, bytes: &[u8]) -> Result<(), FrameError> {
+    crate::files::write_atomically(path, bytes).map_err(|source| FrameError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Reads a PNG (or any 8/16-bit image the `image` crate knows) as linear RGBA.
@@ -73,14 +85,20 @@ pub fn decode_srgb_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, Frame
     Image::from_vec(w, h, data)
 }
 
-/// Writes a linear colour image as a float RGBA OpenEXR.
+/// Writes a linear colour image as a float RGBA OpenEXR (channels `R G B A`).
 pub fn write_exr_rgba(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
-    let w = image.width() as usize;
-    exr::prelude::write_rgba_file(path, w, image.height() as usize, |x, y| {
-        let p = image.pixels()[y * w + x];
-        (p.x, p.y, p.z, p.w)
-    })
-    .map_err(|e| codec(path, e))
+    let px = image.pixels();
+    let channel = |k: usize| px.iter().map(|p| p[k]).collect::<Vec<f32>>();
+    write_exr_channels(
+        path,
+        image.size(),
+        vec![
+            ("R", channel(0)),
+            ("G", channel(1)),
+            ("B", channel(2)),
+            ("A", channel(3)),
+        ],
+    )
 }
 
 /// Writes named float channels of one size to an OpenEXR file (e.g. `Z` for depth, `N.X` …).
@@ -108,6 +126,22 @@ fn write_exr_channels_encoded(
     channels: Vec<(&str, Vec<f32>)>,
     encoding: exr::prelude::Encoding,
 ) -> Result<(), FrameError> {
+    let bytes = encode_exr(path, size, channels, encoding)?;
+    publish(path, &bytes)
+}
+
+/// Named float channels encoded as an OpenEXR file in memory. Blocks are written in increasing
+/// order, so the same image always gives the same bytes (whatever the thread count).
+pub fn encode_exr(
+    path: &Path,
+    size: (u32, u32),
+    channels: Vec<(&str, Vec<f32>)>,
+    encoding: exr::prelude::Encoding,
+) -> Result<Vec<u8>, FrameError> {
+    let encoding = exr::prelude::Encoding {
+        line_order: exr::prelude::LineOrder::Increasing,
+        ..encoding
+    };
     let list = channels
         .into_iter()
         .map(|(name, data)| AnyChannel::new(name, FlatSamples::F32(data)))
@@ -117,7 +151,12 @@ fn write_exr_channels_encoded(
         encoding,
         AnyChannels::sort(list),
     );
-    image.write().to_file(path).map_err(|e| codec(path, e))
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| codec(path, e))?;
+    Ok(bytes.into_inner())
 }
 
 /// Writes a depth image as a single-channel (`Z`) float OpenEXR.

@@ -30,7 +30,7 @@
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{GraphCamera, Orthographic, Pinhole, Spoc};
-use crate::frame::io::{read_exr_channels, write_exr_channels_small};
+use crate::frame::io::read_exr_channels;
 use crate::frame::packed::{OctUnit, pack_rgba, pack_unit};
 use crate::frame::{FrameError, Image};
 use crate::geom::Aabb;
@@ -81,6 +81,38 @@ struct Sidecar {
     height: u32,
     bounds: BoundsFile,
     camera: CameraFile,
+    /// The EXR's size in bytes and FNV-1a 64 checksum (hex): a sidecar is only ever read with
+    /// the EXR it was saved with. Absent in files written before they were recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    exr_bytes: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    exr_fnv1a: Option<String>,
+}
+
+/// FNV-1a, 64 bits: a checksum that tells two files apart (not a defence against forgery).
+fn fnv1a(bytes: impl IntoIterator<Item = u8>, mut hash: u64) -> u64 {
+    for b in bytes {
+        hash ^= u64::from(b);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    hash
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// Size and checksum of the file at `path`, read in blocks.
+fn size_and_checksum(path: &Path) -> std::io::Result<(u64, u64)> {
+    use std::io::Read as _;
+    let mut f = std::fs::File::open(path)?;
+    let (mut hash, mut size, mut block) = (FNV_OFFSET, 0u64, vec![0u8; 1 << 16]);
+    loop {
+        let n = f.read(&mut block)?;
+        if n == 0 {
+            return Ok((size, hash));
+        }
+        size += n as u64;
+        hash = fnv1a(block[..n].iter().copied(), hash);
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -344,7 +376,22 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
                 .collect(),
         ),
     ];
-    write_exr_channels_small(&exr_path, (w, h), channels)?;
+    // The maps first, whole, then the sidecar that names them with their checksum: a reader sees
+    // the old pair, or the new EXR with the old sidecar (refused by the checksum), never a
+    // truncated file.
+    let bytes = crate::frame::io::encode_exr(
+        &exr_path,
+        (w, h),
+        channels,
+        exr::prelude::Encoding::SMALL_LOSSLESS,
+    )?;
+    let publish = |path: &Path, bytes: &[u8]| {
+        crate::files::write_atomically(path, bytes).map_err(|source| ImpostorFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    publish(&exr_path, &bytes)?;
     let sidecar = Sidecar {
         format: FORMAT.into(),
         version: VERSION,
@@ -356,15 +403,14 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
             max: impostor.bounds.max.to_array(),
         },
         camera: CameraFile::from_camera(&impostor.camera),
+        exr_bytes: Some(bytes.len() as u64),
+        exr_fnv1a: Some(format!("{:016x}", fnv1a(bytes.iter().copied(), FNV_OFFSET))),
     };
     let text = serde_json::to_string_pretty(&sidecar).map_err(|e| ImpostorFileError::Invalid {
         path: json_path.to_path_buf(),
         reason: e.to_string(),
     })?;
-    std::fs::write(json_path, text).map_err(|source| ImpostorFileError::Io {
-        path: json_path.to_path_buf(),
-        source,
-    })
+    publish(json_path, text.as_bytes())
 }
 
 /// Reads an impostor saved by [`save`], validating every field.
@@ -485,6 +531,20 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             .map(|i| if i == 0.0 { NO_OBJECT } else { i as u32 - 1 })
             .collect(),
     )?;
+    // Last, once the EXR is known to be a readable impostor: that it is this sidecar's.
+    if let (Some(size), Some(sum)) = (sidecar.exr_bytes, &sidecar.exr_fnv1a) {
+        let (got_size, got) =
+            size_and_checksum(&exr_path).map_err(|source| ImpostorFileError::Io {
+                path: exr_path.clone(),
+                source,
+            })?;
+        if got_size != size || format!("{got:016x}") != *sum {
+            return Err(invalid(format!(
+                "{} is not the EXR this sidecar was saved with ({got_size} bytes, checksum {got:016x}; the sidecar says {size} bytes, {sum}): bake again",
+                exr_path.display()
+            )));
+        }
+    }
     Ok(Impostor::from_maps(
         camera,
         color,

@@ -28,6 +28,8 @@ pub enum Subject {
         path: PathBuf,
         /// The mesh.
         mesh: Mesh,
+        /// Every file read: the mesh file and what it names (materials, textures, buffers).
+        files: Vec<PathBuf>,
     },
     /// A maze floor plan (.maze).
     Maze {
@@ -85,6 +87,7 @@ impl Subject {
         let subject = Subject::Mesh {
             path: path.to_path_buf(),
             mesh: loaded.mesh,
+            files: loaded.files,
         };
         Ok((subject, warnings))
     }
@@ -93,6 +96,14 @@ impl Subject {
     pub fn path(&self) -> &Path {
         match self {
             Subject::Mesh { path, .. } | Subject::Maze { path, .. } => path,
+        }
+    }
+
+    /// Every file it was read from: a mesh's and what it names, or the floor plan.
+    pub fn files(&self) -> Vec<PathBuf> {
+        match self {
+            Subject::Mesh { files, .. } => files.clone(),
+            Subject::Maze { path, .. } => vec![path.clone()],
         }
     }
 

@@ -37,6 +37,16 @@ pub enum ReportError {
     /// A walk was asked of a camera it does not go with.
     #[error(transparent)]
     Walk(#[from] crate::impostor::WalkError),
+    /// The output directory holds files `trompe demo` did not write.
+    #[error(
+        "{dir}: not empty and not a demo report's directory (it holds {files}); give an empty or new directory"
+    )]
+    NotEmpty {
+        /// The directory.
+        dir: PathBuf,
+        /// Some of what it holds.
+        files: String,
+    },
     /// The output directory could not be written.
     #[error("{path}: {source}")]
     Io {
@@ -86,7 +96,7 @@ pub fn demo(
     out: &Path,
     progress: &dyn Fn(&str, u64) -> Box<dyn Progress>,
 ) -> Result<DemoSummary, ReportError> {
-    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    claim_directory(out)?;
     let started = std::time::Instant::now();
     let mut report = Report {
         title: "trompe — demo report".into(),
@@ -121,9 +131,35 @@ pub fn demo(
     run.table(steps);
     report.sections.push(run);
     let index = out.join("index.html");
-    std::fs::write(&index, report.to_html()).map_err(io_err(&index))?;
+    crate::files::write_atomically(&index, report.to_html().as_bytes()).map_err(io_err(&index))?;
     summary.index = index;
     Ok(summary)
+}
+
+/// The file that marks a directory as one `trompe demo` wrote.
+pub const MARKER: &str = ".trompe-demo";
+
+/// Makes `out` the report's directory: created if missing; else it must be empty or hold the
+/// marker of an earlier report, so that no file of a user's is overwritten.
+fn claim_directory(out: &Path) -> Result<(), ReportError> {
+    if out.exists() && !out.join(MARKER).is_file() {
+        let entries = std::fs::read_dir(out).map_err(io_err(out))?;
+        let mut names: Vec<String> = entries
+            .filter_map(Result::ok)
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        if !names.is_empty() {
+            names.sort();
+            names.truncate(5);
+            return Err(ReportError::NotEmpty {
+                dir: out.to_path_buf(),
+                files: names.join(", "),
+            });
+        }
+    }
+    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    let marker = out.join(MARKER);
+    crate::files::write_atomically(&marker, b"written by trompe demo\n").map_err(io_err(&marker))
 }
 
 /// The FLIP colour scale, 0 on the left to 1 on the right.

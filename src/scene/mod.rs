@@ -217,6 +217,9 @@ pub struct Scene {
     pub render: RenderSettings,
     /// Problems survived while loading.
     pub warnings: Vec<Warning>,
+    /// Every file the scene reads: itself, meshes and what they name, textures, the panorama,
+    /// baked impostors (sidecar and maps) — what a command must never overwrite.
+    pub files: Vec<PathBuf>,
 }
 
 /// A scene at one instant: camera and world-space geometry.
@@ -272,8 +275,9 @@ impl Scene {
         };
         let mut warnings = Vec::new();
         let mut objects = Vec::new();
+        let mut files = vec![path.to_path_buf()];
         for (i, o) in file.objects.iter().enumerate() {
-            objects.push(load_object(path, dir, i, o, &mut warnings)?);
+            objects.push(load_object(path, dir, i, o, &mut warnings, &mut files)?);
         }
         let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
             b.union(o.mesh.bounds().transformed(&o.world_from_object))
@@ -328,6 +332,7 @@ impl Scene {
         let environment = match &file.environment {
             Some(e) => {
                 finite("environment.rotation", &[e.rotation, e.intensity])?;
+                files.push(dir.join(&e.path));
                 EnvMap::load(&dir.join(&e.path), e.rotation.to_radians(), e.intensity).map_err(
                     |source| SceneError::Image {
                         path: path.to_path_buf(),
@@ -369,6 +374,7 @@ impl Scene {
                 ray_epsilon: 1e-4 * radius,
             },
             warnings,
+            files,
         })
     }
 
@@ -441,6 +447,7 @@ fn load_object(
     index: usize,
     o: &ObjectFile,
     warnings: &mut Vec<Warning>,
+    files: &mut Vec<PathBuf>,
 ) -> Result<SceneObject, SceneError> {
     let key = |k: &str| format!("object[{index}]{k}");
     let invalid = |k: &str, reason: String| SceneError::Invalid {
@@ -457,6 +464,7 @@ fn load_object(
                 source: Box::new(source),
             })?;
             warnings.extend(loaded.warnings);
+            files.extend(loaded.files);
             let stem = mesh_path
                 .file_stem()
                 .and_then(|s| s.to_str())
@@ -522,6 +530,9 @@ fn load_object(
     let surface = match &o.material {
         None => Surface::Diffuse(None),
         Some(MaterialFile::Diffuse { color, texture }) => {
+            if let Some(t) = texture {
+                files.push(dir.join(t));
+            }
             let texture = match texture {
                 Some(t) => Some(Arc::new(load_image(
                     scene,
@@ -573,7 +584,12 @@ fn load_object(
         surface,
         world_from_object,
         animation,
-        impostor: o.impostor.as_ref().map(|p| dir.join(p)),
+        impostor: o.impostor.as_ref().map(|p| {
+            let sidecar = dir.join(p);
+            files.push(sidecar.with_extension("exr"));
+            files.push(sidecar.clone());
+            sidecar
+        }),
     })
 }
 

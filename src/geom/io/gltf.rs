@@ -20,7 +20,8 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let gltf =
         gltf::Gltf::from_slice(&bytes).map_err(|e| malformed(path, "document", e.to_string()))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    check_external_files(path, base, &gltf.document)?;
+    let mut files = vec![path.to_path_buf()];
+    files.extend(check_external_files(path, base, &gltf.document)?);
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| malformed(path, "buffers", e.to_string()))?;
     for view in gltf.document.views() {
@@ -81,12 +82,22 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         mesh,
         source,
         warnings,
+        files,
     })
 }
 
-fn check_external_files(path: &Path, base: &Path, doc: &gltf::Document) -> Result<(), MeshError> {
+/// The external files `doc` names (buffers, images), each checked to exist.
+fn check_external_files(
+    path: &Path,
+    base: &Path,
+    doc: &gltf::Document,
+) -> Result<Vec<std::path::PathBuf>, MeshError> {
+    let mut files = Vec::new();
     for b in doc.buffers() {
         if let gltf::buffer::Source::Uri(uri) = b.source() {
+            if !uri.starts_with("data:") {
+                files.push(base.join(uri));
+            }
             if !uri.starts_with("data:") && !base.join(uri).is_file() {
                 return Err(malformed(
                     path,
@@ -98,6 +109,9 @@ fn check_external_files(path: &Path, base: &Path, doc: &gltf::Document) -> Resul
     }
     for i in doc.images() {
         if let gltf::image::Source::Uri { uri, .. } = i.source() {
+            if !uri.starts_with("data:") {
+                files.push(base.join(uri));
+            }
             if !uri.starts_with("data:") && !base.join(uri).is_file() {
                 return Err(malformed(
                     path,
@@ -107,7 +121,7 @@ fn check_external_files(path: &Path, base: &Path, doc: &gltf::Document) -> Resul
             }
         }
     }
-    Ok(())
+    Ok(files)
 }
 
 /// The accessors that define a primitive's vertices: POSITION, NORMAL, TEXCOORD_0.

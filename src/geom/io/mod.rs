@@ -10,7 +10,7 @@ mod obj;
 mod ply;
 
 use super::{Mesh, MeshError, SourceCounts, Warning};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A mesh as loaded from a file.
 #[derive(Clone, Debug)]
@@ -21,6 +21,9 @@ pub struct LoadedMesh {
     pub source: SourceCounts,
     /// Problems survived while loading.
     pub warnings: Vec<Warning>,
+    /// Every file read: the mesh file, then what it names (material libraries, textures,
+    /// buffers, images) — what a command must never overwrite.
+    pub files: Vec<PathBuf>,
 }
 
 /// Loads a mesh, choosing the format by extension (`.obj`, `.ply`, `.gltf`, `.glb`).
@@ -56,8 +59,13 @@ fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>)
     }
 }
 
-fn load_texture(mesh_path: &Path, name: &str) -> Result<super::Texture, MeshError> {
+fn load_texture(
+    mesh_path: &Path,
+    name: &str,
+    files: &mut Vec<PathBuf>,
+) -> Result<super::Texture, MeshError> {
     let dir = mesh_path.parent().unwrap_or(Path::new("."));
+    files.push(dir.join(name));
     let image =
         crate::frame::io::read_png(&dir.join(name)).map_err(|source| MeshError::Texture {
             path: mesh_path.to_path_buf(),

@@ -15,6 +15,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let bytes = read_file(path)?;
     let text = String::from_utf8_lossy(&bytes);
     let mut warnings = Vec::new();
+    let mut files = vec![path.to_path_buf()];
 
     let mut v: Vec<Vec3> = Vec::new();
     let mut vt: Vec<Vec2> = Vec::new();
@@ -113,7 +114,16 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 let name = tokens.collect::<Vec<_>>().join(" ");
                 let mtl_path = path.parent().unwrap_or(Path::new(".")).join(&name);
                 match std::fs::read(&mtl_path) {
-                    Ok(bytes) => load_mtl(&mtl_path, &bytes, &mut materials, &mut material_index)?,
+                    Ok(bytes) => {
+                        files.push(mtl_path.clone());
+                        load_mtl(
+                            &mtl_path,
+                            &bytes,
+                            &mut materials,
+                            &mut material_index,
+                            &mut files,
+                        )?
+                    }
                     Err(e) => warnings.push(Warning::Skipped {
                         path: path.to_path_buf(),
                         what: format!("material library {name:?} ({e}); using grey"),
@@ -150,6 +160,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         mesh,
         source,
         warnings,
+        files,
     })
 }
 
@@ -220,6 +231,7 @@ fn load_mtl(
     bytes: &[u8],
     materials: &mut Vec<Material>,
     index: &mut HashMap<String, u32>,
+    files: &mut Vec<std::path::PathBuf>,
 ) -> Result<(), MeshError> {
     let text = String::from_utf8_lossy(bytes);
     let mut current: Option<usize> = None;
@@ -260,7 +272,7 @@ fn load_mtl(
                 let name = tokens
                     .last()
                     .ok_or_else(|| at.malformed("map_Kd names no file"))?;
-                let tex = load_texture(path, name)?;
+                let tex = load_texture(path, name, files)?;
                 if let Some(m) = current.and_then(|i| materials.get_mut(i)) {
                     m.texture = Some(tex);
                 }

@@ -335,6 +335,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         mesh,
         source,
         warnings,
+        files: vec![path.to_path_buf()],
     })
 }
 
