@@ -224,3 +224,97 @@ fn bad_images_are_errors() {
     let p = write(&d, "env.exr", b"v/1\x01garbage");
     assert!(trompe::frame::envmap::EnvMap::load(&p, 0.0, 1.0).is_err());
 }
+
+/// The glTF files the `gltf` crate's readers panic on give a named error instead: indices of a
+/// signed or float type, an attribute accessor that does not exist, a stride smaller than an
+/// element, a bufferView image with no mimeType, UVs of a type the specification forbids.
+#[test]
+fn malformed_gltf_documents_are_named_errors_not_panics() {
+    let d = common::scratch("bad_gltf_rules");
+    // A triangle: 36 bytes of positions, then 3 index bytes (and a pad byte), in a data URI.
+    let mut buf: Vec<u8> = [0.0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    buf.extend([0u8, 1, 2, 0]);
+    let b64 = {
+        const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut s = String::new();
+        for c in buf.chunks(3) {
+            let n = (u32::from(c[0]) << 16)
+                | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+                | u32::from(*c.get(2).unwrap_or(&0));
+            for k in 0..4 {
+                if k <= c.len() {
+                    s.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
+                } else {
+                    s.push('=');
+                }
+            }
+        }
+        s
+    };
+    let doc = |index_type: u32, position: u32, stride: &str, extra: &str, attrs: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":{position}{attrs}}},"indices":1}}]}}],
+"buffers":[{{"byteLength":40,"uri":"data:application/octet-stream;base64,{b64}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36{stride}}},{{"buffer":0,"byteOffset":36,"byteLength":3}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":{index_type},"count":3,"type":"SCALAR"}},
+{{"bufferView":1,"componentType":5125,"count":1,"type":"VEC2"}}]{extra}}}"#
+        )
+    };
+    let good = d.join("good.gltf");
+    std::fs::write(&good, doc(5121, 0, "", "", "")).unwrap();
+    assert!(
+        trompe::geom::io::load(&good).is_ok(),
+        "the well-formed triangle loads"
+    );
+    let image = r#","images":[{"bufferView":1}],"textures":[{"source":0}]"#;
+    for (name, text, expect) in [
+        (
+            "byte_indices",
+            doc(5120, 0, "", "", ""),
+            "indices are unsigned",
+        ),
+        (
+            "short_indices",
+            doc(5122, 0, "", "", ""),
+            "indices are unsigned",
+        ),
+        (
+            "float_indices",
+            doc(5126, 0, "", "", ""),
+            "indices are unsigned",
+        ),
+        (
+            "missing_accessor",
+            doc(5121, 7, "", "", ""),
+            "accessor 7 does not exist",
+        ),
+        (
+            "stride",
+            doc(5121, 0, r#","byteStride":4"#, "", ""),
+            "smaller than one element",
+        ),
+        (
+            "image_mime",
+            doc(5121, 0, "", image, ""),
+            "needs a mimeType",
+        ),
+        (
+            "uint_uvs",
+            doc(5121, 0, "", "", r#","TEXCOORD_0":2"#),
+            "does not allow",
+        ),
+    ] {
+        let p = d.join(format!("{name}.gltf"));
+        std::fs::write(&p, text).unwrap();
+        let e = trompe::geom::io::load(&p)
+            .err()
+            .unwrap_or_else(|| panic!("{name} loaded"));
+        let e = e.to_string();
+        assert!(e.contains(expect) && e.contains(name), "{name}: {e}");
+    }
+}

@@ -638,3 +638,52 @@ fn bakes_are_byte_identical_and_a_sidecar_keeps_to_its_own_maps() {
     let o = trompe(&["info", d.join("a.json").to_str().unwrap()]);
     fails_cleanly(&o, "is not the EXR this sidecar was saved with");
 }
+
+/// Numbers past what trompe can place are named errors, not panics: a NaN time, an object
+/// placed or animated beyond f32, NaN animation speeds.
+#[test]
+fn non_finite_times_and_placements_are_named_errors() {
+    let d = scratch("cli_non_finite");
+    let out = d.join("o.png");
+    let out = out.to_str().unwrap();
+    fails_cleanly(
+        &trompe(&[
+            "render",
+            "scenes/turntable.toml",
+            "--time",
+            "nan",
+            "-o",
+            out,
+        ]),
+        "must be a finite number",
+    );
+    let cam =
+        "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [8, 8]\n";
+    for (name, body, time, expect) in [
+        (
+            "far.toml",
+            "[[object]]\nshape = \"cube\"\ntranslate = [3e38, 0, 0]\n[[object]]\nshape = \"cube\"\ntranslate = [-3e38, 0, 0]\n",
+            "0",
+            "span more than",
+        ),
+        (
+            "runs.toml",
+            "[[object]]\nshape = \"sphere\"\n[object.animate]\nvelocity = [3e38, 0, 0]\n",
+            "10",
+            "not finite",
+        ),
+        (
+            "nan.toml",
+            "[[object]]\nshape = \"sphere\"\n[object.animate]\ndegrees_per_second = nan\n",
+            "1",
+            "object[0].animate",
+        ),
+    ] {
+        let p = d.join(name);
+        std::fs::write(&p, format!("{cam}{body}")).unwrap();
+        fails_cleanly(
+            &trompe(&["render", p.to_str().unwrap(), "--time", time, "-o", out]),
+            expect,
+        );
+    }
+}

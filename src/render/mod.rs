@@ -71,6 +71,17 @@ pub enum RenderError {
         /// Why not.
         reason: &'static str,
     },
+    /// The time asked for is not a finite number.
+    #[error("time {0}: must be a finite number of seconds")]
+    Time(f32),
+    /// An object's coordinates, placed and animated, are not finite.
+    #[error(
+        "object {object}: its coordinates at this time are not finite (placed or animated too far)"
+    )]
+    NonFinite {
+        /// The object (ids count from 0 in the scene file's order).
+        object: usize,
+    },
     /// A baked impostor a scene object names could not be loaded.
     #[error("object {object}: {source}")]
     BakedImpostor {
@@ -111,6 +122,9 @@ pub fn render_at(
     method: Method,
     progress: &dyn Progress,
 ) -> Result<(Frame, Timings), RenderError> {
+    if !t.is_finite() {
+        return Err(RenderError::Time(t));
+    }
     let mut timings = Timings::default();
     let view = timings.time("evaluate scene", || scene.view(t))?;
     let frame = match method {
@@ -150,6 +164,15 @@ pub fn render_view(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
+    // Geometry past what f32 holds (a translation of 3e38, an animation run far) is refused
+    // here, before any structure is built over it.
+    if let Some(object) = view
+        .meshes
+        .iter()
+        .position(|m| !m.bounds().extent().is_finite())
+    {
+        return Err(RenderError::NonFinite { object });
+    }
     match method {
         Method::Raster => render_raster(view, lighting, progress, timings),
         Method::Trace => {

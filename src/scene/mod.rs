@@ -287,6 +287,12 @@ impl Scene {
         } else {
             bounds.radius().max(1e-6)
         };
+        if !radius.is_finite() {
+            return Err(invalid(
+                "object",
+                "the objects together span more than f32 coordinates hold".into(),
+            ));
+        }
 
         let c = &file.camera;
         finite("camera.position", &c.position)?;
@@ -562,6 +568,13 @@ fn load_object(
     let animation = match &o.animate {
         None => None,
         Some(a) => {
+            let values = [a.axis.as_slice(), &a.velocity, &[a.degrees_per_second]].concat();
+            if !values.iter().all(|x| x.is_finite()) {
+                return Err(invalid(
+                    ".animate",
+                    "axis, degrees_per_second and velocity must be finite".into(),
+                ));
+            }
             let axis = Vec3::from_array(a.axis)
                 .try_normalize()
                 .ok_or_else(|| invalid(".animate.axis", "must not be zero".into()))?;

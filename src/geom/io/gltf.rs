@@ -17,8 +17,18 @@ use std::sync::Arc;
 /// Loads a `.gltf` or `.glb` file.
 pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let bytes = read_file(path)?;
-    let gltf =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| malformed(path, "document", e.to_string()))?;
+    check_references(path, &bytes)?;
+    // The last line of defence: a decoder panic on a file no check above foresaw becomes an
+    // error naming the file, not an abort.
+    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes)).map_err(|_| {
+        malformed(
+            path,
+            "document",
+            "the glTF decoder failed on this file (malformed)",
+        )
+    })?;
+    let gltf = parsed.map_err(|e| malformed(path, "document", e.to_string()))?;
+    validate(path, gltf.document.as_json())?;
     let base = path.parent().unwrap_or(Path::new("."));
     let mut files = vec![path.to_path_buf()];
     files.extend(check_external_files(path, base, &gltf.document)?);
@@ -84,6 +94,274 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         warnings,
         files,
     })
+}
+
+/// Every index the document's meshes, nodes, scenes, accessors and textures hold is in range —
+/// checked on the raw JSON (of a `.gltf`, or a `.glb`'s JSON chunk), because the `gltf` crate's
+/// own validation indexes some of them unchecked.
+fn check_references(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
+    use serde_json::Value;
+    let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        match gltf::Glb::from_slice(bytes) {
+            Ok(glb) => glb.json,
+            Err(e) => return Err(malformed(path, "GLB container", e.to_string())),
+        }
+    } else {
+        std::borrow::Cow::Borrowed(bytes)
+    };
+    let Ok(root) = serde_json::from_slice::<Value>(&json) else {
+        return Ok(()); // Not JSON: the decoder says why.
+    };
+    let count = |key: &str| root.get(key).and_then(Value::as_array).map_or(0, Vec::len);
+    let array = |v: &Value, key: &str| -> Vec<Value> {
+        v.get(key)
+            .and_then(Value::as_array)
+            .cloned()
+            .unwrap_or_default()
+    };
+    let check = |element: String, what: &str, v: Option<&Value>, n: usize| match v {
+        None => Ok(()),
+        Some(i) => match i.as_u64() {
+            Some(i) if (i as usize) < n => Ok(()),
+            _ => Err(malformed(
+                path,
+                element,
+                format!("{what} {i} does not exist ({n} in the file)"),
+            )),
+        },
+    };
+    let (accessors, views, meshes, nodes) = (
+        count("accessors"),
+        count("bufferViews"),
+        count("meshes"),
+        count("nodes"),
+    );
+    for (m, mesh) in array(&root, "meshes").iter().enumerate() {
+        for (p, prim) in array(mesh, "primitives").iter().enumerate() {
+            let at = format!("mesh {m} primitive {p}");
+            check(at.clone(), "accessor", prim.get("indices"), accessors)?;
+            check(
+                at.clone(),
+                "material",
+                prim.get("material"),
+                count("materials"),
+            )?;
+            if let Some(attrs) = prim.get("attributes").and_then(Value::as_object) {
+                for (name, a) in attrs {
+                    check(format!("{at} {name}"), "accessor", Some(a), accessors)?;
+                }
+            }
+        }
+    }
+    for (a, acc) in array(&root, "accessors").iter().enumerate() {
+        check(
+            format!("accessor {a}"),
+            "bufferView",
+            acc.get("bufferView"),
+            views,
+        )?;
+    }
+    for (n, node) in array(&root, "nodes").iter().enumerate() {
+        check(format!("node {n}"), "mesh", node.get("mesh"), meshes)?;
+        for c in array(node, "children") {
+            check(format!("node {n}"), "node", Some(&c), nodes)?;
+        }
+    }
+    for (s, scene) in array(&root, "scenes").iter().enumerate() {
+        for c in array(scene, "nodes") {
+            check(format!("scene {s}"), "node", Some(&c), nodes)?;
+        }
+    }
+    check(
+        "document".into(),
+        "scene",
+        root.get("scene"),
+        count("scenes"),
+    )?;
+    for (t, tex) in array(&root, "textures").iter().enumerate() {
+        check(
+            format!("texture {t}"),
+            "image",
+            tex.get("source"),
+            count("images"),
+        )?;
+    }
+    Ok(())
+}
+
+/// The rules of the glTF 2.0 specification that the `gltf` crate's readers assume rather than
+/// check (they panic on a file that breaks them), checked on the document before any data is
+/// read: every index in range, index and attribute accessors of the component types and shapes
+/// the specification allows, strides no smaller than an element, images with a source.
+fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), MeshError> {
+    use gltf::json::accessor::{ComponentType, Type};
+    use gltf::json::validation::Checked;
+    let (n_acc, n_views, n_buffers) = (
+        root.accessors.len(),
+        root.buffer_views.len(),
+        root.buffers.len(),
+    );
+    let bad = |element: String, reason: String| malformed(path, element, reason);
+    let in_range = |what: &str, i: usize, n: usize, element: String| {
+        if i < n {
+            Ok(())
+        } else {
+            Err(bad(
+                element,
+                format!("{what} {i} does not exist ({n} in the file)"),
+            ))
+        }
+    };
+    for (v, view) in root.buffer_views.iter().enumerate() {
+        in_range(
+            "buffer",
+            view.buffer.value(),
+            n_buffers,
+            format!("bufferView {v}"),
+        )?;
+    }
+    for (a, acc) in root.accessors.iter().enumerate() {
+        if let Some(view) = acc.buffer_view {
+            in_range("bufferView", view.value(), n_views, format!("accessor {a}"))?;
+            let (Checked::Valid(ct), Checked::Valid(ty)) = (&acc.component_type, &acc.type_) else {
+                return Err(bad(
+                    format!("accessor {a}"),
+                    "unknown component type or type".into(),
+                ));
+            };
+            let element = ct.0.size() * ty.multiplicity();
+            if let Some(stride) = root.buffer_views[view.value()].byte_stride {
+                if stride.0 < element {
+                    return Err(bad(
+                        format!("accessor {a}"),
+                        format!(
+                            "byteStride {} of bufferView {} is smaller than one element ({element} bytes)",
+                            stride.0,
+                            view.value()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let accessor = |a: usize, element: String| -> Result<(ComponentType, Type, bool), MeshError> {
+        in_range("accessor", a, n_acc, element.clone())?;
+        let acc = &root.accessors[a];
+        match (&acc.component_type, &acc.type_) {
+            (Checked::Valid(ct), Checked::Valid(ty)) => Ok((ct.0, *ty, acc.normalized)),
+            _ => Err(bad(element, "unknown component type or type".into())),
+        }
+    };
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let at = |what: &str| format!("mesh {m} primitive {p} {what}");
+            if let Some(i) = prim.indices {
+                let (ct, ty, _) = accessor(i.value(), at("indices"))?;
+                let unsigned = matches!(
+                    ct,
+                    ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+                );
+                if !unsigned || ty != Type::Scalar {
+                    return Err(bad(
+                        at("indices"),
+                        format!(
+                            "accessor {} is {ct:?} {ty:?}; indices are unsigned byte, short or int scalars",
+                            i.value()
+                        ),
+                    ));
+                }
+            }
+            for (semantic, a) in &prim.attributes {
+                let Checked::Valid(semantic) = semantic else {
+                    continue;
+                };
+                let (ct, ty, normalized) = accessor(a.value(), at(&format!("{semantic:?}")))?;
+                use gltf::json::mesh::Semantic;
+                let allowed = match semantic {
+                    Semantic::Positions | Semantic::Normals => {
+                        ct == ComponentType::F32 && ty == Type::Vec3
+                    }
+                    Semantic::TexCoords(_) => {
+                        ty == Type::Vec2
+                            && (ct == ComponentType::F32
+                                || (normalized
+                                    && matches!(ct, ComponentType::U8 | ComponentType::U16)))
+                    }
+                    _ => true,
+                };
+                if !allowed {
+                    return Err(bad(
+                        at(&format!("{semantic:?}")),
+                        format!(
+                            "accessor {} is {ct:?} {ty:?}{}, which the specification does not allow for it",
+                            a.value(),
+                            if normalized { " normalized" } else { "" }
+                        ),
+                    ));
+                }
+            }
+            if let Some(mat) = prim.material {
+                in_range(
+                    "material",
+                    mat.value(),
+                    root.materials.len(),
+                    at("material"),
+                )?;
+            }
+        }
+    }
+    for (n, node) in root.nodes.iter().enumerate() {
+        if let Some(mesh) = node.mesh {
+            in_range("mesh", mesh.value(), root.meshes.len(), format!("node {n}"))?;
+        }
+        for c in node.children.iter().flatten() {
+            in_range("node", c.value(), root.nodes.len(), format!("node {n}"))?;
+        }
+    }
+    for (s, scene) in root.scenes.iter().enumerate() {
+        for c in &scene.nodes {
+            in_range("node", c.value(), root.nodes.len(), format!("scene {s}"))?;
+        }
+    }
+    for (t, tex) in root.textures.iter().enumerate() {
+        in_range(
+            "image",
+            tex.source.value(),
+            root.images.len(),
+            format!("texture {t}"),
+        )?;
+    }
+    for (m, mat) in root.materials.iter().enumerate() {
+        if let Some(info) = &mat.pbr_metallic_roughness.base_color_texture {
+            in_range(
+                "texture",
+                info.index.value(),
+                root.textures.len(),
+                format!("material {m}"),
+            )?;
+        }
+    }
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (Some(_), None, _) => {}
+            (None, Some(view), Some(_)) => {
+                in_range("bufferView", view.value(), n_views, format!("image {i}"))?;
+            }
+            (None, Some(_), None) => {
+                return Err(bad(
+                    format!("image {i}"),
+                    "a bufferView image needs a mimeType".into(),
+                ));
+            }
+            _ => {
+                return Err(bad(
+                    format!("image {i}"),
+                    "needs either a uri or a bufferView".into(),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The external files `doc` names (buffers, images), each checked to exist.
