@@ -318,3 +318,51 @@ fn malformed_gltf_documents_are_named_errors_not_panics() {
         assert!(e.contains(expect) && e.contains(name), "{name}: {e}");
     }
 }
+
+/// A texture is decoded once however many materials name it, and a glTF image no used material
+/// references is never decoded (a garbage one does not stop the load).
+#[test]
+fn textures_are_decoded_once_and_only_when_used() {
+    let d = common::scratch("textures_once");
+    let png = common::shared("meshes/bunny10k_textured/TextureDouble_A.png");
+    std::fs::copy(&png, d.join("t.png")).unwrap();
+    let mut mtl = String::new();
+    for m in 0..4 {
+        mtl.push_str(&format!("newmtl m{m}\nmap_Kd t.png\n"));
+    }
+    std::fs::write(d.join("m.mtl"), mtl).unwrap();
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n");
+    for m in 0..4 {
+        obj.push_str(&format!("usemtl m{m}\nf 1/1 2/2 3/3\n"));
+    }
+    std::fs::write(d.join("m.obj"), obj).unwrap();
+    let loaded = trompe::geom::io::load(&d.join("m.obj")).unwrap();
+    let textures: Vec<_> = loaded
+        .mesh
+        .materials
+        .iter()
+        .filter_map(|m| m.texture.clone())
+        .collect();
+    assert_eq!(textures.len(), 4);
+    assert!(
+        textures
+            .iter()
+            .all(|t| std::sync::Arc::ptr_eq(t, &textures[0])),
+        "decoded once"
+    );
+    assert_eq!(
+        loaded.files.iter().filter(|f| f.ends_with("t.png")).count(),
+        1
+    );
+    // A glTF with an unused image of garbage bytes.
+    let gltf = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],
+"images":[{"uri":"garbage.png"}]}"#;
+    std::fs::write(d.join("garbage.png"), b"not a png at all").unwrap();
+    std::fs::write(d.join("unused.gltf"), gltf).unwrap();
+    let loaded = trompe::geom::io::load(&d.join("unused.gltf")).unwrap();
+    assert_eq!(loaded.mesh.triangle_count(), 1);
+}

@@ -7,9 +7,8 @@
 //! before the crate's readers slice any buffer.
 
 use super::{LoadedMesh, malformed, read_file};
-use crate::frame::{Image, srgb_to_linear};
 use crate::geom::{Material, Mesh, MeshError, SourceCounts, Warning};
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -49,14 +48,13 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
             ));
         }
     }
-    let images = gltf::import_images(&gltf.document, Some(base), &buffers)
-        .map_err(|e| malformed(path, "images", e.to_string()))?;
 
     let mut warnings = Vec::new();
     let mut state = Flatten {
         path,
         buffers: &buffers,
-        images: &images,
+        document: &gltf.document,
+        base,
         textures: HashMap::new(),
         materials: HashMap::new(),
         mesh: Mesh::default(),
@@ -415,13 +413,41 @@ fn vertex_key(prim: &gltf::Primitive) -> VertexKey {
     )
 }
 
+/// A URI's `%XX` escapes decoded (glTF file URIs are URI-encoded).
+fn percent_decoded(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        match (
+            b[i],
+            b.get(i + 1).copied().and_then(hex),
+            b.get(i + 2).copied().and_then(hex),
+        ) {
+            (b'%', Some(h), Some(l)) => {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+            }
+            (c, _, _) => {
+                out.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
 /// Node hierarchies deeper than this are refused (cycles are invalid glTF but must not hang).
 const MAX_NODE_DEPTH: usize = 256;
 
 struct Flatten<'a> {
     path: &'a Path,
     buffers: &'a [gltf::buffer::Data],
-    images: &'a [gltf::image::Data],
+    /// Images are decoded only when a used material asks for one, each once, its size checked
+    /// before its pixels are allocated.
+    document: &'a gltf::Document,
+    base: &'a Path,
     textures: HashMap<usize, crate::geom::Texture>,
     materials: HashMap<Option<usize>, u32>,
     mesh: Mesh,
@@ -614,46 +640,40 @@ impl Flatten<'_> {
         if let Some(t) = self.textures.get(&image) {
             return Ok(t.clone());
         }
-        let data = self
-            .images
-            .get(image)
-            .ok_or_else(|| malformed(self.path, format!("image {image}"), "missing"))?;
-        let channels = match data.format {
-            gltf::image::Format::R8 => 1,
-            gltf::image::Format::R8G8 => 2,
-            gltf::image::Format::R8G8B8 => 3,
-            gltf::image::Format::R8G8B8A8 => 4,
-            other => {
-                return Err(malformed(
-                    self.path,
-                    format!("image {image}"),
-                    format!("pixel format {other:?} is not supported"),
-                ));
+        let element = format!("image {image}");
+        let source = self
+            .document
+            .images()
+            .nth(image)
+            .ok_or_else(|| malformed(self.path, &element, "missing"))?
+            .source();
+        let bytes: Vec<u8> = match source {
+            gltf::image::Source::View { view, .. } => {
+                let data = self.buffers.get(view.buffer().index()).map(|d| &d[..]);
+                data.and_then(|d| d.get(view.offset()..view.offset() + view.length()))
+                    .ok_or_else(|| {
+                        malformed(self.path, &element, "its bufferView is out of range")
+                    })?
+                    .to_vec()
             }
-        };
-        let px: Vec<Vec4> = data
-            .pixels
-            .chunks_exact(channels)
-            .map(|p| {
-                let c = |i: usize| srgb_to_linear(p[i.min(channels - 1)] as f32 / 255.0);
-                let a = if channels == 4 {
-                    p[3] as f32 / 255.0
-                } else {
-                    1.0
-                };
-                if channels <= 2 {
-                    Vec4::new(c(0), c(0), c(0), a)
-                } else {
-                    Vec4::new(c(0), c(1), c(2), a)
+            gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+                Some(rest) => {
+                    let (_, payload) = rest.split_once(";base64,").ok_or_else(|| {
+                        malformed(self.path, &element, "a data URI that is not base64")
+                    })?;
+                    base64::decode(payload)
+                        .map_err(|e| malformed(self.path, &element, e.to_string()))?
                 }
-            })
-            .collect();
-        let img =
-            Image::from_vec(data.width, data.height, px).map_err(|source| MeshError::Texture {
+                None => read_file(&self.base.join(percent_decoded(uri)))?,
+            },
+        };
+        let img = crate::frame::io::decode_srgb_image(&bytes, self.path).map_err(|source| {
+            MeshError::Texture {
                 path: self.path.to_path_buf(),
-                texture: format!("image {image}"),
+                texture: element.clone(),
                 source,
-            })?;
+            }
+        })?;
         let t = Arc::new(img);
         self.textures.insert(image, t.clone());
         Ok(t)

@@ -59,20 +59,34 @@ fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>)
     }
 }
 
+/// What one load has read: every file, and the textures decoded so far (one decode a path,
+/// however many materials name it).
+#[derive(Default)]
+struct Reads {
+    files: Vec<PathBuf>,
+    textures: std::collections::HashMap<PathBuf, super::Texture>,
+}
+
 fn load_texture(
     mesh_path: &Path,
     name: &str,
-    files: &mut Vec<PathBuf>,
+    reads: &mut Reads,
 ) -> Result<super::Texture, MeshError> {
     let dir = mesh_path.parent().unwrap_or(Path::new("."));
-    files.push(dir.join(name));
+    let at = dir.join(name);
+    if let Some(t) = reads.textures.get(&at) {
+        return Ok(t.clone());
+    }
+    reads.files.push(at.clone());
     let image =
         crate::frame::io::read_png(&dir.join(name)).map_err(|source| MeshError::Texture {
             path: mesh_path.to_path_buf(),
             texture: name.to_string(),
             source,
         })?;
-    Ok(std::sync::Arc::new(image))
+    let texture = std::sync::Arc::new(image);
+    reads.textures.insert(at, texture.clone());
+    Ok(texture)
 }
 
 /// What `trompe info` says of a loaded mesh file ([`LoadedMesh::summary`]).

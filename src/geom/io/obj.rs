@@ -4,7 +4,7 @@
 //! and `mtllib`; MTL `newmtl`, `Kd` and `map_Kd`. Each distinct `v/vt/vn` triple becomes one
 //! vertex. `vt` is flipped to the image convention (`t = 1 − v`). Errors name the line.
 
-use super::{LoadedMesh, load_texture, malformed, read_file};
+use super::{LoadedMesh, Reads, load_texture, malformed, read_file};
 use crate::geom::{Material, Mesh, MeshError, SourceCounts, Warning};
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
@@ -15,7 +15,10 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let bytes = read_file(path)?;
     let text = String::from_utf8_lossy(&bytes);
     let mut warnings = Vec::new();
-    let mut files = vec![path.to_path_buf()];
+    let mut reads = Reads {
+        files: vec![path.to_path_buf()],
+        ..Reads::default()
+    };
 
     let mut v: Vec<Vec3> = Vec::new();
     let mut vt: Vec<Vec2> = Vec::new();
@@ -115,13 +118,13 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 let mtl_path = path.parent().unwrap_or(Path::new(".")).join(&name);
                 match std::fs::read(&mtl_path) {
                     Ok(bytes) => {
-                        files.push(mtl_path.clone());
+                        reads.files.push(mtl_path.clone());
                         load_mtl(
                             &mtl_path,
                             &bytes,
                             &mut materials,
                             &mut material_index,
-                            &mut files,
+                            &mut reads,
                         )?
                     }
                     Err(e) => warnings.push(Warning::Skipped {
@@ -160,7 +163,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         mesh,
         source,
         warnings,
-        files,
+        files: reads.files,
     })
 }
 
@@ -231,7 +234,7 @@ fn load_mtl(
     bytes: &[u8],
     materials: &mut Vec<Material>,
     index: &mut HashMap<String, u32>,
-    files: &mut Vec<std::path::PathBuf>,
+    reads: &mut Reads,
 ) -> Result<(), MeshError> {
     let text = String::from_utf8_lossy(bytes);
     let mut current: Option<usize> = None;
@@ -272,7 +275,7 @@ fn load_mtl(
                 let name = tokens
                     .last()
                     .ok_or_else(|| at.malformed("map_Kd names no file"))?;
-                let tex = load_texture(path, name, files)?;
+                let tex = load_texture(path, name, reads)?;
                 if let Some(m) = current.and_then(|i| materials.get_mut(i)) {
                     m.texture = Some(tex);
                 }
