@@ -16,6 +16,8 @@ use trompe::scene::Scene;
 /// Largest impostor side the CLI accepts: a square image within the frame limits
 /// ([`trompe::frame::MAX_PIXELS`]).
 const MAX_IMPOSTOR_SIDE: i64 = 8192;
+/// The most worker threads `--threads` asks for (each reserves a stack).
+const MAX_THREADS: usize = 1024;
 /// The most rays `impostor check` fires from one source (bounds its memory: 32 bytes a ray).
 const MAX_CHECK_RAYS: i64 = 10_000_000;
 
@@ -103,7 +105,7 @@ pub struct CheckArgs {
     #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
     camera: CameraArg,
     /// SPOC strength k (default: the rule k = 2Δ/z_O from the reflector's region).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_strength)]
     k: Option<f64>,
     /// Impostor resolution (square).
     #[arg(long, default_value_t = 512,
@@ -189,7 +191,7 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 3.0)]
     distance: f32,
     /// SPOC strength k (default: the rule k = 2Δ/z_O with Δ one bounding radius).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_strength)]
     k: Option<f64>,
     /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
     #[arg(short, long)]
@@ -218,6 +220,15 @@ impl CameraArg {
             CameraArg::Spoc => CameraChoice::Placed(ViewCamera::Spoc(k)),
             CameraArg::Graph => CameraChoice::Graph,
         }
+    }
+}
+
+/// Parses a SPOC strength: a finite, non-negative number.
+fn parse_strength(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(k) if k.is_finite() && k >= 0.0 => Ok(k),
+        Ok(_) => Err(format!("{text:?}: must be a finite number ≥ 0")),
+        Err(e) => Err(format!("{text:?}: {e}")),
     }
 }
 
@@ -471,8 +482,8 @@ impl CheckArgs {
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<ExitCode> {
     if let Some(n) = cli.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
+        if n == 0 || n > MAX_THREADS {
+            bail!("--threads {n}: must be between 1 and {MAX_THREADS}");
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)

@@ -687,3 +687,71 @@ fn non_finite_times_and_placements_are_named_errors() {
         );
     }
 }
+
+/// What used to pass silently or be named wrongly: NaN colours, tints and light intensities; an
+/// all-black mask; `--k nan`; an absurd `--threads`; a UTF-8 byte-order mark before an OBJ's
+/// first vertex.
+#[test]
+fn silent_wrong_results_are_named_errors() {
+    let d = scratch("cli_silent");
+    let out = d.join("o.png");
+    let out = out.to_str().unwrap();
+    let cam =
+        "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [8, 8]\n";
+    for (name, body, expect) in [
+        (
+            "colour.toml",
+            "[[object]]\nshape = \"cube\"\nmaterial = { type = \"diffuse\", color = [nan, 0, 0] }\n",
+            "object[0].material",
+        ),
+        (
+            "tint.toml",
+            "[[object]]\nshape = \"cube\"\nmaterial = { type = \"mirror\", tint = [1, inf, 1] }\n",
+            "object[0].material",
+        ),
+        (
+            "light.toml",
+            "[light]\ndirection = [0, 1, 0]\nintensity = nan\n",
+            "light.intensity",
+        ),
+        (
+            "env.toml",
+            "[environment]\npath = \"x.hdr\"\nintensity = nan\n",
+            "environment.intensity",
+        ),
+    ] {
+        let p = d.join(name);
+        std::fs::write(&p, format!("{cam}{body}")).unwrap();
+        fails_cleanly(&trompe(&["render", p.to_str().unwrap(), "-o", out]), expect);
+    }
+    // An all-black mask selects nothing: an error, not NaN scores.
+    let img = d.join("img.png");
+    let black = d.join("black.png");
+    trompe::frame::io::write_png(&img, &trompe::Image::new(4, 4, trompe::Rgba::ONE).unwrap())
+        .unwrap();
+    trompe::frame::io::write_png(&black, &trompe::Image::new(4, 4, trompe::Rgba::W).unwrap())
+        .unwrap();
+    let (i, b) = (img.to_str().unwrap(), black.to_str().unwrap());
+    fails_cleanly(&trompe(&["compare", i, i, "--mask", b]), "selects no pixel");
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            "assets/meshes/teapot.obj",
+            "--k",
+            "nan",
+            "-o",
+            out,
+        ]),
+        "finite number",
+    );
+    fails_cleanly(
+        &trompe(&["--threads", "100000", "info", "assets/meshes/teapot.obj"]),
+        "between 1 and",
+    );
+    // A byte-order mark does not cost the first vertex.
+    let obj = d.join("bom.obj");
+    std::fs::write(&obj, b"\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let loaded = trompe::geom::io::load(&obj).unwrap();
+    assert_eq!(loaded.mesh.triangle_count(), 1);
+}

@@ -39,6 +39,14 @@ fn check_inputs(a: &Image<Rgba>, b: &Image<Rgba>, mask: Option<&Mask>) -> Result
     same_size(a, b)?;
     if let Some(m) = mask {
         same_size(a, m)?;
+        if !m.pixels().iter().any(|&keep| keep) {
+            let (w, h) = m.size();
+            return Err(FrameError::InvalidSize {
+                width: u64::from(w),
+                height: u64::from(h),
+                reason: "the mask selects no pixel: there is nothing to average",
+            });
+        }
     }
     Ok(())
 }

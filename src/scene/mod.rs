@@ -337,7 +337,8 @@ impl Scene {
 
         let environment = match &file.environment {
             Some(e) => {
-                finite("environment.rotation", &[e.rotation, e.intensity])?;
+                finite("environment.rotation", &[e.rotation])?;
+                finite("environment.intensity", &[e.intensity])?;
                 files.push(dir.join(&e.path));
                 EnvMap::load(&dir.join(&e.path), e.rotation.to_radians(), e.intensity).map_err(
                     |source| SceneError::Image {
@@ -351,8 +352,9 @@ impl Scene {
         };
         let light = match &file.light {
             Some(l) => {
-                finite("light", &l.direction)?;
-                finite("light", &l.color)?;
+                finite("light.direction", &l.direction)?;
+                finite("light.color", &l.color)?;
+                finite("light.intensity", &[l.intensity])?;
                 let direction = vec3(l.direction)
                     .try_normalize()
                     .ok_or_else(|| invalid("light.direction", "must not be zero".into()))?;
@@ -531,6 +533,19 @@ fn load_object(
         return Err(invalid(
             "",
             "the transformed mesh has coordinates too large to represent".into(),
+        ));
+    }
+    let colours: Vec<f32> = match &o.material {
+        Some(MaterialFile::Diffuse { color, .. }) => color.map_or(vec![], |c| c.to_vec()),
+        Some(MaterialFile::Mirror { tint }) | Some(MaterialFile::Glass { tint, .. }) => {
+            tint.to_vec()
+        }
+        None => vec![],
+    };
+    if !colours.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(invalid(
+            ".material",
+            "colours and tints must be finite and non-negative".into(),
         ));
     }
     let surface = match &o.material {

@@ -13,7 +13,8 @@ use std::path::Path;
 /// Loads an OBJ file and the MTL libraries it names.
 pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let bytes = read_file(path)?;
-    let text = String::from_utf8_lossy(&bytes);
+    // A UTF-8 byte-order mark is not part of the first line.
+    let text = String::from_utf8_lossy(bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes));
     let mut warnings = Vec::new();
     let mut reads = Reads {
         files: vec![path.to_path_buf()],
