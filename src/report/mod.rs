@@ -1,8 +1,8 @@
 //! The demo report: `trompe demo` renders the scenes shipped in `scenes/`, measures every method
 //! against the exact one, and writes `index.html` — run metadata, a table of contents, then one
-//! [`html::Section`] per capability (`foundation`, `impostors`, `maze`), each built as data and
+//! `html::Section` per capability (`foundation`, `impostors`, `maze`), each built as data and
 //! written by the one HTML writer in `html`. A new capability adds a section file and one line
-//! in [`demo`].
+//! in `demo`.
 
 mod foundation;
 pub mod html;
