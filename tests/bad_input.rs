@@ -366,3 +366,39 @@ fn textures_are_decoded_once_and_only_when_used() {
     let loaded = trompe::geom::io::load(&d.join("unused.gltf")).unwrap();
     assert_eq!(loaded.mesh.triangle_count(), 1);
 }
+
+/// Messages that named the wrong thing: an OBJ texture-coordinate or normal index out of
+/// range, a glTF buffer that is a folder, and a sidecar that is a device with no length.
+#[test]
+fn messages_name_what_is_wrong() {
+    let d = common::scratch("bad_messages");
+    let obj = d.join("vt.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/5 3/1\n").unwrap();
+    let e = trompe::geom::io::load(&obj).unwrap_err().to_string();
+    assert!(e.contains("texture coordinate index 5 out of range"), "{e}");
+    let obj = d.join("vn.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n",
+    )
+    .unwrap();
+    let e = trompe::geom::io::load(&obj).unwrap_err().to_string();
+    assert!(e.contains("normal index 2 out of range"), "{e}");
+    std::fs::create_dir_all(d.join("buffer.bin")).unwrap();
+    let gltf = d.join("folder.gltf");
+    std::fs::write(
+        &gltf,
+        r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":4,"uri":"buffer.bin"}]}"#,
+    )
+    .unwrap();
+    let e = trompe::geom::io::load(&gltf).unwrap_err().to_string();
+    assert!(e.contains("is a folder"), "{e}");
+    #[cfg(unix)]
+    {
+        let link = d.join("zero.json");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+        let e = trompe::impostor::file::load(&link).unwrap_err().to_string();
+        assert!(e.contains("longer than 1 MiB"), "{e}");
+    }
+}

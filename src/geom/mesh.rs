@@ -118,13 +118,15 @@ pub enum MeshError {
         /// What is wrong.
         reason: String,
     },
-    /// A face refers to a vertex that does not exist.
-    #[error("{path}: {element}: vertex index {index} out of range ({count} vertices)")]
+    /// A face refers to a vertex (or an OBJ texture coordinate or normal) that does not exist.
+    #[error("{path}: {element}: {kind} index {index} out of range (there are {count})")]
     IndexOutOfRange {
         /// The file.
         path: PathBuf,
         /// Which face.
         element: String,
+        /// What the index counts: `vertex`, `texture coordinate` or `normal`.
+        kind: &'static str,
         /// The index as written.
         index: i64,
         /// How many vertices there are.
@@ -226,6 +228,7 @@ impl Mesh {
                     return Err(MeshError::IndexOutOfRange {
                         path: path_buf,
                         element: format!("triangle {f}"),
+                        kind: "vertex",
                         index: i as i64,
                         count: n,
                     });

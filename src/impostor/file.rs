@@ -429,7 +429,18 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             "sidecar is {len} bytes; at most 1 MiB expected"
         )));
     }
-    let text = std::fs::read_to_string(json_path).map_err(io)?;
+    // Read through a bound: a device or a pipe named like a sidecar reports no length.
+    let mut text = String::new();
+    {
+        use std::io::Read as _;
+        let f = std::fs::File::open(json_path).map_err(io)?;
+        f.take(MAX_SIDECAR_BYTES + 1)
+            .read_to_string(&mut text)
+            .map_err(io)?;
+    }
+    if text.len() as u64 > MAX_SIDECAR_BYTES {
+        return Err(invalid("sidecar is longer than 1 MiB".into()));
+    }
     let sidecar: Sidecar = serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
     if sidecar.format != FORMAT || sidecar.version != VERSION {
         return Err(invalid(format!(

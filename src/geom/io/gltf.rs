@@ -362,6 +362,15 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), MeshError> {
     Ok(())
 }
 
+/// Why the file `uri` names beside the document is not a file one can read.
+fn missing_file(base: &Path, uri: &str) -> String {
+    if base.join(uri).is_dir() {
+        format!("{uri:?} is a folder, not a file")
+    } else {
+        format!("file {uri:?} not found")
+    }
+}
+
 /// The external files `doc` names (buffers, images), each checked to exist.
 fn check_external_files(
     path: &Path,
@@ -378,7 +387,7 @@ fn check_external_files(
                 return Err(malformed(
                     path,
                     format!("buffer {}", b.index()),
-                    format!("file {uri:?} not found"),
+                    missing_file(base, uri),
                 ));
             }
         }
@@ -392,7 +401,7 @@ fn check_external_files(
                 return Err(malformed(
                     path,
                     format!("image {}", i.index()),
-                    format!("file {uri:?} not found"),
+                    missing_file(base, uri),
                 ));
             }
         }
@@ -571,6 +580,7 @@ impl Flatten<'_> {
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
             return Err(MeshError::IndexOutOfRange {
                 path: self.path.to_path_buf(),
+                kind: "vertex",
                 element: element(),
                 index: bad as i64,
                 count: n,

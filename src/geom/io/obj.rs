@@ -63,11 +63,11 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                 let mut poly: Vec<u32> = Vec::with_capacity(4);
                 for tok in tokens {
                     let mut parts = tok.split('/');
-                    let iv = resolve(&at, parts.next(), v.len())?.ok_or_else(|| {
+                    let iv = resolve(&at, parts.next(), v.len(), "vertex")?.ok_or_else(|| {
                         at.malformed(format!("face corner {tok:?} has no vertex index"))
                     })?;
-                    let it = resolve(&at, parts.next(), vt.len())?;
-                    let inn = resolve(&at, parts.next(), vn.len())?;
+                    let it = resolve(&at, parts.next(), vt.len(), "texture coordinate")?;
+                    let inn = resolve(&at, parts.next(), vn.len(), "normal")?;
                     any_vt |= it.is_some();
                     all_have_vn &= inn.is_some();
                     let key = (iv, it.map_or(u32::MAX, |x| x), inn.map_or(u32::MAX, |x| x));
@@ -211,7 +211,14 @@ fn parse_vec3<'a>(
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index; `None` for an empty field.
-fn resolve(at: &Line<'_>, field: Option<&str>, count: usize) -> Result<Option<u32>, MeshError> {
+/// Resolves one index of a face corner against the `count` elements of its `kind` (`v`, `vt`
+/// or `vn`) read so far; an index out of range names what it counts.
+fn resolve(
+    at: &Line<'_>,
+    field: Option<&str>,
+    count: usize,
+    kind: &'static str,
+) -> Result<Option<u32>, MeshError> {
     let Some(field) = field.filter(|f| !f.is_empty()) else {
         return Ok(None);
     };
@@ -223,6 +230,7 @@ fn resolve(at: &Line<'_>, field: Option<&str>, count: usize) -> Result<Option<u3
         return Err(MeshError::IndexOutOfRange {
             path: at.path.to_path_buf(),
             element: at.element(),
+            kind,
             index: i,
             count,
         });

@@ -288,6 +288,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                             if i < 0.0 || i >= vertex_count as f64 || i.fract() != 0.0 {
                                 return Err(MeshError::IndexOutOfRange {
                                     path: path.to_path_buf(),
+                                    kind: "vertex",
                                     element: body.element(),
                                     index: i as i64,
                                     count: vertex_count,
