@@ -12,6 +12,7 @@ pub mod io;
 mod mesh;
 pub mod optics;
 mod plane;
+pub(crate) mod polygon;
 mod primitives;
 mod sampling;
 

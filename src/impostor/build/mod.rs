@@ -223,16 +223,9 @@ fn draw_and_resolve<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     before: MapsBefore,
 ) -> Result<crate::raster::RasterStats, FrameError> {
     let w = impostor.camera.resolution().0;
-    let camera = impostor.camera.clone();
-    let inputs = ResolveInputs {
-        camera: &camera,
-        mesh,
-        object,
-        color,
-        before,
-    };
+    let inputs = ResolveInputs::of(impostor, (mesh, object), color, before);
     let (gd, runs) = impostor.gd_and_texel_runs((BAND_ROWS * w) as usize);
-    let spoc = match &camera {
+    let spoc = match &inputs.camera {
         ImpostorCamera::Spoc(s) => Some(s),
         _ => None,
     };

@@ -91,11 +91,31 @@ pub(super) struct RunDepth<'a> {
 
 /// What resolving a visibility buffer needs besides the visible points.
 pub(super) struct ResolveInputs<'a, F> {
-    pub(super) camera: &'a ImpostorCamera,
+    /// The impostor's camera (a copy: the impostor's maps are borrowed mutably meanwhile).
+    pub(super) camera: ImpostorCamera,
     pub(super) mesh: &'a Mesh,
     pub(super) object: u32,
     pub(super) color: &'a F,
     pub(super) before: MapsBefore,
+}
+
+impl<'a, F> ResolveInputs<'a, F> {
+    /// What resolving `mesh` (object id `object`) into `impostor`'s maps, which hold `before`,
+    /// needs.
+    pub(super) fn of(
+        impostor: &Impostor,
+        (mesh, object): (&'a Mesh, u32),
+        color: &'a F,
+        before: MapsBefore,
+    ) -> Self {
+        ResolveInputs {
+            camera: impostor.camera.clone(),
+            mesh,
+            object,
+            color,
+            before,
+        }
+    }
 }
 
 /// Fills a run of texels — whole image rows of `width` texels — from the visible points
@@ -227,14 +247,7 @@ pub(super) fn resolve<F, V>(
     V: Fn(usize) -> Option<Visible> + Sync,
 {
     let row = impostor.color.size().0 as usize;
-    let camera = impostor.camera.clone();
-    let inputs = ResolveInputs {
-        camera: &camera,
-        mesh,
-        object,
-        color,
-        before,
-    };
+    let inputs = ResolveInputs::of(impostor, (mesh, object), color, before);
     impostor
         .gd_and_texel_runs(row)
         .1
