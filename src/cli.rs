@@ -28,6 +28,10 @@ pub struct Cli {
     /// Worker threads (default: every core).
     #[arg(long, global = true)]
     pub threads: Option<usize>,
+    /// Largest memory one input-sized allocation may take: a frame, an impostor, a decoded
+    /// texture, a glTF scene's instances (e.g. 512M, 4G; default: half the machine's memory).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = trompe::memory::parse_size)]
+    pub memory_limit: Option<u64>,
     /// Print per-step timings and loader warnings.
     #[arg(short, long, global = true)]
     pub verbose: bool,
@@ -481,6 +485,9 @@ impl CheckArgs {
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<ExitCode> {
+    if let Some(bytes) = cli.memory_limit {
+        trompe::memory::set_limit(bytes);
+    }
     if let Some(n) = cli.threads {
         if n == 0 || n > MAX_THREADS {
             bail!("--threads {n}: must be between 1 and {MAX_THREADS}");

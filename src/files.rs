@@ -11,6 +11,28 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
+/// Holds the folder of a multi-file artefact (an impostor's EXR and the sidecar that names it)
+/// while one writer publishes it: a second writer to the same folder waits, so concurrent
+/// writers leave one complete result, never one's sidecar beside another's maps. The lock is
+/// the operating system's advisory lock on the folder, released when the guard drops or the
+/// process dies (a killed writer never leaves it held). Where a folder cannot be locked (a
+/// platform that does not open folders as files), writers proceed unserialised.
+pub struct PublishLock {
+    _folder: Option<std::fs::File>,
+}
+
+impl PublishLock {
+    /// Waits for, then takes, the publishing lock of `path`'s folder.
+    pub fn of(path: &Path) -> PublishLock {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let folder = std::fs::File::open(dir).ok().filter(|f| f.lock().is_ok());
+        PublishLock { _folder: folder }
+    }
+}
+
 /// Writes `bytes` to `path` as a whole: into a temporary file in the same folder, flushed to
 /// disk, then renamed over `path` (a rename within one file system is atomic). On any error the
 /// temporary file is removed and `path` is as it was.

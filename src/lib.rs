@@ -35,6 +35,7 @@
 //!   the raster, trace and impostor methods built on it.
 //! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.
 //! * [`progress`] — progress reports and step timings of long work.
+//! * [`memory`] — the memory budget every input-sized allocation is checked against.
 //!
 //! ## Conventions (said once, here)
 //!
@@ -59,6 +60,7 @@ pub mod files;
 pub mod frame;
 pub mod geom;
 pub mod impostor;
+pub mod memory;
 pub mod progress;
 pub mod raster;
 pub mod render;

@@ -166,6 +166,13 @@ fn bad_ply_files() {
     );
     let nan = ply_header("ascii", 3, 1) + "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n";
     error_of(&d, "nan.ply", nan.as_bytes(), "vertex 1");
+    let half = ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n";
+    error_of(
+        &d,
+        "half.ply",
+        half.as_bytes(),
+        "vertex index 1.5 is not a whole number",
+    );
     let word = ply_header("ascii", 3, 1) + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n";
     error_of(&d, "word.ply", word.as_bytes(), "vertex 1");
 }
@@ -308,6 +315,15 @@ fn malformed_gltf_documents_are_named_errors_not_panics() {
             doc(5121, 0, "", "", r#","TEXCOORD_0":2"#),
             "does not allow",
         ),
+        (
+            "count_overflow",
+            doc(5121, 0, "", "", "").replacen(
+                r#""count":3,"type":"SCALAR""#,
+                r#""count":18446744073709551615,"type":"SCALAR""#,
+                1,
+            ),
+            "accessor 1",
+        ),
     ] {
         let p = d.join(format!("{name}.gltf"));
         std::fs::write(&p, text).unwrap();
@@ -369,6 +385,35 @@ fn textures_are_decoded_once_and_only_when_used() {
 
 /// Messages that named the wrong thing: an OBJ texture-coordinate or normal index out of
 /// range, a glTF buffer that is a folder, and a sidecar that is a device with no length.
+/// An EXR with more channels than any trompe file has is refused from its header, before its
+/// pixels are read.
+#[test]
+fn an_exr_with_too_many_channels_is_refused_from_its_header() {
+    use exr::prelude::*;
+    let d = scratch("exr_channels");
+    let size = (4, 4);
+    let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = (0..60)
+        .map(|c| {
+            AnyChannel::new(
+                Text::from(format!("c{c}").as_str()),
+                FlatSamples::F32(vec![0.0; 16]),
+            )
+        })
+        .collect();
+    let layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::UNCOMPRESSED,
+        AnyChannels::sort(channels),
+    );
+    let p = d.join("wide.exr");
+    Image::from_layer(layer).write().to_file(&p).unwrap();
+    let e = trompe::frame::io::read_exr_channels(&p)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("wide.exr") && e.contains("60 channels"), "{e}");
+}
+
 #[test]
 fn messages_name_what_is_wrong() {
     let d = common::scratch("bad_messages");

@@ -639,6 +639,36 @@ fn bakes_are_byte_identical_and_a_sidecar_keeps_to_its_own_maps() {
     fails_cleanly(&o, "is not the EXR this sidecar was saved with");
 }
 
+/// Two bakes to one name at once leave one complete, loadable impostor: the first is held
+/// between its EXR and its sidecar (a test hook) while the second bakes and publishes.
+#[test]
+fn concurrent_bakes_to_one_name_leave_one_complete_impostor() {
+    let d = scratch("cli_bake_concurrent");
+    let teapot = common::asset("meshes/teapot.obj");
+    let out = d.join("t.json");
+    let bake = |from: &str, pause_ms: &str| {
+        Command::new(env!("CARGO_BIN_EXE_trompe"))
+            .args(["impostor", "bake", teapot.to_str().unwrap()])
+            .args(["--resolution", "96", "--from", from, "-o"])
+            .arg(&out)
+            .env("TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS", pause_ms)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("runs")
+    };
+    for trial in 0..2 {
+        let slow = bake("0,0.3,1", "800");
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let fast = bake("1,0.3,0", "0");
+        for child in [slow, fast] {
+            let o = child.wait_with_output().expect("waits");
+            assert!(o.status.success(), "trial {trial}: {}", stderr(&o));
+        }
+        let loaded = trompe::impostor::file::load(&out);
+        assert!(loaded.is_ok(), "trial {trial}: {:?}", loaded.err());
+    }
+}
+
 /// Numbers past what trompe can place are named errors, not panics: a NaN time, an object
 /// placed or animated beyond f32, NaN animation speeds.
 #[test]

@@ -64,12 +64,15 @@ pub fn read_png(path: &Path) -> Result<Image<Rgba>, FrameError> {
 
 /// Decodes an encoded 8/16-bit image held in memory (`path` only names it in errors).
 pub fn decode_srgb_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, FrameError> {
-    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| codec(path, e))?;
-    let (w, h) = reader.into_dimensions().map_err(|e| codec(path, e))?;
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| codec(path, e))
+    };
+    let (w, h) = reader()?.into_dimensions().map_err(|e| codec(path, e))?;
     check_size(w as u64, h as u64)?;
-    let img = image::load_from_memory(bytes).map_err(|e| codec(path, e))?;
+    decode_budget(path, w, h, DECODE_BYTES_PER_PIXEL)?;
+    let img = reader()?.decode().map_err(|e| codec(path, e))?;
     let rgba = img.to_rgba8();
     let data = rgba
         .pixels()
@@ -83,6 +86,19 @@ pub fn decode_srgb_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, Frame
         })
         .collect();
     Image::from_vec(w, h, data)
+}
+
+/// Bytes a pixel costs while an 8/16-bit image is decoded to linear RGBA: the decoded image (up
+/// to 8 bytes), its RGBA8 copy (4) and the linear result (16).
+const DECODE_BYTES_PER_PIXEL: u64 = 28;
+
+/// Refuses decoding a `w × h` image of `path` at `per_pixel` bytes past the memory budget.
+fn decode_budget(path: &Path, w: u32, h: u32, per_pixel: u64) -> Result<(), FrameError> {
+    crate::memory::check(
+        || format!("{}, a {w} × {h} image,", path.display()),
+        crate::memory::times(w as u64 * h as u64, per_pixel),
+    )?;
+    Ok(())
 }
 
 /// Writes a linear colour image as a float RGBA OpenEXR (channels `R G B A`).
@@ -236,6 +252,9 @@ impl ExrChannels {
     }
 }
 
+/// The most channels trompe reads from one EXR layer (an impostor has 15 at most).
+pub const MAX_EXR_CHANNELS: usize = 32;
+
 fn check_exr_size(path: &Path) -> Result<(), FrameError> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| codec(path, e))?;
     let header = meta
@@ -243,7 +262,16 @@ fn check_exr_size(path: &Path) -> Result<(), FrameError> {
         .first()
         .ok_or_else(|| codec(path, "no layer in file"))?;
     let size = header.layer_size;
-    check_size(size.0 as u64, size.1 as u64)?;
+    let (w, h) = check_size(size.0 as u64, size.1 as u64)?;
+    let channels = header.channels.list.len() as u64;
+    if channels > MAX_EXR_CHANNELS as u64 {
+        return Err(codec(
+            path,
+            format!("{channels} channels in one layer (trompe reads at most {MAX_EXR_CHANNELS})"),
+        ));
+    }
+    // Each channel is read as f32 samples and may be copied once more by the caller.
+    decode_budget(path, w, h, crate::memory::times(channels.max(4), 8))?;
     Ok(())
 }
 
@@ -273,6 +301,8 @@ pub fn read_hdr(path: &Path) -> Result<Image<Rgba>, FrameError> {
         .map_err(|e| codec(path, e))?;
     let meta = decoder.metadata();
     let (w, h) = check_size(meta.width as u64, meta.height as u64)?;
+    // The decoded RGB f32 image (12 bytes), its RGB32F view (12) and the RGBA result (16).
+    decode_budget(path, w, h, 40)?;
     let img = image::DynamicImage::from_decoder(decoder).map_err(|e| codec(path, e))?;
     let rgb = img.to_rgb32f();
     let data = rgb

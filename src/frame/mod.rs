@@ -60,6 +60,9 @@ pub enum FrameError {
         /// What went wrong.
         reason: String,
     },
+    /// An image the memory budget refuses ([`crate::memory`]).
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OverBudget),
     /// Two images that must have the same size do not.
     #[error("image sizes differ: {a:?} vs {b:?}")]
     SizeMismatch {
@@ -104,6 +107,7 @@ impl<T: Copy + Send + Sync> Image<T> {
     /// first write to a fresh page of memory is a page fault, and those are served in parallel.
     pub fn new(width: u32, height: u32, fill: T) -> Result<Self, FrameError> {
         let (w, h) = check_size(width as u64, height as u64)?;
+        check_budget::<T>(w, h)?;
         let n = w as usize * h as usize;
         let data = if n * std::mem::size_of::<T>() < PARALLEL_FILL_BYTES {
             vec![fill; n]
@@ -128,6 +132,7 @@ impl<T: Copy + bytemuck::Zeroable> Image<T> {
     /// recycles, it clears itself.)
     pub fn zeroed(width: u32, height: u32) -> Result<Self, FrameError> {
         let (w, h) = check_size(width as u64, height as u64)?;
+        check_budget::<T>(w, h)?;
         let data = bytemuck::allocation::try_zeroed_vec(w as usize * h as usize).map_err(|()| {
             FrameError::InvalidSize {
                 width: width as u64,
@@ -141,6 +146,21 @@ impl<T: Copy + bytemuck::Zeroable> Image<T> {
             data,
         })
     }
+}
+
+/// Refuses a `w × h` image of `T` past the memory budget.
+fn check_budget<T>(w: u32, h: u32) -> Result<(), FrameError> {
+    let bytes = crate::memory::times(w as u64 * h as u64, std::mem::size_of::<T>() as u64);
+    crate::memory::check(
+        || {
+            format!(
+                "a {w} × {h} image of {}-byte pixels",
+                std::mem::size_of::<T>()
+            )
+        },
+        bytes,
+    )?;
+    Ok(())
 }
 
 /// Images at least this large are filled in parallel ([`Image::new`]).

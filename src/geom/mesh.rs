@@ -150,6 +150,14 @@ pub enum MeshError {
         /// The cause.
         source: FrameError,
     },
+    /// What the file asks for would need more memory than the budget allows.
+    #[error("{path}: {source}")]
+    Memory {
+        /// The file.
+        path: PathBuf,
+        /// What, and how much.
+        source: crate::memory::OverBudget,
+    },
     /// The file holds no triangle.
     #[error("{path}: no triangles")]
     Empty {

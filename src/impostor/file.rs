@@ -391,7 +391,9 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
             source,
         })
     };
+    let _lock = crate::files::PublishLock::of(json_path);
     publish(&exr_path, &bytes)?;
+    pause_for_tests();
     let sidecar = Sidecar {
         format: FORMAT.into(),
         version: VERSION,
@@ -411,6 +413,17 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
         reason: e.to_string(),
     })?;
     publish(json_path, text.as_bytes())
+}
+
+/// A test hook: `TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS` (at most 10 s) holds a writer between
+/// its EXR and its sidecar, so the tests can make two writers interleave there.
+fn pause_for_tests() {
+    if let Some(ms) = std::env::var("TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms.min(10_000)));
+    }
 }
 
 /// Reads an impostor saved by [`save`], validating every field.

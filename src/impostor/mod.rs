@@ -28,6 +28,11 @@ mod straight;
 mod subject;
 mod walk;
 
+/// Bytes one texel of an impostor costs, for the memory budget ([`crate::memory`]): its maps
+/// (24: half-float colour, `gd`, two packed normals, object id), the walks' index (about 22: the
+/// texel's plane and its share of the max pyramid) and the rasterizer's scratch while it builds.
+pub const BYTES_PER_TEXEL: u64 = 64;
+
 pub use bake::{BakeError, BakeReport, BakeSettings, bake};
 pub use billboard::Billboard;
 pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};

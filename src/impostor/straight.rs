@@ -90,12 +90,12 @@ impl Impostor {
             let entry = self.texel_sample(camera, world(mu_in), (tx, ty));
             let exit = self.texel_sample(camera, world(mu_out), (tx, ty));
             for cur in [entry, exit].into_iter().flatten() {
-                if let Some(p) = prev {
-                    if p.delta > 0.0 && cur.delta <= 0.0 {
-                        if let Some(hit) = self.accept(ray, &p, &cur) {
-                            return Some(hit);
-                        }
-                    }
+                if let Some(p) = prev
+                    && p.delta > 0.0
+                    && cur.delta <= 0.0
+                    && let Some(hit) = self.accept(ray, &p, &cur)
+                {
+                    return Some(hit);
                 }
                 prev = Some(cur);
             }

@@ -259,10 +259,11 @@ impl Impostor {
             let cur = self
                 .sample(g, c.lerp(e, k as f64 / n as f64), &mut stats)
                 .unwrap_or(empty);
-            if prev.delta > 0.0 && cur.delta <= 0.0 {
-                if let Some(hit) = self.accept(ray, &prev, &cur) {
-                    return (Some(hit), stats);
-                }
+            if prev.delta > 0.0
+                && cur.delta <= 0.0
+                && let Some(hit) = self.accept(ray, &prev, &cur)
+            {
+                return (Some(hit), stats);
             }
             prev = cur;
         }

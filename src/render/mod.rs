@@ -71,6 +71,9 @@ pub enum RenderError {
         /// Why not.
         reason: &'static str,
     },
+    /// The frame, the BVH or the impostors would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OverBudget),
     /// The time asked for is not a finite number.
     #[error("time {0}: must be a finite number of seconds")]
     Time(f32),
@@ -127,6 +130,7 @@ pub fn render_at(
     }
     let mut timings = Timings::default();
     let view = timings.time("evaluate scene", || scene.view(t))?;
+    check_memory(&view, method)?;
     let frame = match method {
         Method::Impostor(resolution) => {
             let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
@@ -153,6 +157,32 @@ pub fn render_at(
         )?,
     };
     Ok((frame, timings))
+}
+
+/// Bytes a frame pixel costs while it is rendered: the [`Frame`] (36) and the tracer's working
+/// state and the encoded output beside it.
+pub const BYTES_PER_PIXEL: u64 = 64;
+/// Bytes a triangle costs in the BVH and while it is built.
+pub const BVH_BYTES_PER_TRIANGLE: u64 = 256;
+
+/// Refuses a render whose frame, BVH and impostors would need more than the memory budget.
+pub fn check_memory(view: &View, method: Method) -> Result<(), crate::memory::OverBudget> {
+    use crate::memory::{check, times};
+    let (w, h) = crate::camera::Projection::resolution(&view.camera);
+    let triangles: u64 = view.meshes.iter().map(|m| m.triangle_count() as u64).sum();
+    let mut needed = times(w as u64 * h as u64, BYTES_PER_PIXEL)
+        .saturating_add(times(triangles, BVH_BYTES_PER_TRIANGLE));
+    let mut what = format!("a {w} × {h} render of {triangles} triangles");
+    if let Method::Impostor(side) = method {
+        // At most one impostor an object.
+        let objects = view.meshes.len() as u64;
+        let each = times(side as u64 * side as u64, crate::impostor::BYTES_PER_TEXEL);
+        needed = needed.saturating_add(times(objects, each));
+        what.push_str(&format!(
+            " with up to {objects} impostors of {side} × {side}"
+        ));
+    }
+    check(|| what, needed)
 }
 
 /// Renders an evaluated view.

@@ -67,6 +67,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         .default_scene()
         .or_else(|| gltf.document.scenes().next())
         .ok_or_else(|| malformed(path, "document", "no scene"))?;
+    check_instances(path, &scene)?;
     for node in scene.nodes() {
         state.visit(&node, Mat4::IDENTITY, 0)?;
     }
@@ -228,17 +229,17 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), MeshError> {
                 ));
             };
             let element = ct.0.size() * ty.multiplicity();
-            if let Some(stride) = root.buffer_views[view.value()].byte_stride {
-                if stride.0 < element {
-                    return Err(bad(
-                        format!("accessor {a}"),
-                        format!(
-                            "byteStride {} of bufferView {} is smaller than one element ({element} bytes)",
-                            stride.0,
-                            view.value()
-                        ),
-                    ));
-                }
+            if let Some(stride) = root.buffer_views[view.value()].byte_stride
+                && stride.0 < element
+            {
+                return Err(bad(
+                    format!("accessor {a}"),
+                    format!(
+                        "byteStride {} of bufferView {} is smaller than one element ({element} bytes)",
+                        stride.0,
+                        view.value()
+                    ),
+                ));
             }
         }
     }
@@ -447,6 +448,64 @@ fn percent_decoded(uri: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// Bytes a vertex of the flattened mesh costs (position, normal, texture coordinate and the
+/// loader's bookkeeping), and a triangle (indices and material).
+const BYTES_PER_VERTEX: u64 = 48;
+const BYTES_PER_TRIANGLE: u64 = 32;
+
+/// Refuses a scene whose node hierarchy instances more geometry than the memory budget holds —
+/// a small file can instance a mesh 2⁴⁰ times through a DAG of nodes — before any is flattened.
+/// Each node's cost is counted once (memoised), so the check is linear in the document.
+fn check_instances(path: &Path, scene: &gltf::Scene) -> Result<(), MeshError> {
+    use crate::memory::times;
+    // A count past what its bufferView holds is reported, naming the accessor, by the walk.
+    fn held(accessor: &gltf::Accessor) -> u64 {
+        let most = accessor.view().map_or(0, |v| {
+            v.length() / v.stride().unwrap_or(accessor.size()).max(1)
+        });
+        accessor.count().min(most) as u64
+    }
+    fn mesh_bytes(mesh: &gltf::Mesh) -> u64 {
+        mesh.primitives()
+            .map(|p| {
+                let vertices = p.get(&gltf::Semantic::Positions).map_or(0, |a| held(&a));
+                let corners = p.indices().map_or(vertices, |a| held(&a));
+                times(vertices, BYTES_PER_VERTEX)
+                    .saturating_add(times(corners / 3, BYTES_PER_TRIANGLE))
+            })
+            .fold(0u64, u64::saturating_add)
+    }
+    fn node_bytes(node: &gltf::Node, depth: usize, memo: &mut HashMap<usize, u64>) -> Option<u64> {
+        if depth > MAX_NODE_DEPTH {
+            return None;
+        }
+        if let Some(&bytes) = memo.get(&node.index()) {
+            return Some(bytes);
+        }
+        let mut bytes = node.mesh().map_or(0, |m| mesh_bytes(&m));
+        for child in node.children() {
+            bytes = bytes.saturating_add(node_bytes(&child, depth + 1, memo)?);
+        }
+        memo.insert(node.index(), bytes);
+        Some(bytes)
+    }
+    let mut memo = HashMap::new();
+    let mut total = 0u64;
+    for node in scene.nodes() {
+        // A hierarchy too deep is reported, naming the node, by the walk that flattens it.
+        let Some(bytes) = node_bytes(&node, 0, &mut memo) else {
+            return Ok(());
+        };
+        total = total.saturating_add(bytes);
+    }
+    crate::memory::check(|| "the scene's instanced meshes".to_string(), total).map_err(|source| {
+        MeshError::Memory {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
+
 /// Node hierarchies deeper than this are refused (cycles are invalid glTF but must not hang).
 const MAX_NODE_DEPTH: usize = 256;
 
@@ -506,10 +565,14 @@ impl Flatten<'_> {
         let elem = accessor.size();
         let stride = view.stride().unwrap_or(elem);
         let need = match accessor.count() {
-            0 => 0,
-            n => accessor.offset() + (n - 1).saturating_mul(stride) + elem,
+            0 => Some(0),
+            n => (n - 1)
+                .checked_mul(stride)
+                .and_then(|b| b.checked_add(accessor.offset()))
+                .and_then(|b| b.checked_add(elem)),
         };
-        if need > view.length() {
+        if need.is_none_or(|need| need > view.length()) {
+            let need = need.map_or("more than 2⁶⁴".to_string(), |n| n.to_string());
             return Err(malformed(
                 self.path,
                 element,
@@ -570,7 +633,7 @@ impl Flatten<'_> {
             Some(i) => i.into_u32().collect(),
             None => (0..n as u32).collect(),
         };
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(malformed(
                 self.path,
                 element(),

@@ -285,7 +285,14 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                         let mut poly = Vec::with_capacity(n as usize);
                         for _ in 0..n as usize {
                             let i = body.read(*item)?;
-                            if i < 0.0 || i >= vertex_count as f64 || i.fract() != 0.0 {
+                            if i.fract() != 0.0 || !i.is_finite() {
+                                return Err(malformed(
+                                    path,
+                                    body.element(),
+                                    format!("vertex index {i} is not a whole number"),
+                                ));
+                            }
+                            if i < 0.0 || i >= vertex_count as f64 {
                                 return Err(MeshError::IndexOutOfRange {
                                     path: path.to_path_buf(),
                                     kind: "vertex",

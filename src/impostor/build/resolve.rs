@@ -282,6 +282,10 @@ pub(in crate::impostor) fn impostor_bounds(mesh: &Mesh) -> Aabb {
 /// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
 pub(super) fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     let (w, h) = camera.resolution();
+    crate::memory::check(
+        || format!("a {w} × {h} impostor"),
+        crate::memory::times(w as u64 * h as u64, crate::impostor::BYTES_PER_TEXEL),
+    )?;
     // Allocated on two threads, half the bytes each (colour and normal; face normal, object
     // and gd): memory the allocator recycles (a process that builds again and again) it
     // clears itself, and that clearing then runs on both cores.

@@ -95,10 +95,10 @@ pub(super) fn tessellate_with<P: Projection>(
     let needs_any_split = |t: usize| {
         let [a, b, c] = mesh.triangles[t].map(|i| i as usize);
         // One bound for the three edges settles nearly every triangle.
-        if let (Some(pa), Some(pb), Some(pc)) = (projected[a], projected[b], projected[c]) {
-            if camera.midpoint_deviation_bound(&[pa, pb, pc]) <= MAX_DEVIATION_PX {
-                return false;
-            }
+        if let (Some(pa), Some(pb), Some(pc)) = (projected[a], projected[b], projected[c])
+            && camera.midpoint_deviation_bound(&[pa, pb, pc]) <= MAX_DEVIATION_PX
+        {
+            return false;
         }
         [(a, b), (b, c), (c, a)]
             .iter()

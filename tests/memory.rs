@@ -1,0 +1,115 @@
+//! The memory budget: every allocation sized by input is refused past the limit, before it is
+//! made. One test in this binary, because the limit is process-wide.
+
+mod common;
+use std::path::Path;
+use trompe::memory::{self, OverBudget};
+
+/// The process's peak resident memory so far (Linux), in bytes.
+fn peak_resident() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// A glTF whose 40 levels of two nodes each all point at both nodes of the next level: a few
+/// kilobytes that instance one triangle 2⁴⁰ times.
+fn instancing_dag(dir: &Path) -> std::path::PathBuf {
+    const LEVELS: usize = 40;
+    let mut nodes = Vec::new();
+    for level in 0..LEVELS {
+        for _ in 0..2 {
+            if level + 1 == LEVELS {
+                nodes.push(r#"{"mesh":0}"#.to_string());
+            } else {
+                let (a, b) = (2 * (level + 1), 2 * (level + 1) + 1);
+                nodes.push(format!(r#"{{"children":[{a},{b}]}}"#));
+            }
+        }
+    }
+    // One triangle: 36 bytes of positions, base64 of nine little-endian floats.
+    let positions = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA";
+    let doc = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],"nodes":[{}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{positions}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}]}}"#,
+        nodes.join(",")
+    );
+    let path = dir.join("dag.gltf");
+    std::fs::write(&path, doc).unwrap();
+    path
+}
+
+#[test]
+fn input_sized_allocations_are_refused_past_the_budget_before_they_are_made() {
+    let d = common::scratch("memory_budget");
+    // Inputs are made before the budget is lowered.
+    let dag = instancing_dag(&d);
+    // A 4096² grey PNG (a few kilobytes compressed; 448 MiB decoded), as an OBJ's texture.
+    let big = d.join("big.png");
+    image::GrayImage::new(4096, 4096).save(&big).unwrap();
+    std::fs::write(d.join("m.mtl"), "newmtl a\nmap_Kd big.png\n").unwrap();
+    let obj = d.join("textured.obj");
+    std::fs::write(
+        &obj,
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let mesh = trompe::geom::icosphere(2);
+    let mut scene = trompe::Scene::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/turntable.toml"
+    )))
+    .unwrap();
+    scene.camera.width = 8192;
+    scene.camera.height = 8192;
+
+    let before = peak_resident();
+    memory::set_limit(64 << 20);
+    assert_eq!(memory::limit(), 64 << 20);
+
+    let over = |e: &dyn std::error::Error| {
+        let text = e.to_string();
+        assert!(
+            text.contains("memory limit is 64.0 MiB") && text.contains("--memory-limit"),
+            "{text}"
+        );
+        text
+    };
+    let e = trompe::geom::io::load(&dag).unwrap_err();
+    assert!(over(&e).contains("dag.gltf"));
+    assert!(matches!(e, trompe::geom::MeshError::Memory { .. }), "{e:?}");
+
+    let e = trompe::geom::io::load(&obj).unwrap_err();
+    assert!(over(&e).contains("4096 × 4096"));
+
+    let e = trompe::Impostor::spoc(&mesh)
+        .resolution(4096)
+        .build()
+        .unwrap_err();
+    assert!(over(&e).contains("4096 × 4096 impostor"));
+
+    let e = trompe::render(&scene, trompe::Method::Trace, &()).unwrap_err();
+    assert!(over(&e).contains("8192 × 8192 render"));
+
+    let e = trompe::Image::new(8192, 8192, 0u32).unwrap_err();
+    let source: Option<&OverBudget> = match &e {
+        trompe::frame::FrameError::Memory(b) => Some(b),
+        _ => None,
+    };
+    assert_eq!(source.map(|b| b.needed), Some(256 << 20), "{e}");
+
+    // What fits still runs under the same budget.
+    let small = trompe::Impostor::spoc(&mesh).resolution(64).build();
+    assert!(small.is_ok());
+
+    if let (Some(before), Some(after)) = (before, peak_resident()) {
+        assert!(
+            after < before + (64 << 20),
+            "refusals raised the peak from {before} to {after} bytes"
+        );
+    }
+}
