@@ -4,6 +4,10 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     trompe_fuzz::small_budget();
-    let name = if data.starts_with(b"glTF") { "m.glb" } else { "m.gltf" };
+    let name = if data.starts_with(b"glTF") {
+        "m.glb"
+    } else {
+        "m.gltf"
+    };
     let _ = trompe::geom::io::load(&trompe_fuzz::file(name, data));
 });
