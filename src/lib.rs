@@ -33,6 +33,8 @@
 //!   walk, bake, save and load.
 //! * [`render`](mod@render) — one Whitted tracer generic over what answers primary and secondary rays, and
 //!   the raster, trace and impostor methods built on it.
+//! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility,
+//!   view-dependent projective texturing (VDTM / ULR).
 //! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.
 //! * [`progress`] — progress reports and step timings of long work.
 //! * [`memory`] — the memory budget every input-sized allocation is checked against.
@@ -66,6 +68,7 @@ pub mod raster;
 pub mod render;
 pub mod scene;
 pub mod trace;
+pub mod views;
 
 /// The workloads of `trompe bench` and `cargo bench`: for the command line and the benches,
 /// not a library interface.

@@ -251,7 +251,13 @@ impl Scene {
             path: path.to_path_buf(),
             source,
         })?;
-        let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Parse {
+        Self::from_toml(&text, path)
+    }
+
+    /// Reads and validates a scene given as TOML text (`path` locates relative paths and names
+    /// errors; nothing is read from it).
+    pub fn from_toml(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
             path: path.to_path_buf(),
             message: e.to_string().trim_end().replace('\n', "\n  "),
         })?;

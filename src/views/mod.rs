@@ -1,0 +1,223 @@
+//! Calibrated views: photographs (or renders) of a mesh with the cameras that took them — the
+//! input of view-dependent texturing, layered projective textures (paper 4: "Layered
+//! view-dependent projective textures") and the Master Texture (paper 5: "Master Texture Space").
+//!
+//! A [`ViewSet`] reads and writes COLMAP models ([`colmap`]); each [`CalibratedView`] has its
+//! intrinsics with lens distortion ([`intrinsics`]), its pose and its image. [`visibility`]
+//! gives each view's depth map of a mesh; [`blend`] renders the mesh at a new viewpoint from the
+//! views (VDTM / Unstructured Lumigraph weights); [`capture`] renders synthetic captures whose
+//! every novel view has a known ground truth.
+//!
+//! Invariants: a pose maps world to camera, `x_cam = R·x_world + t`, `R` from a unit
+//! quaternion; a view's image, once loaded, has its camera's size.
+
+pub mod blend;
+pub mod capture;
+pub mod colmap;
+pub mod intrinsics;
+pub mod visibility;
+
+pub use blend::{BlendSettings, Holes, Weighting};
+pub use intrinsics::{CameraModel, Intrinsics};
+
+use crate::camera::Pinhole;
+use crate::frame::{FrameError, Image, Rgba};
+use glam::{DMat3, DQuat, DVec2, DVec3};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Errors from reading, writing or using calibrated views.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ViewsError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A model file is malformed.
+    #[error("{path}: {element}: {reason}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Where: `line 4`, `camera 2`, `image 7` …
+        element: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A folder holds neither a text nor a binary COLMAP model.
+    #[error("{0}: no COLMAP model here (cameras.txt + images.txt, or cameras.bin + images.bin)")]
+    NoModel(PathBuf),
+    /// A view's image could not be loaded, or disagrees with its camera.
+    #[error("image {name}: {source}")]
+    Image {
+        /// The image's name in the model.
+        name: String,
+        /// Why.
+        source: FrameError,
+    },
+    /// A view's image is not the size its camera says.
+    #[error("image {name}: {width} × {height} pixels, but camera {camera} is {cw} × {ch}")]
+    ImageSize {
+        /// The image's name.
+        name: String,
+        /// Its size.
+        width: u32,
+        /// Its size.
+        height: u32,
+        /// Its camera's id.
+        camera: u32,
+        /// The camera's size.
+        cw: u32,
+        /// The camera's size.
+        ch: u32,
+    },
+    /// The model holds no view.
+    #[error("{0}: no registered image")]
+    Empty(PathBuf),
+}
+
+/// A rigid world-to-camera transform: `x_cam = R·x_world + t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Unit rotation, world to camera.
+    pub rotation: DQuat,
+    /// Translation, world to camera.
+    pub translation: DVec3,
+}
+
+impl Pose {
+    /// The pose of a camera at `centre` looking at `target`, `up` roughly up (camera `y` down).
+    pub fn looking_at(centre: DVec3, target: DVec3, up: DVec3) -> Option<Pose> {
+        let z = (target - centre).try_normalize()?;
+        let x = z.cross(up).try_normalize()?;
+        let y = z.cross(x);
+        // Rows of R are the camera axes in world coordinates.
+        let r = DMat3::from_cols(x, y, z).transpose();
+        let rotation = DQuat::from_mat3(&r).normalize();
+        Some(Pose {
+            rotation,
+            translation: -(rotation * centre),
+        })
+    }
+
+    /// Camera coordinates of a world point.
+    pub fn to_camera(&self, world: DVec3) -> DVec3 {
+        self.rotation * world + self.translation
+    }
+
+    /// The camera's centre in world coordinates, `−Rᵀt`.
+    pub fn centre(&self) -> DVec3 {
+        -(self.rotation.inverse() * self.translation)
+    }
+}
+
+/// One calibrated view.
+#[derive(Clone, Debug)]
+pub struct CalibratedView {
+    /// The image's name in the model (a path relative to the image folder).
+    pub name: String,
+    /// COLMAP's image id.
+    pub image_id: u32,
+    /// COLMAP's camera id.
+    pub camera_id: u32,
+    /// Intrinsics with distortion.
+    pub intrinsics: Intrinsics,
+    /// World to camera.
+    pub pose: Pose,
+    /// The image, once loaded ([`ViewSet::load_images`]).
+    pub image: Option<Image<Rgba>>,
+}
+
+impl CalibratedView {
+    /// The pixel a world point projects to (distortion applied) and its depth along the
+    /// camera's `z`; `None` behind the camera.
+    pub fn project(&self, world: DVec3) -> Option<(DVec2, f64)> {
+        let p = self.pose.to_camera(world);
+        if p.z <= 1e-9 {
+            return None;
+        }
+        let px = self.intrinsics.pixel_of(DVec2::new(p.x / p.z, p.y / p.z));
+        Some((px, p.z))
+    }
+
+    /// Whether a pixel lies in the image.
+    pub fn contains(&self, px: DVec2) -> bool {
+        let (w, h) = self.intrinsics.size();
+        px.x >= 0.0 && px.y >= 0.0 && px.x < w as f64 && px.y < h as f64
+    }
+
+    /// The undistorted pinhole of this view as a trompe camera (for rasterizing through it).
+    pub fn pinhole(&self) -> Pinhole {
+        let u = self.intrinsics.undistorted();
+        let ((fx, fy), (cx, cy)) = (u.focal(), u.principal_point());
+        let (w, h) = u.size();
+        let r_inv = self.pose.rotation.inverse();
+        let (x, y, z) = (r_inv * DVec3::X, r_inv * DVec3::Y, r_inv * DVec3::Z);
+        let a = x / fx;
+        let b = y / fy;
+        let c = z - x * (cx / fx) - y * (cy / fy);
+        Pinhole::from_mcmillan(self.pose.centre(), a, b, c, w, h)
+    }
+}
+
+/// A set of calibrated views and the folder their images are in.
+#[derive(Clone, Debug)]
+pub struct ViewSet {
+    /// The views, in image-id order.
+    pub views: Vec<CalibratedView>,
+    /// The folder image names are relative to.
+    pub image_folder: PathBuf,
+    /// What the model held that was skipped (a camera no image uses, …).
+    pub warnings: Vec<String>,
+}
+
+impl ViewSet {
+    /// Reads the COLMAP model in `model` (text or binary); images are looked for in
+    /// `image_folder` (default: `model` itself, then its `images/` subfolder).
+    pub fn load(model: &Path, image_folder: Option<&Path>) -> Result<ViewSet, ViewsError> {
+        let (views, warnings) = colmap::read_model(model)?;
+        let image_folder = image_folder.map_or_else(
+            || {
+                let beside = model.join("images");
+                match views.first() {
+                    Some(v) if !model.join(&v.name).is_file() && beside.is_dir() => beside,
+                    _ => model.to_path_buf(),
+                }
+            },
+            Path::to_path_buf,
+        );
+        Ok(ViewSet {
+            views,
+            image_folder,
+            warnings,
+        })
+    }
+
+    /// Loads every view's image, checking its size against its camera.
+    pub fn load_images(&mut self) -> Result<(), ViewsError> {
+        for v in &mut self.views {
+            let path = self.image_folder.join(&v.name);
+            let img = crate::frame::io::read_color(&path).map_err(|source| ViewsError::Image {
+                name: v.name.clone(),
+                source,
+            })?;
+            let (w, h) = v.intrinsics.size();
+            if img.size() != (w, h) {
+                return Err(ViewsError::ImageSize {
+                    name: v.name.clone(),
+                    width: img.size().0,
+                    height: img.size().1,
+                    camera: v.camera_id,
+                    cw: w,
+                    ch: h,
+                });
+            }
+            v.image = Some(img);
+        }
+        Ok(())
+    }
+}
