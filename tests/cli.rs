@@ -639,6 +639,75 @@ fn bakes_are_byte_identical_and_a_sidecar_keeps_to_its_own_maps() {
     fails_cleanly(&o, "is not the EXR this sidecar was saved with");
 }
 
+/// A capture written by `views capture` is read back by `views score` and `views render`; a
+/// folder that holds other files is refused.
+#[test]
+fn views_capture_score_and_render() {
+    let d = scratch("cli_views");
+    let cap = d.join("cap");
+    let teapot = common::asset("meshes/teapot.obj");
+    let t = teapot.to_str().unwrap();
+    let o = trompe(&[
+        "views",
+        "capture",
+        t,
+        "--count",
+        "16",
+        "--size",
+        "96x72",
+        "-o",
+        cap.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(cap.join("cameras.txt").is_file() && cap.join("images/view0015.png").is_file());
+    let o = trompe(&[
+        "views",
+        "score",
+        cap.to_str().unwrap(),
+        "--mesh",
+        t,
+        "--every",
+        "5",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("16 views; each of 4 left out") && out.contains("ulr"),
+        "{out}"
+    );
+    let png = d.join("novel.png");
+    let o = trompe(&[
+        "views",
+        "render",
+        cap.to_str().unwrap(),
+        "--mesh",
+        t,
+        "--scene",
+        "scenes/diffuse.toml",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(png.is_file());
+    // Into a folder of someone else's files: refused, nothing written.
+    let foreign = d.join("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+    let o = trompe(&[
+        "views",
+        "capture",
+        t,
+        "--count",
+        "2",
+        "-o",
+        foreign.to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "holds files that are not a capture");
+    assert_eq!(std::fs::read_dir(&foreign).unwrap().count(), 1);
+    let o = trompe(&["views", "score", d.to_str().unwrap(), "--mesh", t]);
+    fails_cleanly(&o, "no COLMAP model here");
+}
+
 /// Two bakes to one name at once leave one complete, loadable impostor: the first is held
 /// between its EXR and its sidecar (a test hook) while the second bakes and publishes.
 #[test]

@@ -28,6 +28,9 @@ pub enum Weighting {
         /// Weight of the resolution penalty (SIBR uses 0.1).
         beta: f64,
     },
+    /// The baseline a single-texture bake gives: every triangle takes the one view that sees its
+    /// centroid with the largest projected area, alone.
+    BestFace,
 }
 
 /// What a pixel whose surface no view sees shows.
@@ -84,7 +87,7 @@ pub fn weights(
             let v1 = x - c;
             let angle = v1.angle_between(v2);
             let pen = match weighting {
-                Weighting::Vdtm => angle,
+                Weighting::Vdtm | Weighting::BestFace => angle,
                 Weighting::Ulr { beta } => {
                     let res = ((v1.length() - v2.length()) / v1.length()).max(0.0);
                     angle + beta * res
@@ -103,7 +106,7 @@ pub fn weights(
         return vec![(penalties[0].0, 1.0)];
     }
     let raw: Vec<(usize, f64)> = match weighting {
-        Weighting::Vdtm => penalties
+        Weighting::Vdtm | Weighting::BestFace => penalties
             .iter()
             .take(k)
             .map(|&(i, p)| (i, 1.0 / p))
@@ -156,6 +159,9 @@ pub fn render(
     let eye = camera.position();
     let centres: Vec<DVec3> = views.iter().map(|v| v.pose.centre()).collect();
     let fragments = target.attributes.pixels();
+    let usable = |i: usize| Some(i) != exclude && views[i].image.is_some();
+    let best_face = (settings.weighting == Weighting::BestFace)
+        .then(|| best_views(mesh, views, depth, settings.tolerance, &usable));
     let mut image = Image::new(w, h, Vec4::ZERO)?;
     let counts: Vec<(usize, usize)> = image
         .pixels_mut()
@@ -170,12 +176,13 @@ pub fn render(
                 covered += 1;
                 let c = mesh.corners(f.item.triangle as usize);
                 let p = (c[0] * f.bary.x + c[1] * f.bary.y + c[2] * f.bary.z).as_dvec3();
-                let sees = |i: usize| {
-                    Some(i) != exclude
-                        && views[i].image.is_some()
-                        && depth[i].sees(p, settings.tolerance)
+                let sees = |i: usize| usable(i) && depth[i].sees(p, settings.tolerance);
+                let ws = match &best_face {
+                    Some(table) => table[f.item.triangle as usize]
+                        .filter(|&i| sees(i))
+                        .map_or_else(Vec::new, |i| vec![(i, 1.0)]),
+                    None => weights(p, eye, &centres, sees, settings.weighting, settings.k),
                 };
-                let ws = weights(p, eye, &centres, sees, settings.weighting, settings.k);
                 if ws.is_empty() {
                     holes += 1;
                     *out = match settings.holes {
@@ -210,6 +217,36 @@ pub fn render(
         covered,
         holes,
     })
+}
+
+/// Per triangle, the usable view that sees its centroid with the largest projected area.
+fn best_views(
+    mesh: &Mesh,
+    views: &[CalibratedView],
+    depth: &[DepthMap],
+    tolerance: f64,
+    usable: &(dyn Fn(usize) -> bool + Sync),
+) -> Vec<Option<usize>> {
+    (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|t| {
+            let c = mesh.corners(t).map(|p| p.as_dvec3());
+            let centroid = (c[0] + c[1] + c[2]) / 3.0;
+            let mut best: Option<(usize, f64)> = None;
+            for (i, v) in views.iter().enumerate() {
+                if !usable(i) || !depth[i].sees(centroid, tolerance) {
+                    continue;
+                }
+                let px: Option<Vec<DVec2>> = c.iter().map(|&p| v.project(p).map(|q| q.0)).collect();
+                let Some(px) = px else { continue };
+                let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs() * 0.5;
+                if best.is_none_or(|(_, a)| area > a) {
+                    best = Some((i, area));
+                }
+            }
+            best.map(|b| b.0)
+        })
+        .collect()
 }
 
 /// `view`'s image resampled to its undistorted pinhole ([`CalibratedView::pinhole`]); the image

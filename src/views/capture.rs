@@ -10,7 +10,7 @@ use super::{CalibratedView, Intrinsics, Pose, ViewSet};
 use crate::progress::Progress;
 use crate::render::{Method, RenderError};
 use crate::scene::{Scene, SceneError};
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// Where the cameras stand.
@@ -37,6 +37,13 @@ pub struct CaptureSettings {
     pub distance: f64,
     /// Vertical field of view, degrees.
     pub fov_y: f64,
+    /// Error put into the recorded camera centres (not the rendered ones): a random offset of
+    /// this many bounding radii, as a calibration is never exact.
+    pub pose_noise: f64,
+    /// Noise added to every linear colour channel, uniform in `±colour_noise` (sensor noise).
+    pub colour_noise: f32,
+    /// Seed of both noises.
+    pub seed: u64,
 }
 
 impl Default for CaptureSettings {
@@ -48,6 +55,9 @@ impl Default for CaptureSettings {
             size: (320, 240),
             distance: 3.0,
             fov_y: 40.0,
+            pose_noise: 0.0,
+            colour_noise: 0.0,
+            seed: 1,
         }
     }
 }
@@ -147,6 +157,7 @@ pub fn capture(
     let f = h as f64 * 0.5 / (settings.fov_y.to_radians() * 0.5).tan();
     let intrinsics = Intrinsics::pinhole(w, h, f, f, w as f64 * 0.5, h as f64 * 0.5);
     let mut views = Vec::new();
+    let mut rng = crate::geom::SplitMix64::new(settings.seed);
     for (i, c) in rig_centres(settings, centre, radius)
         .into_iter()
         .enumerate()
@@ -168,13 +179,31 @@ pub fn capture(
         scene.camera.near = radius * 1e-3;
         let (frame, _) = crate::render::render(&scene, Method::Trace, &())
             .map_err(|source| CaptureError::Render { view: i, source })?;
+        let mut image = frame.color;
+        if settings.colour_noise > 0.0 {
+            for p in image.pixels_mut() {
+                for k in 0..3 {
+                    p[k] = (p[k] + (2.0 * rng.next_f32() - 1.0) * settings.colour_noise).max(0.0);
+                }
+            }
+        }
+        // The recorded pose: the camera moved (keeping its rotation) by the pose noise.
+        let recorded = if settings.pose_noise > 0.0 {
+            let shift = rng.unit_vector().as_dvec3() * settings.pose_noise * radius;
+            Pose {
+                rotation: pose.rotation,
+                translation: pose.translation - pose.rotation * shift,
+            }
+        } else {
+            pose
+        };
         views.push(CalibratedView {
             name: format!("view{i:04}.png"),
             image_id: i as u32 + 1,
             camera_id: 1,
             intrinsics: intrinsics.clone(),
-            pose,
-            image: Some(frame.color),
+            pose: recorded,
+            image: Some(image),
         });
         progress.advance(1);
     }
@@ -202,9 +231,4 @@ pub fn write_capture(dir: &Path, set: &ViewSet) -> Result<(), super::ViewsError>
         }
     }
     super::colmap::write_text(dir, &set.views)
-}
-
-/// The light a capture uses, for a caller that renders the same scene otherwise.
-pub fn capture_light() -> Vec3 {
-    Vec3::new(0.4, 1.0, 0.6).normalize()
 }

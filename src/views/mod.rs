@@ -15,6 +15,7 @@ pub mod blend;
 pub mod capture;
 pub mod colmap;
 pub mod intrinsics;
+pub mod score;
 pub mod visibility;
 
 pub use blend::{BlendSettings, Holes, Weighting};
