@@ -8,6 +8,7 @@ mod foundation;
 pub mod html;
 mod impostors;
 mod maze;
+mod views;
 
 use crate::frame::metrics::{self, Scores};
 use crate::frame::{FrameError, io};
@@ -37,6 +38,12 @@ pub enum ReportError {
     /// A walk was asked of a camera it does not go with.
     #[error(transparent)]
     Walk(#[from] crate::impostor::WalkError),
+    /// A capture or a blend of calibrated views failed.
+    #[error(transparent)]
+    Views(#[from] crate::views::ViewsError),
+    /// A capture could not be rendered.
+    #[error(transparent)]
+    Capture(#[from] crate::views::capture::CaptureError),
     /// The output directory holds files `trompe demo` did not write.
     #[error(
         "{dir}: not empty and not a demo report's directory (it holds {files}); give an empty or new directory"
@@ -122,6 +129,9 @@ pub fn demo(
     let t = std::time::Instant::now();
     report.sections.push(maze::section(inputs, out)?);
     timed("graph camera", t);
+    let t = std::time::Instant::now();
+    report.sections.push(views::section(inputs, out)?);
+    timed("calibrated views", t);
     io::write_png(&out.join(html::SCALE_FILE), &flip_scale()?)?;
     let mut run = Section::new("run", "This run");
     run.paragraph(format!(

@@ -1,7 +1,8 @@
 //! View-dependent projective texturing: a mesh seen from a new camera, each surface point
 //! coloured by blending the calibrated views that see it — Debevec, Taylor and Malik's VDTM
 //! weights (inverse angle, "Modeling and Rendering Architecture from Photographs", 1996) or the
-//! Unstructured Lumigraph's (Buehler et al. 2001), as ../shared/algorithms.md §9 gives them.
+//! weights of "Unstructured Lumigraph Rendering" (Buehler et al. 2001, §6: angle, resolution and
+//! field-of-view penalties, the k best cameras, a threshold that hands over continuously).
 //!
 //! Invariants: at most `k` views contribute to a point, each of them sees it (the visibility
 //! test of [`super::visibility`]), and the weights sum to one; a point no view sees is a hole,
