@@ -164,6 +164,8 @@ pub enum WeightsArg {
     Ulr,
     /// VDTM (inverse angle).
     Vdtm,
+    /// Debevec's view map: at most three views a triangle, barycentric weights.
+    ViewMap,
     /// One view a face, the largest projected area (a single-texture baseline).
     BestFace,
 }
@@ -173,6 +175,7 @@ impl WeightsArg {
         match self {
             WeightsArg::Ulr => trompe::views::Weighting::Ulr { beta: 0.1 },
             WeightsArg::Vdtm => trompe::views::Weighting::Vdtm,
+            WeightsArg::ViewMap => trompe::views::Weighting::ViewMap,
             WeightsArg::BestFace => trompe::views::Weighting::BestFace,
         }
     }
@@ -189,7 +192,7 @@ pub struct ScoreArgs {
     /// The images' folder (default: the model's folder, or its images/).
     #[arg(long)]
     images: Option<PathBuf>,
-    /// Weightings to score (default: all three).
+    /// Weightings to score (default: all four).
     #[arg(long, value_enum, value_delimiter = ',')]
     weights: Vec<WeightsArg>,
     /// Most views blended at a point.
@@ -302,7 +305,12 @@ impl ScoreArgs {
         set.load_images()?;
         let mesh = load_mesh(&self.mesh)?;
         let weights = if self.weights.is_empty() {
-            vec![WeightsArg::Ulr, WeightsArg::Vdtm, WeightsArg::BestFace]
+            vec![
+                WeightsArg::Ulr,
+                WeightsArg::Vdtm,
+                WeightsArg::ViewMap,
+                WeightsArg::BestFace,
+            ]
         } else {
             self.weights.clone()
         };

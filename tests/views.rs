@@ -183,7 +183,11 @@ fn a_capture_is_reproduced_at_its_views_and_rebuilt_when_one_is_left_out() {
         same > 40.0 && holes < 0.01,
         "at its own view: {same} dB, {holes} holes"
     );
-    for w in [Weighting::Ulr { beta: 0.1 }, Weighting::Vdtm] {
+    for w in [
+        Weighting::Ulr { beta: 0.1 },
+        Weighting::Vdtm,
+        Weighting::ViewMap,
+    ] {
         let (left_out, holes) = score(Some(v), w);
         eprintln!("{w:?}: left out {left_out:.2} dB, holes {holes:.4}");
         assert!(

@@ -164,7 +164,8 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         "The glTF duck captured by {} cameras on a ring 15° up, {} × {} pixels, rendered by the \
          exact tracer and written as a COLMAP model (`trompe views capture`). A surface point seen \
          from a new camera takes the colour of the views that see it (per-view depth maps, 1 % \
-         tolerance), weighted by the Unstructured Lumigraph (k = 4), by VDTM's inverse angle, or \
+         tolerance), weighted by the Unstructured Lumigraph (k = 4), by VDTM's inverse angle, by \
+         Debevec's view map, or \
          — the baseline a single-texture bake gives — by the one view a face that sees it largest.",
         settings.count, settings.size.0, settings.size.1
     ));

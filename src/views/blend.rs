@@ -29,6 +29,10 @@ pub enum Weighting {
         /// Weight of the resolution penalty (SIBR uses 0.1).
         beta: f64,
     },
+    /// Debevec's view map (1998): per triangle, a sphere of directions sampled with the nearest
+    /// view that sees it; a new direction blends the (at most three) views of the spherical
+    /// triangle it falls in by its barycentric coordinates ([`super::view_map`]).
+    ViewMap,
     /// The baseline a single-texture bake gives: every triangle takes the one view that sees its
     /// centroid with the largest projected area, alone.
     BestFace,
@@ -68,7 +72,9 @@ impl Default for BlendSettings {
     }
 }
 
-/// The blending weights of the views that see surface point `x` from a camera at `eye`:
+/// The blending weights of the views that see surface point `x` from a camera at `eye` (the
+/// per-triangle weightings, [`Weighting::ViewMap`] and [`Weighting::BestFace`], are weighted
+/// here as [`Weighting::Vdtm`]; [`render`] uses their tables):
 /// `(view index, weight)`, at most `k`, weights summing to one; empty when no view sees `x`.
 /// `sees[i]` says whether view `i` sees `x`; `centres[i]` is its centre.
 pub fn weights(
@@ -88,7 +94,7 @@ pub fn weights(
             let v1 = x - c;
             let angle = v1.angle_between(v2);
             let pen = match weighting {
-                Weighting::Vdtm | Weighting::BestFace => angle,
+                Weighting::Vdtm | Weighting::ViewMap | Weighting::BestFace => angle,
                 Weighting::Ulr { beta } => {
                     let res = ((v1.length() - v2.length()) / v1.length()).max(0.0);
                     angle + beta * res
@@ -107,7 +113,7 @@ pub fn weights(
         return vec![(penalties[0].0, 1.0)];
     }
     let raw: Vec<(usize, f64)> = match weighting {
-        Weighting::Vdtm | Weighting::BestFace => penalties
+        Weighting::Vdtm | Weighting::ViewMap | Weighting::BestFace => penalties
             .iter()
             .take(k)
             .map(|&(i, p)| (i, 1.0 / p))
@@ -163,6 +169,8 @@ pub fn render(
     let usable = |i: usize| Some(i) != exclude && views[i].image.is_some();
     let best_face = (settings.weighting == Weighting::BestFace)
         .then(|| best_views(mesh, views, depth, settings.tolerance, &usable));
+    let view_map = (settings.weighting == Weighting::ViewMap)
+        .then(|| super::view_map::ViewMap::build(mesh, views, depth, settings.tolerance, &usable));
     let mut image = Image::new(w, h, Vec4::ZERO)?;
     let counts: Vec<(usize, usize)> = image
         .pixels_mut()
@@ -178,11 +186,19 @@ pub fn render(
                 let c = mesh.corners(f.item.triangle as usize);
                 let p = (c[0] * f.bary.x + c[1] * f.bary.y + c[2] * f.bary.z).as_dvec3();
                 let sees = |i: usize| usable(i) && depth[i].sees(p, settings.tolerance);
-                let ws = match &best_face {
-                    Some(table) => table[f.item.triangle as usize]
+                let t = f.item.triangle as usize;
+                let ws = match (&best_face, &view_map) {
+                    (Some(table), _) => table[t]
                         .filter(|&i| sees(i))
                         .map_or_else(Vec::new, |i| vec![(i, 1.0)]),
-                    None => weights(p, eye, &centres, sees, settings.weighting, settings.k),
+                    (_, Some(map)) => {
+                        let mut ws = map.weights(t, (eye - p).normalize());
+                        ws.retain(|&(i, _)| sees(i));
+                        let sum: f64 = ws.iter().map(|w| w.1).sum();
+                        ws.iter_mut().for_each(|w| w.1 /= sum);
+                        ws
+                    }
+                    _ => weights(p, eye, &centres, sees, settings.weighting, settings.k),
                 };
                 if ws.is_empty() {
                     holes += 1;

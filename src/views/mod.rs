@@ -16,6 +16,7 @@ pub mod capture;
 pub mod colmap;
 pub mod intrinsics;
 pub mod score;
+pub mod view_map;
 pub mod visibility;
 
 pub use blend::{BlendSettings, Holes, Weighting};

@@ -64,6 +64,7 @@ impl std::fmt::Display for LeaveOneOut {
 pub fn name(w: Weighting) -> &'static str {
     match w {
         Weighting::Vdtm => "vdtm",
+        Weighting::ViewMap => "view map",
         Weighting::Ulr { .. } => "ulr",
         Weighting::BestFace => "best view per face",
     }
