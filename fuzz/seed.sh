@@ -5,7 +5,7 @@ set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 repo=$(dirname "$here")
 data="$repo/../shared/data"
-for t in obj ply gltf hdr exr scene maze impostor; do mkdir -p "$here/corpus/$t"; done
+for t in obj ply gltf hdr exr scene maze impostor colmap; do mkdir -p "$here/corpus/$t"; done
 c="$here/corpus"
 
 # OBJ seeds: meshes under 400 KB, then an OBJ with its MTL after the marker.
@@ -47,6 +47,13 @@ for f in "$repo"/scenes/*.toml; do
 done
 sed 's#meshes/bunny\.obj#meshes/teapot.obj#g' "$repo/scenes/turntable.toml" > "$c/scene/panorama.toml"
 cp "$repo"/scenes/*.maze "$c/maze/"
+
+# COLMAP models written by COLMAP itself (the test fixtures).
+f="$repo/tests/fixtures/colmap"
+for kind in text:txt binary:bin; do
+    dir=${kind%%:*}; ext=${kind##*:}
+    { cat "$f/$dir/cameras.$ext"; printf '\n--8<--\n'; cat "$f/$dir/images.$ext"; } > "$c/colmap/$dir"
+done
 
 # An impostor: a small bake, its sidecar and EXR joined by the marker.
 tmp=$(mktemp -d)
