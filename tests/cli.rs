@@ -708,6 +708,27 @@ fn views_capture_score_and_render() {
     fails_cleanly(&o, "no COLMAP model here");
 }
 
+/// Every input the fuzzers found a crash with (tests/fuzz-regressions/) is a named error now,
+/// without a panic even caught.
+#[test]
+fn fuzz_regressions_are_named_errors_without_a_panic() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-regressions");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let o = trompe(&["info", path.to_str().unwrap()]);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{}: loaded", path.display());
+        assert!(!e.contains("panicked"), "{}: {e}", path.display());
+        assert!(
+            e.contains(path.file_name().unwrap().to_str().unwrap()),
+            "{e}"
+        );
+        seen += 1;
+    }
+    assert!(seen > 0);
+}
+
 /// Two bakes to one name at once leave one complete, loadable impostor: the first is held
 /// between its EXR and its sidecar (a test hook) while the second bakes and publishes.
 #[test]

@@ -108,7 +108,12 @@ fn check_references(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
     } else {
         std::borrow::Cow::Borrowed(bytes)
     };
-    let Ok(root) = serde_json::from_slice::<Value>(&json) else {
+    // The decoder skips the keys it does not know without checking that they are UTF-8, so a
+    // document with a broken key still decodes: read it the same way here (broken bytes
+    // replaced), or its indices would go unchecked.
+    let root = serde_json::from_slice::<Value>(&json)
+        .or_else(|_| serde_json::from_str::<Value>(&String::from_utf8_lossy(&json)));
+    let Ok(root) = root else {
         return Ok(()); // Not JSON: the decoder says why.
     };
     let count = |key: &str| root.get(key).and_then(Value::as_array).map_or(0, Vec::len);
