@@ -151,6 +151,27 @@ fn malformed_models_are_named_errors() {
     );
 }
 
+/// `points3D.txt`, when present, is a sanity check: an observation behind its camera is a
+/// warning naming the file.
+#[test]
+fn points_behind_their_cameras_are_a_warning() {
+    let d = common::scratch("views_points");
+    for f in ["cameras.txt", "images.txt", "points3D.txt"] {
+        std::fs::copy(fixtures().join("text").join(f), d.join(f)).unwrap();
+    }
+    let set = ViewSet::load(&d, None).unwrap();
+    assert!(set.warnings.is_empty(), "{:?}", set.warnings);
+    let v = &set.views[0];
+    let forward = v.pose.rotation.inverse() * DVec3::Z;
+    let (front, back) = (v.pose.centre() + forward, v.pose.centre() - forward);
+    let line =
+        |p: DVec3, id: u32| format!("{id} {} {} {} 0 0 0 0 {} 0\n", p.x, p.y, p.z, v.image_id);
+    std::fs::write(d.join("points3D.txt"), line(front, 1) + &line(back, 2)).unwrap();
+    let set = ViewSet::load(&d, None).unwrap();
+    assert_eq!(set.warnings.len(), 1, "{:?}", set.warnings);
+    assert!(set.warnings[0].contains("1 of 2 observations see their point behind the camera"));
+}
+
 /// A ring capture of the teapot: at an input viewpoint the blend reproduces the view; left out,
 /// the view is rebuilt from its neighbours.
 #[test]

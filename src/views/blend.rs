@@ -211,13 +211,17 @@ pub fn render(
                 let mut colour = Vec4::ZERO;
                 for (i, wgt) in ws {
                     let v = &views[i];
-                    let (px, _) = v.project(p).unwrap_or((DVec2::ZERO, 0.0));
+                    let (px, z) = v.project(p).unwrap_or((DVec2::ZERO, 0.0));
                     if let Some(img) = &v.image {
-                        let s = img.sample_bilinear(
-                            Vec2::new(px.x as f32, px.y as f32),
-                            Wrap::Clamp,
-                            Wrap::Clamp,
-                        );
+                        let s = if v.intrinsics.is_undistorted() {
+                            sample_on_surface(img, depth[i].gd(), px, z)
+                        } else {
+                            img.sample_bilinear(
+                                Vec2::new(px.x as f32, px.y as f32),
+                                Wrap::Clamp,
+                                Wrap::Clamp,
+                            )
+                        };
                         colour += s * wgt as f32;
                     }
                 }
@@ -234,6 +238,43 @@ pub fn render(
         covered,
         holes,
     })
+}
+
+/// How far (relative depth) a texel's surface may be from the sampled point and still be the
+/// same surface, for [`sample_on_surface`].
+const SAME_SURFACE: f64 = 0.05;
+
+/// A bilinear lookup of a view's image at `px` that takes only the texels whose depth says
+/// they show the surface at depth `z`: at a silhouette, plain bilinear filtering would mix the
+/// background (or an occluder) into the surface's colour. The depth map `gd` is on the image's
+/// own pixel grid (a view without distortion). Falls back to the nearest texel when no tap is on
+/// the surface.
+fn sample_on_surface(img: &Image<Rgba>, gd: &Image<f32>, px: DVec2, z: f64) -> Rgba {
+    let (w, h) = img.size();
+    let (fx, fy) = (px.x - 0.5, px.y - 0.5);
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
+    let clamp = |v: f64, n: u32| (v as i64).clamp(0, n as i64 - 1) as u32;
+    let mut sum = Vec4::ZERO;
+    let mut weight = 0.0f32;
+    for (dx, dy, wgt) in [
+        (0.0, 0.0, (1.0 - tx) * (1.0 - ty)),
+        (1.0, 0.0, tx * (1.0 - ty)),
+        (0.0, 1.0, (1.0 - tx) * ty),
+        (1.0, 1.0, tx * ty),
+    ] {
+        let (x, y) = (clamp(x0 + dx, w), clamp(y0 + dy, h));
+        let g = gd.get(x, y) as f64;
+        if g > 0.0 && (1.0 / g - z).abs() <= SAME_SURFACE * z && wgt > 0.0 {
+            sum += img.get(x, y) * wgt;
+            weight += wgt;
+        }
+    }
+    if weight > 0.0 {
+        sum / weight
+    } else {
+        img.sample_nearest(Vec2::new(px.x as f32, px.y as f32))
+    }
 }
 
 /// Per triangle, the usable view that sees its centroid with the largest projected area.

@@ -30,7 +30,67 @@ pub fn read_model(dir: &Path) -> Result<(Vec<CalibratedView>, Vec<String>), View
     } else {
         return Err(ViewsError::NoModel(dir.to_path_buf()));
     };
-    assemble(dir, cameras, images)
+    let (views, mut warnings) = assemble(dir, cameras, images)?;
+    let points = dir.join("points3D.txt");
+    if points.is_file() {
+        warnings.extend(check_points_text(&points, &views)?);
+    }
+    Ok((views, warnings))
+}
+
+/// The sanity check `points3D.txt` allows: every observation of a 3-D point must see it in
+/// front of the observing camera. Returns a warning when some do not (a model and poses that
+/// disagree: a different frame, or inverted poses).
+fn check_points_text(path: &Path, views: &[CalibratedView]) -> Result<Vec<String>, ViewsError> {
+    let text = text_of(path)?;
+    let by_id: BTreeMap<u32, &CalibratedView> = views.iter().map(|v| (v.image_id, v)).collect();
+    let (mut observations, mut behind, mut unknown) = (0usize, 0usize, 0usize);
+    for (n, line) in data_lines(&text) {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        if f.len() < 8 || !(f.len() - 8).is_multiple_of(2) {
+            return Err(malformed(
+                path,
+                format!("line {n}"),
+                "expected POINT3D_ID X Y Z R G B ERROR and (IMAGE_ID, POINT2D_IDX) pairs",
+            ));
+        }
+        let xyz = [
+            parse::<f64>(path, n, "X", f[1])?,
+            parse::<f64>(path, n, "Y", f[2])?,
+            parse::<f64>(path, n, "Z", f[3])?,
+        ];
+        let p = DVec3::from_array(xyz);
+        if !p.is_finite() {
+            return Err(malformed(
+                path,
+                format!("line {n}"),
+                "the point is not finite",
+            ));
+        }
+        for pair in f[8..].chunks(2) {
+            let image: u32 = parse(path, n, "image id", pair[0])?;
+            observations += 1;
+            match by_id.get(&image) {
+                Some(v) if v.pose.to_camera(p).z <= 0.0 => behind += 1,
+                Some(_) => {}
+                None => unknown += 1,
+            }
+        }
+    }
+    let mut warnings = Vec::new();
+    if behind > 0 {
+        warnings.push(format!(
+            "{}: {behind} of {observations} observations see their point behind the camera (poses and points disagree)",
+            path.display()
+        ));
+    }
+    if unknown > 0 {
+        warnings.push(format!(
+            "{}: {unknown} observations name an image the model does not hold",
+            path.display()
+        ));
+    }
+    Ok(warnings)
 }
 
 /// An image record before its camera is attached.
