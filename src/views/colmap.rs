@@ -239,19 +239,35 @@ pub fn read_cameras_text(path: &Path) -> Result<BTreeMap<u32, Intrinsics>, Views
             .iter()
             .map(|s| parse::<f64>(path, n, "parameter", s))
             .collect::<Result<Vec<_>, _>>()?;
-        crate::frame::check_size(width as u64, height as u64)
-            .map_err(|e| malformed(path, format!("camera {id}"), e.to_string()))?;
-        let c = Intrinsics::new(model, width, height, params)
-            .map_err(|reason| malformed(path, format!("camera {id}"), reason))?;
-        if cameras.insert(id, c).is_some() {
-            return Err(malformed(
-                path,
-                format!("camera {id}"),
-                "the id appears twice",
-            ));
-        }
+        add_camera(
+            path,
+            &mut cameras,
+            id,
+            model,
+            (width as u64, height as u64),
+            params,
+        )?;
     }
     Ok(cameras)
+}
+
+/// Checks one camera record and adds it to `cameras` (text and binary models alike).
+fn add_camera(
+    path: &Path,
+    cameras: &mut BTreeMap<u32, Intrinsics>,
+    id: u32,
+    model: CameraModel,
+    (width, height): (u64, u64),
+    params: Vec<f64>,
+) -> Result<(), ViewsError> {
+    let element = || format!("camera {id}");
+    let (w, h) = crate::frame::check_size(width, height)
+        .map_err(|e| malformed(path, element(), e.to_string()))?;
+    let c = Intrinsics::new(model, w, h, params).map_err(|r| malformed(path, element(), r))?;
+    if cameras.insert(id, c).is_some() {
+        return Err(malformed(path, element(), "the id appears twice"));
+    }
+    Ok(())
 }
 
 /// Reads `images.txt`: two lines an image, `IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME`, then
@@ -361,17 +377,7 @@ pub fn read_cameras_binary(path: &Path) -> Result<BTreeMap<u32, Intrinsics>, Vie
         let params = (0..model.param_count())
             .map(|_| r.f64("camera parameters"))
             .collect::<Result<Vec<_>, _>>()?;
-        let (w, h) = crate::frame::check_size(width, height)
-            .map_err(|e| malformed(path, format!("camera {id}"), e.to_string()))?;
-        let c = Intrinsics::new(model, w, h, params)
-            .map_err(|reason| malformed(path, format!("camera {id}"), reason))?;
-        if cameras.insert(id, c).is_some() {
-            return Err(malformed(
-                path,
-                format!("camera {id}"),
-                "the id appears twice",
-            ));
-        }
+        add_camera(path, &mut cameras, id, model, (width, height), params)?;
     }
     Ok(cameras)
 }
