@@ -165,8 +165,9 @@ pub const BYTES_PER_PIXEL: u64 = 64;
 /// Bytes a triangle costs in the BVH and while it is built.
 pub const BVH_BYTES_PER_TRIANGLE: u64 = 256;
 
-/// Refuses a render whose frame, BVH and impostors would need more than the memory budget.
-pub fn check_memory(view: &View, method: Method) -> Result<(), crate::memory::OverBudget> {
+/// Refuses a render whose frame, BVH and impostors would need more than the memory budget (an
+/// impostor side no image can have is refused as such first).
+pub fn check_memory(view: &View, method: Method) -> Result<(), RenderError> {
     use crate::memory::{check, times};
     let (w, h) = crate::camera::Projection::resolution(&view.camera);
     let triangles: u64 = view.meshes.iter().map(|m| m.triangle_count() as u64).sum();
@@ -174,6 +175,7 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), crate::memory::Ov
         .saturating_add(times(triangles, BVH_BYTES_PER_TRIANGLE));
     let mut what = format!("a {w} × {h} render of {triangles} triangles");
     if let Method::Impostor(side) = method {
+        crate::frame::check_size(side as u64, side as u64)?;
         // At most one impostor an object.
         let objects = view.meshes.len() as u64;
         let each = times(side as u64 * side as u64, crate::impostor::BYTES_PER_TEXEL);
@@ -182,7 +184,7 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), crate::memory::Ov
             " with up to {objects} impostors of {side} × {side}"
         ));
     }
-    check(|| what, needed)
+    Ok(check(|| what, needed)?)
 }
 
 /// Renders an evaluated view.
