@@ -59,7 +59,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     }
 
     // A left-out view beside its rebuildings.
-    let depth = DepthMap::of_all(&set.views, &mesh).map_err(ReportError::Frame)?;
+    let depth = DepthMap::of_all(&set.views, &mesh)?;
     let left = 0;
     let view = &set.views[left];
     // A capture holds every view's image.

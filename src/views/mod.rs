@@ -77,6 +77,9 @@ pub enum ViewsError {
         /// The camera's size.
         ch: u32,
     },
+    /// The views' depth maps could not be drawn (their size refused).
+    #[error("depth maps of the views: {0}")]
+    DepthMaps(FrameError),
     /// The model holds no view.
     #[error("{0}: no registered image")]
     Empty(PathBuf),

@@ -80,10 +80,7 @@ pub fn leave_one_out(
     which: &[usize],
     progress: &dyn Progress,
 ) -> Result<Vec<LeaveOneOut>, ViewsError> {
-    let depth = DepthMap::of_all(&set.views, mesh).map_err(|source| ViewsError::Image {
-        name: "depth maps".into(),
-        source,
-    })?;
+    let depth = DepthMap::of_all(&set.views, mesh).map_err(ViewsError::DepthMaps)?;
     let mut out: Vec<LeaveOneOut> = weightings
         .iter()
         .map(|&weighting| LeaveOneOut {

@@ -12,7 +12,6 @@ use crate::frame::{FrameError, Image};
 use crate::geom::Mesh;
 use crate::raster::{NoAttributes, rasterize};
 use glam::{DVec2, DVec3, Vec2};
-use rayon::prelude::*;
 
 /// Default relative depth tolerance of the visibility test (1 %).
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
@@ -65,17 +64,5 @@ impl DepthMap {
         // than the tolerance.
         let (z, z_map) = (1.0 / p.gd, 1.0 / stored);
         z <= z_map * (1.0 + tolerance)
-    }
-
-    /// The fraction of `points` this view sees (for reports and tests).
-    pub fn seen_fraction(&self, points: &[DVec3], tolerance: f64) -> f64 {
-        if points.is_empty() {
-            return 0.0;
-        }
-        let seen = points
-            .par_iter()
-            .filter(|&&p| self.sees(p, tolerance))
-            .count();
-        seen as f64 / points.len() as f64
     }
 }
