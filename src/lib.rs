@@ -33,6 +33,8 @@
 //!   walk, bake, save and load.
 //! * [`render`](mod@render) — one Whitted tracer generic over what answers primary and secondary rays, and
 //!   the raster, trace and impostor methods built on it.
+//! * [`relief`] — relief impostors: a software shader, 3-D image warping, validity, the
+//!   two-thread pipeline.
 //! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility,
 //!   view-dependent projective texturing (VDTM / ULR).
 //! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.
@@ -65,6 +67,7 @@ pub mod impostor;
 pub mod memory;
 pub mod progress;
 pub mod raster;
+pub mod relief;
 pub mod render;
 pub mod scene;
 pub mod trace;

@@ -1,0 +1,759 @@
+//! The relief system of paper 3 (§4–5): a warping loop (the caller's thread, which has priority)
+//! that shows every frame, and a rendering thread — the software shader — that makes a new
+//! relief impostor when the critical-point heuristic says the current one is obsolete.
+//!
+//! Per object and frame, a state: **valid** (the last pre-warp still fits: Schaufler's test
+//! says no critical texel moved half a texel, so only the texture-mapping phase runs),
+//! **warping** (pre-warped for this eye), **stale** (the heuristic says obsolete: the old
+//! impostor is still warped while a new one is made) or **fallback** (no impostor is good
+//! enough: the mesh is rasterized directly, with the same lighting minus what only the software
+//! shader does). Around it: an impostor cache searched by view direction before any new
+//! request (the paper's "database" of §7), requests ordered by error when several objects
+//! compete, a low-resolution impostor first for an object that has none (progressive
+//! resolution), and the rendering thread yielding the CPU while a frame is warped.
+//!
+//! Invariants: the frame loop never waits on the rendering thread, except in deterministic mode,
+//! where a request's result is used exactly `latency` frames after it was made (so that the
+//! same camera path gives the same decisions and pixels); an impostor crosses threads whole,
+//! through a channel; dropping the pipeline stops the thread within one row of ray tracing.
+
+use super::prewarp::{Coefficients, Eye, Prewarped, prewarp};
+use super::shader::SoftwareShader;
+use super::texture::draw;
+use super::validity::CriticalPairs;
+use super::{DepthEncoding, ReliefError, ReliefImpostor};
+use crate::camera::Pinhole;
+use crate::frame::Frame;
+use crate::progress::Timings;
+use crate::scene::View;
+use glam::DVec3;
+use std::collections::{BTreeMap, BinaryHeap};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+
+/// Settings of the relief pipeline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PipelineSettings {
+    /// Relief resolution, texels a side.
+    pub resolution: u32,
+    /// Resolution of the first impostor of an object that has none (progressive); `None` makes
+    /// the full one at once.
+    pub first_resolution: Option<u32>,
+    /// How displacements are stored.
+    pub encoding: DepthEncoding,
+    /// Pre-warp eight-bit displacements by lookup tables (paper §5).
+    pub lut: bool,
+    /// Heuristic error (mean stretch of critical pairs, texels) past which an impostor is
+    /// obsolete and a new one is requested.
+    pub threshold: f64,
+    /// Past `threshold × fallback_factor`, a frame rasterizes the mesh instead.
+    pub fallback_factor: f64,
+    /// Schaufler's test: skip the pre-warp while no critical texel moved this far (texels).
+    pub skip_move: f64,
+    /// Impostors kept per object for reuse.
+    pub cache_size: usize,
+    /// Regions a side for the critical pairs.
+    pub grid: u32,
+    /// Deterministic mode: a request's impostor is used exactly this many frames later (the
+    /// frame loop waits for it if need be). `None`: used as soon as it is ready.
+    pub deterministic: Option<u32>,
+}
+
+impl Default for PipelineSettings {
+    fn default() -> Self {
+        Self {
+            resolution: 256,
+            first_resolution: Some(64),
+            encoding: DepthEncoding::U8,
+            lut: true,
+            threshold: DEFAULT_THRESHOLD,
+            fallback_factor: 4.0,
+            skip_move: 0.5,
+            cache_size: 16,
+            grid: 4,
+            deterministic: None,
+        }
+    }
+}
+
+/// Default heuristic threshold, texels of mean stretch (see docs/relief.md for how it tracks
+/// the brute-force 20 % ratio along walks).
+pub const DEFAULT_THRESHOLD: f64 = 0.25;
+
+/// What the pipeline did for one object in one frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ObjectState {
+    /// The last pre-warp still fits (Schaufler's test): texture mapping only.
+    Valid,
+    /// Pre-warped for this eye.
+    Warping,
+    /// Obsolete by the heuristic; warped anyway while a new impostor is made.
+    Stale,
+    /// Rasterized directly: no impostor good enough.
+    Fallback,
+}
+
+impl std::fmt::Display for ObjectState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ObjectState::Valid => "valid",
+            ObjectState::Warping => "warping",
+            ObjectState::Stale => "stale",
+            ObjectState::Fallback => "fallback",
+        })
+    }
+}
+
+/// One object in one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectFrame {
+    /// The object (scene id).
+    pub object: usize,
+    /// What was done.
+    pub state: ObjectState,
+    /// The heuristic's error for this eye (`INFINITY` without an impostor).
+    pub error: f64,
+    /// Interpolated over direct texels of the pre-warp shown (`None` if none was shown).
+    pub ratio: Option<f64>,
+    /// A new impostor from the rendering thread came into use this frame.
+    pub regenerated: bool,
+    /// A cached impostor came back into use this frame.
+    pub cache_hit: bool,
+    /// Resolution of the impostor shown (0 in fallback).
+    pub resolution: u32,
+}
+
+/// One frame of the pipeline.
+#[derive(Clone, Debug)]
+pub struct FrameOutput {
+    /// The frame.
+    pub frame: Frame,
+    /// Per relief object.
+    pub objects: Vec<ObjectFrame>,
+    /// Step timings of this frame.
+    pub timings: Timings,
+}
+
+/// An impostor in use, with its critical pairs.
+struct Current {
+    impostor: ReliefImpostor,
+    pairs: CriticalPairs,
+}
+
+/// Per relief object.
+struct Slot {
+    object: usize,
+    current: Option<Arc<Current>>,
+    /// The eye and image of the last pre-warp of `current`.
+    last: Option<(Coefficients, Arc<Prewarped>)>,
+    /// Request in flight: id and resolution.
+    pending: Option<(u64, u32)>,
+    /// Cached impostors and the frame each was put aside.
+    cache: Vec<(Arc<Current>, u64)>,
+    /// A new impostor arrived since the last frame.
+    fresh: bool,
+}
+
+/// A request to the rendering thread.
+#[derive(Clone, Debug)]
+struct Request {
+    id: u64,
+    object: usize,
+    eye: DVec3,
+    resolution: u32,
+    priority: f64,
+}
+
+impl PartialEq for Request {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == std::cmp::Ordering::Equal
+    }
+}
+impl Eq for Request {}
+impl PartialOrd for Request {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Request {
+    /// Larger error first, then the older request.
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.priority
+            .total_cmp(&o.priority)
+            .then_with(|| o.id.cmp(&self.id))
+    }
+}
+
+/// What the two threads share.
+#[derive(Default)]
+struct Shared {
+    queue: Mutex<BinaryHeap<Request>>,
+    wake: Condvar,
+    stop: AtomicBool,
+    /// Set while the frame loop warps: the rendering thread waits between rows.
+    busy: Mutex<bool>,
+    idle: Condvar,
+}
+
+/// A finished request.
+struct Generated {
+    id: u64,
+    object: usize,
+    result: Result<Option<ReliefImpostor>, ReliefError>,
+}
+
+/// The relief pipeline over a scene: its relief objects warped, the others rasterized.
+pub struct Pipeline {
+    shader: Arc<SoftwareShader>,
+    settings: PipelineSettings,
+    slots: Vec<Slot>,
+    shared: Arc<Shared>,
+    results: Receiver<Generated>,
+    arrived: BTreeMap<u64, Generated>,
+    /// Frame at which each request in flight was made.
+    issued: BTreeMap<u64, u64>,
+    worker: Option<JoinHandle<()>>,
+    next_id: u64,
+    frame: u64,
+    /// Requests made and impostors brought into use, over the pipeline's life.
+    pub regenerations: u64,
+}
+
+impl Pipeline {
+    /// A pipeline over `shader`'s scene, with relief impostors for the objects `relief` (scene
+    /// ids; the others are rasterized every frame). Starts the rendering thread.
+    pub fn new(
+        shader: Arc<SoftwareShader>,
+        relief: &[usize],
+        settings: PipelineSettings,
+    ) -> Result<Self, ReliefError> {
+        for &o in relief {
+            shader.bounds(o)?;
+        }
+        for r in [Some(settings.resolution), settings.first_resolution]
+            .into_iter()
+            .flatten()
+        {
+            if !(super::RESOLUTION_RANGE.0..=super::RESOLUTION_RANGE.1).contains(&r) {
+                return Err(ReliefError::Resolution(r));
+            }
+        }
+        let shared = Arc::new(Shared::default());
+        let (tx, rx) = channel();
+        let worker = {
+            let (shader, shared, encoding) = (shader.clone(), shared.clone(), settings.encoding);
+            std::thread::Builder::new()
+                .name("relief software shader".into())
+                .spawn(move || render_thread(&shader, &shared, encoding, &tx))
+                .map_err(|_| ReliefError::Worker("could not be started"))?
+        };
+        let slots = relief
+            .iter()
+            .map(|&object| Slot {
+                object,
+                current: None,
+                last: None,
+                pending: None,
+                cache: Vec::new(),
+                fresh: false,
+            })
+            .collect();
+        Ok(Self {
+            shader,
+            settings,
+            slots,
+            shared,
+            results: rx,
+            arrived: BTreeMap::new(),
+            issued: BTreeMap::new(),
+            worker: Some(worker),
+            next_id: 0,
+            frame: 0,
+            regenerations: 0,
+        })
+    }
+
+    /// Renders the next frame through `camera`.
+    pub fn frame(&mut self, camera: &Pinhole) -> Result<FrameOutput, ReliefError> {
+        let mut timings = Timings::default();
+        timings.time("collect", || self.collect())?;
+        let eye = camera.position();
+        let mut outputs = Vec::with_capacity(self.slots.len());
+        let regenerated: Vec<bool> = self
+            .slots
+            .iter_mut()
+            .map(|s| std::mem::take(&mut s.fresh))
+            .collect();
+        // Decide, and pre-warp, with the rendering thread held off.
+        self.set_busy(true);
+        let decided = timings.time("pre-warp", || {
+            (0..self.slots.len())
+                .map(|i| self.decide(i, eye, regenerated[i]))
+                .collect::<Vec<_>>()
+        });
+        self.set_busy(false);
+        // The frame: rasterized objects first (with their ids), then the warped impostors.
+        let fallback: Vec<usize> = decided
+            .iter()
+            .filter(|d| d.state == ObjectState::Fallback)
+            .map(|d| d.object)
+            .collect();
+        let relief: Vec<usize> = self.slots.iter().map(|s| s.object).collect();
+        let view = self.shader.view();
+        let rasterized: Vec<usize> = (0..view.meshes.len())
+            .filter(|o| !relief.contains(o) || fallback.contains(o))
+            .collect();
+        self.set_busy(true);
+        let frame = raster_subset(
+            view,
+            self.shader.lighting(),
+            camera,
+            &rasterized,
+            &mut timings,
+        );
+        let mut frame = match frame {
+            Ok(f) => f,
+            Err(e) => {
+                self.set_busy(false);
+                return Err(e);
+            }
+        };
+        timings.time("texture map", || {
+            for (slot, d) in self.slots.iter().zip(&decided) {
+                if let (Some((_, image)), Some(cur), false) =
+                    (&slot.last, &slot.current, d.state == ObjectState::Fallback)
+                {
+                    draw(
+                        image,
+                        &cur.impostor.frame,
+                        camera,
+                        &mut frame,
+                        slot.object as u32,
+                    );
+                }
+            }
+        });
+        self.set_busy(false);
+        outputs.extend(decided);
+        self.frame += 1;
+        Ok(FrameOutput {
+            frame,
+            objects: outputs,
+            timings,
+        })
+    }
+
+    /// Takes finished impostors from the rendering thread: all that are ready, or in
+    /// deterministic mode exactly those due this frame (waiting for them).
+    fn collect(&mut self) -> Result<(), ReliefError> {
+        let due = |issued: u64, frame: u64, latency: u32| issued + latency as u64 <= frame;
+        match self.settings.deterministic {
+            None => {
+                while let Ok(g) = self.results.try_recv() {
+                    self.arrived.insert(g.id, g);
+                }
+            }
+            Some(latency) => {
+                let frame = self.frame;
+                while self
+                    .issued
+                    .iter()
+                    .any(|(id, &at)| due(at, frame, latency) && !self.arrived.contains_key(id))
+                {
+                    let g = self
+                        .results
+                        .recv()
+                        .map_err(|_| ReliefError::Worker("it stopped before answering"))?;
+                    self.arrived.insert(g.id, g);
+                }
+            }
+        }
+        let ready: Vec<u64> = self
+            .arrived
+            .keys()
+            .copied()
+            .filter(|id| match self.settings.deterministic {
+                None => true,
+                Some(l) => self
+                    .issued
+                    .get(id)
+                    .is_some_and(|&at| due(at, self.frame, l)),
+            })
+            .collect();
+        for id in ready {
+            let Some(g) = self.arrived.remove(&id) else {
+                continue;
+            };
+            self.issued.remove(&id);
+            let Some(slot) = self.slots.iter_mut().find(|s| s.object == g.object) else {
+                continue;
+            };
+            if slot.pending.map(|p| p.0) == Some(id) {
+                slot.pending = None;
+            }
+            if let Some(imp) = g.result? {
+                let pairs = CriticalPairs::of(&imp, self.settings.grid);
+                if let Some(old) = slot.current.take() {
+                    slot.cache.push((old, self.frame));
+                    if slot.cache.len() > self.settings.cache_size {
+                        // Evict the least recently used.
+                        if let Some(i) = (0..slot.cache.len()).min_by_key(|&i| slot.cache[i].1) {
+                            slot.cache.remove(i);
+                        }
+                    }
+                }
+                slot.current = Some(Arc::new(Current {
+                    impostor: imp,
+                    pairs,
+                }));
+                slot.last = None;
+                slot.fresh = true;
+                self.regenerations += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// The state of slot `i` for `eye`: cache lookup, request, pre-warp.
+    fn decide(&mut self, i: usize, eye: DVec3, regenerated: bool) -> ObjectFrame {
+        let settings = self.settings.clone();
+        let frame_no = self.frame;
+        let error_of = |c: &Current| {
+            let k = Coefficients::new(&c.impostor.frame, Eye::Point(eye));
+            c.pairs.error(k.as_ref())
+        };
+        let slot = &mut self.slots[i];
+        let mut error = slot.current.as_ref().map_or(f64::INFINITY, |c| error_of(c));
+        let mut cache_hit = false;
+        let full = slot
+            .current
+            .as_ref()
+            .is_some_and(|c| c.impostor.frame.width == settings.resolution);
+        if error > settings.threshold || !full {
+            // The cache, nearest view direction first: the best there by the heuristic.
+            let best = slot
+                .cache
+                .iter()
+                .enumerate()
+                .map(|(j, (c, _))| (j, error_of(c)))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((j, e)) = best {
+                let better_res = slot.cache[j].0.impostor.frame.width >= settings.resolution;
+                if e <= settings.threshold && (e < error || !full) && better_res {
+                    let (cached, _) = slot.cache.remove(j);
+                    if let Some(old) = slot.current.replace(cached) {
+                        slot.cache.push((old, frame_no));
+                    }
+                    slot.last = None;
+                    error = e;
+                    cache_hit = true;
+                }
+            }
+        }
+        let full = slot
+            .current
+            .as_ref()
+            .is_some_and(|c| c.impostor.frame.width == settings.resolution);
+        // A request when obsolete, or to replace a low-resolution first impostor.
+        let mut request = None;
+        if slot.pending.is_none() && (error > settings.threshold || !full) {
+            let resolution = match (&slot.current, settings.first_resolution) {
+                (None, Some(r)) => r.min(settings.resolution),
+                _ => settings.resolution,
+            };
+            request = Some((slot.object, resolution, error));
+        }
+        let state = match &slot.current {
+            None => ObjectState::Fallback,
+            Some(_) if error > settings.threshold * settings.fallback_factor => {
+                ObjectState::Fallback
+            }
+            Some(c) => {
+                let k = Coefficients::new(&c.impostor.frame, Eye::Point(eye));
+                let fits = match (&slot.last, &k) {
+                    (Some((then, _)), Some(now)) => {
+                        c.pairs.largest_move(then, now) < settings.skip_move
+                    }
+                    _ => false,
+                };
+                if fits {
+                    ObjectState::Valid
+                } else {
+                    match (k, prewarp(&c.impostor, Eye::Point(eye), settings.lut)) {
+                        (Some(k), Some(p)) => {
+                            slot.last = Some((k, Arc::new(p)));
+                            if error > settings.threshold {
+                                ObjectState::Stale
+                            } else {
+                                ObjectState::Warping
+                            }
+                        }
+                        _ => ObjectState::Fallback,
+                    }
+                }
+            }
+        };
+        let (ratio, resolution) = match (state, &slot.last, &slot.current) {
+            (ObjectState::Fallback, _, _) => (None, 0),
+            (_, Some((_, p)), Some(c)) => (Some(p.interpolated_ratio()), c.impostor.frame.width),
+            _ => (None, 0),
+        };
+        let object = slot.object;
+        if let Some((object, resolution, error)) = request {
+            let id = self.next_id;
+            self.next_id += 1;
+            self.slots[i].pending = Some((id, resolution));
+            self.issued.insert(id, frame_no);
+            let priority = if error.is_finite() { error } else { f64::MAX };
+            if let Ok(mut q) = self.shared.queue.lock() {
+                q.push(Request {
+                    id,
+                    object,
+                    eye,
+                    resolution,
+                    priority,
+                });
+            }
+            self.shared.wake.notify_one();
+        }
+        ObjectFrame {
+            object,
+            state,
+            error,
+            ratio,
+            regenerated: regenerated && !cache_hit,
+            cache_hit,
+            resolution,
+        }
+    }
+
+    fn set_busy(&self, busy: bool) {
+        if let Ok(mut b) = self.shared.busy.lock() {
+            *b = busy;
+        }
+        if !busy {
+            self.shared.idle.notify_all();
+        }
+    }
+
+    /// The impostor object `object` shows now, if any.
+    pub fn current(&self, object: usize) -> Option<&ReliefImpostor> {
+        self.slots
+            .iter()
+            .find(|s| s.object == object)
+            .and_then(|s| s.current.as_ref())
+            .map(|c| &c.impostor)
+    }
+
+    /// Impostors held in the caches, over all objects.
+    pub fn cached(&self) -> usize {
+        self.slots.iter().map(|s| s.cache.len()).sum()
+    }
+
+    /// Bytes of every impostor held (in use and cached).
+    pub fn bytes(&self) -> usize {
+        self.slots
+            .iter()
+            .flat_map(|s| s.current.iter().chain(s.cache.iter().map(|c| &c.0)))
+            .map(|c| c.impostor.bytes())
+            .sum()
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &PipelineSettings {
+        &self.settings
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        self.shared.stop.store(true, Ordering::SeqCst);
+        self.set_busy(false);
+        self.shared.wake.notify_all();
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}
+
+/// The rendering thread: highest-error request first, one row at a time, waiting while the
+/// frame loop is busy.
+fn render_thread(
+    shader: &SoftwareShader,
+    shared: &Shared,
+    encoding: DepthEncoding,
+    results: &Sender<Generated>,
+) {
+    loop {
+        let request = {
+            let Ok(mut q) = shared.queue.lock() else {
+                return;
+            };
+            loop {
+                if shared.stop.load(Ordering::SeqCst) {
+                    return;
+                }
+                if let Some(r) = q.pop() {
+                    break r;
+                }
+                q = match shared.wake.wait(q) {
+                    Ok(q) => q,
+                    Err(_) => return,
+                };
+            }
+        };
+        let cancel = || {
+            if let Ok(mut busy) = shared.busy.lock() {
+                while *busy && !shared.stop.load(Ordering::SeqCst) {
+                    busy = match shared.idle.wait(busy) {
+                        Ok(b) => b,
+                        Err(_) => return true,
+                    };
+                }
+            }
+            shared.stop.load(Ordering::SeqCst)
+        };
+        let result = shader.impostor(
+            request.object,
+            request.eye,
+            request.resolution,
+            encoding,
+            &cancel,
+        );
+        if shared.stop.load(Ordering::SeqCst) {
+            return;
+        }
+        let generated = Generated {
+            id: request.id,
+            object: request.object,
+            result,
+        };
+        if results.send(generated).is_err() {
+            return;
+        }
+    }
+}
+
+/// Rasterizes the objects `objects` of `view` through `camera` (ids kept), the environment
+/// behind them.
+pub fn raster_subset(
+    view: &View,
+    lighting: &crate::scene::Lighting,
+    camera: &Pinhole,
+    objects: &[usize],
+    timings: &mut Timings,
+) -> Result<Frame, ReliefError> {
+    let subset = View {
+        camera: camera.clone(),
+        meshes: objects.iter().map(|&o| view.meshes[o].clone()).collect(),
+        surfaces: objects.iter().map(|&o| view.surfaces[o].clone()).collect(),
+    };
+    let mut frame = crate::render::render_raster(&subset, lighting, &(), timings)?;
+    for id in frame.object_id.pixels_mut() {
+        if let Some(&o) = objects.get(*id as usize) {
+            *id = o as u32;
+        }
+    }
+    Ok(frame)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::shader::tests::sphere_on_floor;
+    use super::*;
+    use glam::Vec3;
+
+    fn camera(eye: Vec3) -> Pinhole {
+        Pinhole::look_at(eye, Vec3::new(0.0, 1.2, 0.0), Vec3::Y, 45.0, 64, 48).unwrap()
+    }
+
+    fn eyes(n: usize, speed: f32) -> Vec<Vec3> {
+        (0..n)
+            .map(|i| {
+                let a = i as f32 * speed;
+                Vec3::new(5.0 * a.sin(), 1.8 + 0.5 * (a * 0.7).sin(), 5.0 * a.cos())
+            })
+            .collect()
+    }
+
+    fn settings() -> PipelineSettings {
+        PipelineSettings {
+            resolution: 48,
+            first_resolution: Some(16),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn deterministic_mode_repeats_its_decisions_and_pixels() {
+        let (view, lighting, rs) = sphere_on_floor();
+        let shader = SoftwareShader::new(&view, &lighting, &rs);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let s = PipelineSettings {
+                    deterministic: Some(2),
+                    ..settings()
+                };
+                let mut p = Pipeline::new(shader.clone(), &[1], s).unwrap();
+                eyes(40, 0.08)
+                    .iter()
+                    .map(|&e| {
+                        let out = p.frame(&camera(e)).unwrap();
+                        (out.objects, out.frame.color.into_vec())
+                    })
+                    .collect::<Vec<_>>()
+            })
+        };
+        let (a, b) = (run(1), run(2));
+        assert_eq!(a, b);
+        let states: Vec<_> = a.iter().map(|(o, _)| o[0].state).collect();
+        // It started in fallback, then warped, and regenerated along the way.
+        assert_eq!(states[0], ObjectState::Fallback);
+        assert!(states.contains(&ObjectState::Warping), "{states:?}");
+        assert!(a.iter().filter(|(o, _)| o[0].regenerated).count() >= 2);
+    }
+
+    #[test]
+    fn a_fast_random_path_neither_deadlocks_nor_shows_a_half_made_impostor() {
+        let (view, lighting, rs) = sphere_on_floor();
+        let shader = SoftwareShader::new(&view, &lighting, &rs);
+        let mut p = Pipeline::new(shader.clone(), &[0, 1], settings()).unwrap();
+        let mut seed = 3u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut checked = 0;
+        for i in 0..150 {
+            let a = rnd() * 6.3;
+            let eye = Vec3::new(6.0 * a.sin(), 1.0 + 3.0 * rnd(), 6.0 * a.cos());
+            let out = p.frame(&camera(eye)).unwrap();
+            assert_eq!(out.objects.len(), 2);
+            // Every few frames: the ball's impostor in use is exactly what the shader makes for
+            // its eye — whole, never a half-written one.
+            if i % 25 == 0 {
+                if let Some(imp) = p.current(1) {
+                    let again = shader
+                        .impostor(1, imp.eye, imp.frame.width, imp.encoding(), &|| false)
+                        .unwrap()
+                        .unwrap();
+                    assert_eq!(&again, imp);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked >= 3, "{checked}");
+        // Shut down while the thread may be mid-impostor: bounded time.
+        let started = std::time::Instant::now();
+        drop(p);
+        assert!(started.elapsed() < std::time::Duration::from_secs(5));
+    }
+}

@@ -1,0 +1,292 @@
+//! A walk along a scene's camera path through the relief pipeline (paper 3 §6: "17 images for a
+//! complete walk around the object"): every frame's image and decisions, each frame scored
+//! against the true render of that frame (the software shader through the view camera), the
+//! pipeline's frame time beside direct rasterization of the same scene, and how often the
+//! critical-point heuristic and the brute-force ratio agree.
+//!
+//! Invariants: the walk's eyes are the scene's camera path sampled evenly over its keyframes'
+//! times, or, for a scene without a path, one orbit around its `look_at` at the camera's
+//! distance and height.
+
+use super::pipeline::{ObjectFrame, ObjectState, Pipeline, PipelineSettings, raster_subset};
+use super::shader::SoftwareShader;
+use super::validity::{CriticalPairs, RATIO_THRESHOLD, verdicts};
+use super::{DepthEncoding, ReliefError};
+use crate::camera::Pinhole;
+use crate::frame::Frame;
+use crate::frame::metrics::psnr;
+use crate::progress::{Progress, Timings};
+use crate::scene::Scene;
+use glam::Vec3;
+use std::time::{Duration, Instant};
+
+/// Settings of a walk.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WalkSettings {
+    /// Frames along the path.
+    pub frames: u32,
+    /// The pipeline's settings.
+    pub pipeline: PipelineSettings,
+    /// Objects drawn as relief impostors (scene ids); empty: every object.
+    pub objects: Vec<usize>,
+    /// Render the true frame too and score each frame against it.
+    pub score: bool,
+}
+
+impl Default for WalkSettings {
+    fn default() -> Self {
+        Self {
+            frames: 120,
+            pipeline: PipelineSettings::default(),
+            objects: Vec::new(),
+            score: true,
+        }
+    }
+}
+
+/// One frame of a walk.
+#[derive(Clone, Debug)]
+pub struct WalkFrame {
+    /// Scene time of the frame.
+    pub time: f32,
+    /// The eye.
+    pub eye: Vec3,
+    /// Per relief object.
+    pub objects: Vec<ObjectFrame>,
+    /// The pipeline's time for the frame.
+    pub frame_time: Duration,
+    /// Direct rasterization of the whole scene from the same camera.
+    pub raster_time: Duration,
+    /// PSNR against the true render (when scored).
+    pub psnr: Option<f64>,
+    /// PSNR of direct rasterization against the true render (when scored).
+    pub raster_psnr: Option<f64>,
+}
+
+/// What a walk measured.
+#[derive(Clone, Debug)]
+pub struct WalkReport {
+    /// Every frame.
+    pub frames: Vec<WalkFrame>,
+    /// Impostors the rendering thread delivered and the pipeline used.
+    pub regenerations: u64,
+    /// Bytes of impostors held at the end (in use and cached).
+    pub bytes: usize,
+    /// The heuristic's threshold.
+    pub threshold: f64,
+}
+
+impl WalkReport {
+    /// Frames in which any object was in `state`.
+    pub fn count(&self, state: ObjectState) -> usize {
+        self.frames
+            .iter()
+            .filter(|f| f.objects.iter().any(|o| o.state == state))
+            .count()
+    }
+
+    /// Frames in which a cached impostor came back.
+    pub fn cache_hits(&self) -> usize {
+        self.frames
+            .iter()
+            .filter(|f| f.objects.iter().any(|o| o.cache_hit))
+            .count()
+    }
+
+    /// Mean PSNR of the scored frames (infinite frames count as 100 dB).
+    pub fn mean_psnr(&self) -> Option<f64> {
+        mean(self.frames.iter().filter_map(|f| f.psnr))
+    }
+
+    /// Mean PSNR of direct rasterization against the truth.
+    pub fn mean_raster_psnr(&self) -> Option<f64> {
+        mean(self.frames.iter().filter_map(|f| f.raster_psnr))
+    }
+
+    /// Mean frame time of the pipeline and of direct rasterization.
+    pub fn mean_times(&self) -> (Duration, Duration) {
+        let n = self.frames.len().max(1) as u32;
+        (
+            self.frames.iter().map(|f| f.frame_time).sum::<Duration>() / n,
+            self.frames.iter().map(|f| f.raster_time).sum::<Duration>() / n,
+        )
+    }
+
+    /// Share of (frame, object) pairs showing an impostor on which the heuristic (error past
+    /// the threshold) and the brute force (ratio past 20 %) give the same verdict, and how many
+    /// pairs were compared.
+    pub fn agreement(&self) -> (f64, usize) {
+        let pairs: Vec<bool> = self
+            .frames
+            .iter()
+            .flat_map(|f| &f.objects)
+            .filter_map(|o| {
+                o.ratio
+                    .map(|r| (o.error > self.threshold) == (r > RATIO_THRESHOLD))
+            })
+            .collect();
+        let agree = pairs.iter().filter(|&&a| a).count();
+        (agree as f64 / pairs.len().max(1) as f64, pairs.len())
+    }
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let v: Vec<f64> = values.map(|p| p.min(100.0)).collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// The cameras of a walk of `frames` frames over `scene` (module doc).
+pub fn path(scene: &Scene, frames: u32) -> Result<Vec<(f32, Pinhole)>, ReliefError> {
+    let spec = &scene.camera;
+    let n = frames.max(1);
+    let mut out = Vec::with_capacity(n as usize);
+    match (spec.path.first(), spec.path.last()) {
+        (Some(first), Some(last)) if spec.path.len() > 1 => {
+            for i in 0..n {
+                let s = if n == 1 {
+                    0.0
+                } else {
+                    i as f32 / (n - 1) as f32
+                };
+                let t = first.time + (last.time - first.time) * s;
+                out.push((t, spec.at(t)?));
+            }
+        }
+        _ => {
+            let centre = spec.look_at;
+            let r = spec.position - centre;
+            let (radius, height) = (Vec3::new(r.x, 0.0, r.z).length(), r.y);
+            let start = r.x.atan2(r.z);
+            for i in 0..n {
+                let a = start + std::f32::consts::TAU * i as f32 / n as f32;
+                let eye = centre + Vec3::new(radius * a.sin(), height, radius * a.cos());
+                let camera =
+                    Pinhole::look_at(eye, centre, spec.up, spec.fov_y, spec.width, spec.height)?
+                        .with_near(spec.near);
+                out.push((scene.render.time, camera));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Walks `scene`'s camera path through the relief pipeline. `sink(i, frame, truth)` receives
+/// every frame (and its true render when scored) as it is made.
+pub fn walk(
+    scene: &Scene,
+    settings: &WalkSettings,
+    progress: &dyn Progress,
+    sink: &mut dyn FnMut(usize, &Frame, Option<&Frame>) -> Result<(), ReliefError>,
+) -> Result<WalkReport, ReliefError> {
+    let view = scene.view(scene.render.time)?;
+    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let objects: Vec<usize> = if settings.objects.is_empty() {
+        (0..view.meshes.len()).collect()
+    } else {
+        settings.objects.clone()
+    };
+    let others: Vec<usize> = (0..view.meshes.len())
+        .filter(|o| !objects.contains(o))
+        .collect();
+    let all: Vec<usize> = (0..view.meshes.len()).collect();
+    let cameras = path(scene, settings.frames)?;
+    let mut pipeline = Pipeline::new(shader.clone(), &objects, settings.pipeline.clone())?;
+    let mut frames = Vec::with_capacity(cameras.len());
+    for (i, (time, camera)) in cameras.iter().enumerate() {
+        let started = Instant::now();
+        let out = pipeline.frame(camera)?;
+        let frame_time = started.elapsed();
+        let started = Instant::now();
+        let raster = raster_subset(
+            &view,
+            &scene.lighting,
+            camera,
+            &all,
+            &mut Timings::default(),
+        )?;
+        let raster_time = started.elapsed();
+        let (mut score, mut raster_score, mut truth) = (None, None, None);
+        if settings.score {
+            let t = true_frame(&shader, camera, &objects, &others)?;
+            score = Some(psnr(&t.color, &out.frame.color, None)?);
+            raster_score = Some(psnr(&t.color, &raster.color, None)?);
+            truth = Some(t);
+        }
+        sink(i, &out.frame, truth.as_ref())?;
+        frames.push(WalkFrame {
+            time: *time,
+            eye: camera.position().as_vec3(),
+            objects: out.objects,
+            frame_time,
+            raster_time,
+            psnr: score,
+            raster_psnr: raster_score,
+        });
+        progress.advance(1);
+    }
+    Ok(WalkReport {
+        frames,
+        regenerations: pipeline.regenerations,
+        bytes: pipeline.bytes(),
+        threshold: settings.pipeline.threshold,
+    })
+}
+
+/// The frame a relief walk stands for: the relief objects ray traced by the software shader,
+/// the others rasterized, the nearer winning.
+pub fn true_frame(
+    shader: &SoftwareShader,
+    camera: &Pinhole,
+    relief: &[usize],
+    others: &[usize],
+) -> Result<Frame, ReliefError> {
+    let mut traced = shader.render(camera, relief)?;
+    if others.is_empty() {
+        return Ok(traced);
+    }
+    let raster = raster_subset(
+        shader.view(),
+        shader.lighting(),
+        camera,
+        others,
+        &mut Timings::default(),
+    )?;
+    for i in 0..traced.color.pixels().len() {
+        let (r, t) = (raster.depth.pixels()[i], traced.depth.pixels()[i]);
+        let relief_hit = relief.contains(&(traced.object_id.pixels()[i] as usize));
+        if r < t || (!relief_hit && r.is_finite()) {
+            traced.color.pixels_mut()[i] = raster.color.pixels()[i];
+            traced.depth.pixels_mut()[i] = r;
+            traced.object_id.pixels_mut()[i] = raster.object_id.pixels()[i];
+        }
+    }
+    Ok(traced)
+}
+
+/// The heuristic against the brute force with no pipeline in between: impostors of `object`
+/// made at every `every`-th eye of `eyes`, each judged by both measures at the `span` eyes that
+/// follow. Returns `(heuristic, ratio)` per judged eye.
+pub fn verdicts_along(
+    shader: &SoftwareShader,
+    object: usize,
+    eyes: &[Vec3],
+    every: usize,
+    span: usize,
+    resolution: u32,
+    grid: u32,
+) -> Result<Vec<(f64, f64)>, ReliefError> {
+    let mut out = Vec::new();
+    for start in (0..eyes.len()).step_by(every.max(1)) {
+        let eye = eyes[start].as_dvec3();
+        let Some(imp) = shader.impostor(object, eye, resolution, DepthEncoding::U8, &|| false)?
+        else {
+            continue;
+        };
+        let pairs = CriticalPairs::of(&imp, grid);
+        for e in eyes.iter().skip(start).take(span) {
+            let v = verdicts(&imp, &pairs, e.as_dvec3());
+            out.push((v.heuristic, v.ratio));
+        }
+    }
+    Ok(out)
+}
