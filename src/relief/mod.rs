@@ -14,8 +14,10 @@
 //! * [`pipeline`] — the warping loop and the rendering thread, the state machine, the cache.
 //! * [`walk`] — a camera path walked through the pipeline and scored against the true render.
 //!
-//! Invariants: displacements `d` are heights above the base plane along its unit normal `f`
-//! (toward the viewer), in world units, `0 ≤ d ≤ max_depth`; texel `(u, v)` has its centre at
+//! Invariants: the base plane is the front of the object (paper Fig. 2: the image plane of the
+//! orthographic camera that made it); a displacement `d` is a signed height along its unit
+//! normal `f` (toward the viewer), in world units, so the object lies at `−max_depth ≤ d ≤ 0`
+//! and its depth into the impostor is `δ = −d`; texel `(u, v)` has its centre at
 //! `(u + 0.5, v + 0.5)` in texel coordinates; a background texel has alpha 0. Warps are
 //! deterministic: the same impostor and eye give the same pre-warped image on any thread count.
 
@@ -103,14 +105,16 @@ pub struct ReliefFrame {
     pub width: u32,
     /// Rows.
     pub height: u32,
-    /// Largest displacement (`MAX_DEPTH` of paper §5): the depth of the object's box along `f`.
+    /// Largest depth into the impostor (`MAX_DEPTH` of paper §5): the object's extent along `f`.
     pub max_depth: f64,
 }
 
 impl ReliefFrame {
     /// The frame of an object bounded by the sphere `(centre, radius)`, seen from `eye`: the base
-    /// plane perpendicular to the direction from the centre to the eye, behind the sphere, with
-    /// `resolution²` texels covering the sphere's silhouette; `max_depth = 2·radius`.
+    /// plane perpendicular to the direction from the centre to the eye, tangent to the sphere on
+    /// the eye's side, with `resolution²` texels covering the sphere's silhouette;
+    /// `max_depth = 2·radius`. Seen from near its own eye, every texel then shrinks under the
+    /// pre-warp (it lies behind the plane), so interpolation measures disocclusion only.
     pub fn facing(
         centre: DVec3,
         radius: f64,
@@ -133,7 +137,7 @@ impl ReliefFrame {
         let (a, b) = (right * s, down * s);
         let half = resolution as f64 * 0.5;
         Ok(Self {
-            origin: centre - f * radius - a * half - b * half,
+            origin: centre + f * radius - a * half - b * half,
             a,
             b,
             f,
@@ -158,6 +162,16 @@ impl ReliefFrame {
         )
     }
 
+    /// The centre of the sphere the frame was made around ([`ReliefFrame::facing`]): the
+    /// middle of the image, `max_depth / 2` behind the plane.
+    pub fn centre(&self) -> DVec3 {
+        self.point(
+            self.width as f64 * 0.5,
+            self.height as f64 * 0.5,
+            -self.max_depth * 0.5,
+        )
+    }
+
     /// Texel size in world units.
     pub fn texel_size(&self) -> f64 {
         self.a.length()
@@ -167,7 +181,8 @@ impl ReliefFrame {
 /// How displacements are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum DepthEncoding {
-    /// Eight bits over `[0, max_depth]`, as in paper §5 (and its lookup-table pre-warp).
+    /// Eight bits of depth into the impostor over `[0, max_depth]`, as in paper §5 (and its
+    /// lookup-table pre-warp).
     #[default]
     U8,
     /// One `f32` a texel.
@@ -177,9 +192,9 @@ pub enum DepthEncoding {
 /// Stored displacements.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Displacements {
-    /// Eight-bit steps of `max_depth / 255`.
+    /// Depth into the impostor in eight-bit steps of `max_depth / 255`: `d = −code·max/255`.
     U8(Vec<u8>),
-    /// World units.
+    /// Signed displacement `d`, world units.
     F32(Vec<f32>),
 }
 
@@ -197,11 +212,12 @@ pub struct ReliefImpostor {
 }
 
 impl ReliefImpostor {
-    /// Displacement of texel `i` (row-major), world units.
+    /// Displacement `d` of texel `i` (row-major), world units (`≤ 0` for an impostor a shader
+    /// made: the object lies behind the base plane).
     #[inline]
     pub fn displacement(&self, i: usize) -> f64 {
         match &self.depth {
-            Displacements::U8(d) => d[i] as f64 * self.frame.max_depth / 255.0,
+            Displacements::U8(d) => -(d[i] as f64) * self.frame.max_depth / 255.0,
             Displacements::F32(d) => d[i] as f64,
         }
     }
@@ -240,12 +256,13 @@ impl ReliefImpostor {
         crate::frame::Image::from_vec(self.frame.width, self.frame.height, self.color.clone())
     }
 
-    /// The displacement as a grey image, white = `max_depth`, background transparent.
+    /// The depth as a grey image, white at the base plane, black `max_depth` behind it,
+    /// background transparent.
     pub fn depth_image(&self) -> Result<crate::frame::Image<Rgba>, crate::frame::FrameError> {
         let data = (0..self.color.len())
             .map(|i| {
                 if self.covered(i) {
-                    let g = (self.displacement(i) / self.frame.max_depth) as f32;
+                    let g = (1.0 + self.displacement(i) / self.frame.max_depth) as f32;
                     Vec3::splat(g).extend(1.0)
                 } else {
                     Rgba::ZERO
@@ -268,13 +285,14 @@ mod tests {
         assert!((fr.f - (eye - c).normalize()).length() < 1e-12);
         assert!(fr.a.dot(fr.b).abs() < 1e-12 && fr.a.dot(fr.f).abs() < 1e-12);
         assert!((fr.b.cross(fr.a).normalize() - fr.f).length() < 1e-12);
-        // The sphere's centre is at the image centre, at height r.
+        // The sphere's centre is at the image centre, r behind the plane.
         let centre = fr.coordinates(c);
         assert!(
-            (centre - DVec3::new(32.0, 32.0, r)).length() < 1e-9,
+            (centre - DVec3::new(32.0, 32.0, -r)).length() < 1e-9,
             "{centre}"
         );
         assert!((fr.point(centre.x, centre.y, centre.z) - c).length() < 1e-12);
+        assert!((fr.centre() - c).length() < 1e-12);
         assert!(ReliefFrame::facing(c, r, eye, 2).is_err());
     }
 }

@@ -10,7 +10,8 @@
 //! shader does). Around it: an impostor cache searched by view direction before any new
 //! request (the paper's "database" of §7), requests ordered by error when several objects
 //! compete, a low-resolution impostor first for an object that has none (progressive
-//! resolution), and the rendering thread yielding the CPU while a frame is warped.
+//! resolution), camera-path prediction, and the rendering thread yielding the CPU while the
+//! frame loop pre-warps.
 //!
 //! Invariants: the frame loop never waits on the rendering thread, except in deterministic mode,
 //! where a request's result is used exactly `latency` frames after it was made (so that the
@@ -20,7 +21,7 @@
 use super::prewarp::{Coefficients, Eye, Prewarped, prewarp};
 use super::shader::SoftwareShader;
 use super::texture::draw;
-use super::validity::CriticalPairs;
+use super::validity::{Calibration, CriticalPairs, RATIO_THRESHOLD, calibrate};
 use super::{DepthEncoding, ReliefError, ReliefImpostor};
 use crate::camera::Pinhole;
 use crate::frame::Frame;
@@ -45,17 +46,27 @@ pub struct PipelineSettings {
     pub encoding: DepthEncoding,
     /// Pre-warp eight-bit displacements by lookup tables (paper §5).
     pub lut: bool,
-    /// Heuristic error (mean stretch of critical pairs, texels) past which an impostor is
-    /// obsolete and a new one is requested.
+    /// Interpolated share (interpolated over direct texels) past which an impostor is obsolete
+    /// and a new one is requested — judged each frame by the critical-point heuristic,
+    /// calibrated against this measure when the impostor was made.
     pub threshold: f64,
-    /// Past `threshold × fallback_factor`, a frame rasterizes the mesh instead.
-    pub fallback_factor: f64,
+    /// Predicted share past which a frame rasterizes the mesh instead.
+    pub fallback: f64,
+    /// A new impostor is requested once the predicted share passes `threshold × prefetch`
+    /// (1: only when obsolete), so that it can arrive before the old one goes stale.
+    pub prefetch: f64,
+    /// Camera-path prediction: a request is made for where the eye will be this many frames
+    /// ahead at its current velocity (0: for the eye as it is).
+    pub predict: u32,
     /// Schaufler's test: skip the pre-warp while no critical texel moved this far (texels).
     pub skip_move: f64,
     /// Impostors kept per object for reuse.
     pub cache_size: usize,
     /// Regions a side for the critical pairs.
     pub grid: u32,
+    /// An impostor is never used for an eye further than this from its own direction,
+    /// degrees (the heuristic is calibrated up to 24°; past grazing views it cannot judge).
+    pub max_angle: f64,
     /// Deterministic mode: a request's impostor is used exactly this many frames later (the
     /// frame loop waits for it if need be). `None`: used as soon as it is ready.
     pub deterministic: Option<u32>,
@@ -68,19 +79,18 @@ impl Default for PipelineSettings {
             first_resolution: Some(64),
             encoding: DepthEncoding::U8,
             lut: true,
-            threshold: DEFAULT_THRESHOLD,
-            fallback_factor: 4.0,
+            threshold: RATIO_THRESHOLD,
+            fallback: 0.6,
+            prefetch: 0.75,
+            predict: 0,
             skip_move: 0.5,
             cache_size: 16,
             grid: 4,
+            max_angle: 45.0,
             deterministic: None,
         }
     }
 }
-
-/// Default heuristic threshold, texels of mean stretch (see docs/relief.md for how it tracks
-/// the brute-force 20 % ratio along walks).
-pub const DEFAULT_THRESHOLD: f64 = 0.25;
 
 /// What the pipeline did for one object in one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -113,8 +123,11 @@ pub struct ObjectFrame {
     pub object: usize,
     /// What was done.
     pub state: ObjectState,
-    /// The heuristic's error for this eye (`INFINITY` without an impostor).
+    /// The heuristic's error for this eye: mean stretch of the critical pairs, texels
+    /// (`INFINITY` without an impostor).
     pub error: f64,
+    /// The interpolated share the heuristic predicts from it.
+    pub predicted: f64,
     /// Interpolated over direct texels of the pre-warp shown (`None` if none was shown).
     pub ratio: Option<f64>,
     /// A new impostor from the rendering thread came into use this frame.
@@ -136,10 +149,11 @@ pub struct FrameOutput {
     pub timings: Timings,
 }
 
-/// An impostor in use, with its critical pairs.
+/// An impostor in use, with its critical pairs and their calibration.
 struct Current {
     impostor: ReliefImpostor,
     pairs: CriticalPairs,
+    calibration: Calibration,
 }
 
 /// Per relief object.
@@ -201,7 +215,7 @@ struct Shared {
 struct Generated {
     id: u64,
     object: usize,
-    result: Result<Option<ReliefImpostor>, ReliefError>,
+    result: Result<Option<Current>, ReliefError>,
 }
 
 /// The relief pipeline over a scene: its relief objects warped, the others rasterized.
@@ -215,6 +229,8 @@ pub struct Pipeline {
     /// Frame at which each request in flight was made.
     issued: BTreeMap<u64, u64>,
     worker: Option<JoinHandle<()>>,
+    /// The previous frame's eye (for camera-path prediction).
+    previous_eye: Option<DVec3>,
     next_id: u64,
     frame: u64,
     /// Requests made and impostors brought into use, over the pipeline's life.
@@ -243,10 +259,11 @@ impl Pipeline {
         let shared = Arc::new(Shared::default());
         let (tx, rx) = channel();
         let worker = {
-            let (shader, shared, encoding) = (shader.clone(), shared.clone(), settings.encoding);
+            let (shader, shared) = (shader.clone(), shared.clone());
+            let (encoding, grid) = (settings.encoding, settings.grid);
             std::thread::Builder::new()
                 .name("relief software shader".into())
-                .spawn(move || render_thread(&shader, &shared, encoding, &tx))
+                .spawn(move || render_thread(&shader, &shared, encoding, grid, &tx))
                 .map_err(|_| ReliefError::Worker("could not be started"))?
         };
         let slots = relief
@@ -269,6 +286,7 @@ impl Pipeline {
             arrived: BTreeMap::new(),
             issued: BTreeMap::new(),
             worker: Some(worker),
+            previous_eye: None,
             next_id: 0,
             frame: 0,
             regenerations: 0,
@@ -286,7 +304,8 @@ impl Pipeline {
             .iter_mut()
             .map(|s| std::mem::take(&mut s.fresh))
             .collect();
-        // Decide, and pre-warp, with the rendering thread held off.
+        // Decide and pre-warp with the rendering thread held off (the warping thread's
+        // priority, paper §6); it runs again while the frame is composed.
         self.set_busy(true);
         let decided = timings.time("pre-warp", || {
             (0..self.slots.len())
@@ -305,21 +324,13 @@ impl Pipeline {
         let rasterized: Vec<usize> = (0..view.meshes.len())
             .filter(|o| !relief.contains(o) || fallback.contains(o))
             .collect();
-        self.set_busy(true);
-        let frame = raster_subset(
+        let mut frame = raster_subset(
             view,
             self.shader.lighting(),
             camera,
             &rasterized,
             &mut timings,
-        );
-        let mut frame = match frame {
-            Ok(f) => f,
-            Err(e) => {
-                self.set_busy(false);
-                return Err(e);
-            }
-        };
+        )?;
         timings.time("texture map", || {
             for (slot, d) in self.slots.iter().zip(&decided) {
                 if let (Some((_, image)), Some(cur), false) =
@@ -335,8 +346,8 @@ impl Pipeline {
                 }
             }
         });
-        self.set_busy(false);
         outputs.extend(decided);
+        self.previous_eye = Some(eye);
         self.frame += 1;
         Ok(FrameOutput {
             frame,
@@ -393,8 +404,7 @@ impl Pipeline {
             if slot.pending.map(|p| p.0) == Some(id) {
                 slot.pending = None;
             }
-            if let Some(imp) = g.result? {
-                let pairs = CriticalPairs::of(&imp, self.settings.grid);
+            if let Some(made) = g.result? {
                 if let Some(old) = slot.current.take() {
                     slot.cache.push((old, self.frame));
                     if slot.cache.len() > self.settings.cache_size {
@@ -404,10 +414,7 @@ impl Pipeline {
                         }
                     }
                 }
-                slot.current = Some(Arc::new(Current {
-                    impostor: imp,
-                    pairs,
-                }));
+                slot.current = Some(Arc::new(made));
                 slot.last = None;
                 slot.fresh = true;
                 self.regenerations += 1;
@@ -420,34 +427,47 @@ impl Pipeline {
     fn decide(&mut self, i: usize, eye: DVec3, regenerated: bool) -> ObjectFrame {
         let settings = self.settings.clone();
         let frame_no = self.frame;
-        let error_of = |c: &Current| {
-            let k = Coefficients::new(&c.impostor.frame, Eye::Point(eye));
-            c.pairs.error(k.as_ref())
+        // The heuristic, and the share it predicts.
+        let cos_max = settings.max_angle.to_radians().cos();
+        let judge = |c: &Current| {
+            let fr = &c.impostor.frame;
+            if (eye - fr.centre()).normalize_or_zero().dot(fr.f) < cos_max {
+                return (f64::INFINITY, f64::INFINITY);
+            }
+            let k = Coefficients::new(fr, Eye::Point(eye));
+            let e = c.pairs.error(k.as_ref());
+            match k {
+                Some(k) => (e, c.calibration.predict(e, k.epipole)),
+                None => (f64::INFINITY, f64::INFINITY),
+            }
         };
         let slot = &mut self.slots[i];
-        let mut error = slot.current.as_ref().map_or(f64::INFINITY, |c| error_of(c));
+        let (mut error, mut predicted) = slot
+            .current
+            .as_ref()
+            .map_or((f64::INFINITY, f64::INFINITY), |c| judge(c));
         let mut cache_hit = false;
         let full = slot
             .current
             .as_ref()
             .is_some_and(|c| c.impostor.frame.width == settings.resolution);
-        if error > settings.threshold || !full {
-            // The cache, nearest view direction first: the best there by the heuristic.
+        if predicted > settings.threshold || !full {
+            // The cache: the impostor there the heuristic judges best for this eye.
             let best = slot
                 .cache
                 .iter()
                 .enumerate()
-                .map(|(j, (c, _))| (j, error_of(c)))
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            if let Some((j, e)) = best {
+                .map(|(j, (c, _))| (j, judge(c)))
+                .min_by(|a, b| a.1.1.total_cmp(&b.1.1));
+            if let Some((j, (e, p))) = best {
                 let better_res = slot.cache[j].0.impostor.frame.width >= settings.resolution;
-                if e <= settings.threshold && (e < error || !full) && better_res {
+                if p <= settings.threshold && (p < predicted || !full) && better_res {
                     let (cached, _) = slot.cache.remove(j);
                     if let Some(old) = slot.current.replace(cached) {
                         slot.cache.push((old, frame_no));
                     }
                     slot.last = None;
-                    error = e;
+                    (error, predicted) = (e, p);
                     cache_hit = true;
                 }
             }
@@ -458,18 +478,16 @@ impl Pipeline {
             .is_some_and(|c| c.impostor.frame.width == settings.resolution);
         // A request when obsolete, or to replace a low-resolution first impostor.
         let mut request = None;
-        if slot.pending.is_none() && (error > settings.threshold || !full) {
+        if slot.pending.is_none() && (predicted > settings.threshold * settings.prefetch || !full) {
             let resolution = match (&slot.current, settings.first_resolution) {
                 (None, Some(r)) => r.min(settings.resolution),
                 _ => settings.resolution,
             };
-            request = Some((slot.object, resolution, error));
+            request = Some((slot.object, resolution, predicted));
         }
         let state = match &slot.current {
             None => ObjectState::Fallback,
-            Some(_) if error > settings.threshold * settings.fallback_factor => {
-                ObjectState::Fallback
-            }
+            Some(_) if predicted > settings.fallback => ObjectState::Fallback,
             Some(c) => {
                 let k = Coefficients::new(&c.impostor.frame, Eye::Point(eye));
                 let fits = match (&slot.last, &k) {
@@ -482,9 +500,9 @@ impl Pipeline {
                     ObjectState::Valid
                 } else {
                     match (k, prewarp(&c.impostor, Eye::Point(eye), settings.lut)) {
-                        (Some(k), Some(p)) => {
+                        (Some(k), Some(p)) if p.direct > 0 => {
                             slot.last = Some((k, Arc::new(p)));
-                            if error > settings.threshold {
+                            if predicted > settings.threshold {
                                 ObjectState::Stale
                             } else {
                                 ObjectState::Warping
@@ -502,6 +520,7 @@ impl Pipeline {
         };
         let object = slot.object;
         if let Some((object, resolution, error)) = request {
+            let eye = self.request_eye(object, eye);
             let id = self.next_id;
             self.next_id += 1;
             self.slots[i].pending = Some((id, resolution));
@@ -522,10 +541,24 @@ impl Pipeline {
             object,
             state,
             error,
+            predicted,
             ratio,
             regenerated: regenerated && !cache_hit,
             cache_hit,
             resolution,
+        }
+    }
+
+    /// Where to make a new impostor of `object` for: the eye, or with camera-path prediction
+    /// the eye `predict` frames ahead at its velocity (unless that is inside the object).
+    fn request_eye(&self, object: usize, eye: DVec3) -> DVec3 {
+        let (Some(previous), n) = (self.previous_eye, self.settings.predict) else {
+            return eye;
+        };
+        let ahead = eye + (eye - previous) * n as f64;
+        match self.shader.bounds(object) {
+            Ok((c, r)) if (ahead - c).length() > r * 1.01 && ahead.is_finite() => ahead,
+            _ => eye,
         }
     }
 
@@ -579,11 +612,12 @@ impl Drop for Pipeline {
 }
 
 /// The rendering thread: highest-error request first, one row at a time, waiting while the
-/// frame loop is busy.
+/// frame loop is busy; then the new impostor's critical pairs and their calibration.
 fn render_thread(
     shader: &SoftwareShader,
     shared: &Shared,
     encoding: DepthEncoding,
+    grid: u32,
     results: &Sender<Generated>,
 ) {
     loop {
@@ -615,13 +649,27 @@ fn render_thread(
             }
             shared.stop.load(Ordering::SeqCst)
         };
-        let result = shader.impostor(
-            request.object,
-            request.eye,
-            request.resolution,
-            encoding,
-            &cancel,
-        );
+        let result = shader
+            .impostor(
+                request.object,
+                request.eye,
+                request.resolution,
+                encoding,
+                &cancel,
+            )
+            .and_then(|made| {
+                let Some(impostor) = made else {
+                    return Ok(None);
+                };
+                let (centre, _) = shader.bounds(request.object)?;
+                let pairs = CriticalPairs::of(&impostor, grid);
+                let calibration = calibrate(&impostor, &pairs, centre);
+                Ok(Some(Current {
+                    impostor,
+                    pairs,
+                    calibration,
+                }))
+            });
         if shared.stop.load(Ordering::SeqCst) {
             return;
         }
@@ -720,6 +768,42 @@ mod tests {
     }
 
     #[test]
+    fn a_still_camera_reuses_its_warp_and_a_turned_one_comes_back_from_the_cache() {
+        let (view, lighting, rs) = sphere_on_floor();
+        let shader = SoftwareShader::new(&view, &lighting, &rs);
+        let s = PipelineSettings {
+            deterministic: Some(1),
+            first_resolution: None,
+            ..settings()
+        };
+        let mut p = Pipeline::new(shader, &[1], s).unwrap();
+        let (front, side) = (Vec3::new(0.0, 1.8, 5.0), Vec3::new(5.0, 1.8, 0.0));
+        let mut states = Vec::new();
+        for eye in [front, front, front, front, side, side, side, front, front] {
+            let out = p.frame(&camera(eye)).unwrap();
+            states.push((out.objects[0].state, out.objects[0].cache_hit));
+        }
+        use ObjectState::{Fallback, Valid, Warping};
+        // No impostor, then one made for the front: warped once, then reused unwarped.
+        assert_eq!(
+            &states[..4],
+            &[
+                (Fallback, false),
+                (Warping, false),
+                (Valid, false),
+                (Valid, false)
+            ]
+        );
+        // 90° away: obsolete past use until one is made for the side.
+        assert_eq!(states[4], (Fallback, false));
+        assert_eq!(states[5].0, Warping);
+        // Back to the front: the first impostor returns from the cache.
+        assert_eq!(states[7], (Warping, true));
+        assert_eq!(states[8], (Valid, false));
+        assert_eq!(p.cached(), 1);
+    }
+
+    #[test]
     fn a_fast_random_path_neither_deadlocks_nor_shows_a_half_made_impostor() {
         let (view, lighting, rs) = sphere_on_floor();
         let shader = SoftwareShader::new(&view, &lighting, &rs);
@@ -732,22 +816,27 @@ mod tests {
             (seed >> 40) as f32 / (1u64 << 24) as f32
         };
         let mut checked = 0;
-        for i in 0..150 {
+        for i in 0..600 {
+            if checked >= 3 {
+                break;
+            }
+            // A frame's pace: the rendering thread has the idle time an interactive loop leaves.
+            std::thread::sleep(std::time::Duration::from_millis(1));
             let a = rnd() * 6.3;
             let eye = Vec3::new(6.0 * a.sin(), 1.0 + 3.0 * rnd(), 6.0 * a.cos());
             let out = p.frame(&camera(eye)).unwrap();
             assert_eq!(out.objects.len(), 2);
             // Every few frames: the ball's impostor in use is exactly what the shader makes for
             // its eye — whole, never a half-written one.
-            if i % 25 == 0 {
-                if let Some(imp) = p.current(1) {
-                    let again = shader
-                        .impostor(1, imp.eye, imp.frame.width, imp.encoding(), &|| false)
-                        .unwrap()
-                        .unwrap();
-                    assert_eq!(&again, imp);
-                    checked += 1;
-                }
+            if i % 20 == 0
+                && let Some(imp) = p.current(1)
+            {
+                let again = shader
+                    .impostor(1, imp.eye, imp.frame.width, imp.encoding(), &|| false)
+                    .unwrap()
+                    .unwrap();
+                assert_eq!(&again, imp);
+                checked += 1;
             }
         }
         assert!(checked >= 3, "{checked}");

@@ -112,7 +112,8 @@ impl Coefficients {
 }
 
 /// The lookup tables of paper §5 for eight-bit displacements: `Coef1[D] = k1·d`,
-/// `Coef2[D] = k2·d`, `Coef3[D] = 1/(1 + k3·d)` with `d = D·max_depth/255`, rebuilt for each eye.
+/// `Coef2[D] = k2·d`, `Coef3[D] = 1/(1 + k3·d)` with `d = −D·max_depth/255` (`D` the depth into
+/// the impostor), rebuilt for each eye.
 #[derive(Clone, Debug)]
 pub struct Lut {
     coef1: [f64; 256],
@@ -121,7 +122,7 @@ pub struct Lut {
 }
 
 impl Lut {
-    /// The tables for `k` over displacements up to `max_depth`.
+    /// The tables for `k` over depths up to `max_depth`.
     pub fn new(k: &Coefficients, max_depth: f64) -> Self {
         let mut lut = Lut {
             coef1: [0.0; 256],
@@ -129,7 +130,7 @@ impl Lut {
             coef3: [0.0; 256],
         };
         for code in 0..256 {
-            let d = code as f64 * max_depth / 255.0;
+            let d = -(code as f64) * max_depth / 255.0;
             let w = 1.0 + k.k3 * d;
             lut.coef1[code] = k.k1 * d;
             lut.coef2[code] = k.k2 * d;
@@ -248,9 +249,9 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
     let eight_bit = matches!(impostor.depth, super::Displacements::U8(_));
     let table = (lut && eight_bit).then(|| Lut::new(&k, fr.max_depth));
 
-    // The source as a plane, and the largest displacement on it.
+    // The source as a plane, and its range of displacements.
     let mut src = Plane::empty(w, h);
-    let mut d_max: f64 = 0.0;
+    let (mut d_min, mut d_max): (f64, f64) = (0.0, 0.0);
     for i in 0..w * h {
         if impostor.covered(i) {
             src.color[i] = impostor.color[i];
@@ -259,13 +260,14 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
             if let super::Displacements::U8(codes) = &impostor.depth {
                 src.code[i] = codes[i] as u16;
             }
+            d_min = d_min.min(src.d[i]);
             d_max = d_max.max(src.d[i]);
         }
     }
     let margin = |n: usize, e_shift: &dyn Fn(f64, f64) -> Option<f64>| -> usize {
         let mut m: f64 = 0.0;
         for x in [0.5, n as f64 - 0.5] {
-            for d in [0.0, d_max] {
+            for d in [d_min, 0.0, d_max] {
                 if let Some(y) = e_shift(x, d) {
                     m = m.max((y - x).abs());
                 }
@@ -383,10 +385,11 @@ fn pass(
             let left = line.sweep((0..split).map(|i| (i, take(i))), true, map);
             let right = line.sweep((split..n).rev().map(|i| (i, take(i))), false, map);
             // The two sweeps meet at the epipole: join their last texels if they are neighbours.
-            if let (Some((il, l)), Some((ir, r))) = (left, right) {
-                if ir == il + 1 && l.x < r.x {
-                    line.fill(&l, &r);
-                }
+            if let (Some((il, l)), Some((ir, r))) = (left, right)
+                && ir == il + 1
+                && l.x < r.x
+            {
+                line.fill(&l, &r);
             }
             line.dropped
         })

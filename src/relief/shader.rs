@@ -119,7 +119,8 @@ impl SoftwareShader {
             (n * n * 24) as u64,
         )?;
         let bvh = &self.objects[object].bvh;
-        let top = frame.max_depth * 1.0001;
+        // Rays start just in front of the base plane; a hit `t` along them is `top − d`.
+        let top = frame.max_depth * 1e-4;
         let mut color = vec![Rgba::ZERO; n * n];
         let mut heights = vec![0.0f64; n * n];
         for v in 0..n {
@@ -129,10 +130,10 @@ impl SoftwareShader {
             for u in 0..n {
                 let start = frame.point(u as f64 + 0.5, v as f64 + 0.5, top);
                 let ray = Ray::new(start.as_vec3(), (-frame.f).as_vec3());
-                let Some(hit) = bvh.closest_hit(&ray, (top * 1.0001) as f32) else {
+                let Some(hit) = bvh.closest_hit(&ray, (frame.max_depth * 1.0002) as f32) else {
                     continue;
                 };
-                let d = (top - hit.t as f64).clamp(0.0, frame.max_depth);
+                let d = (top - hit.t as f64).clamp(-frame.max_depth, 0.0);
                 let mut hit = hit;
                 hit.object = object as u32;
                 color[v * n + u] = self.shade(&ray, &hit, 0).extend(1.0);
@@ -143,7 +144,7 @@ impl SoftwareShader {
             DepthEncoding::U8 => Displacements::U8(
                 heights
                     .iter()
-                    .map(|&d| (d / frame.max_depth * 255.0).round().clamp(0.0, 255.0) as u8)
+                    .map(|&d| (-d / frame.max_depth * 255.0).round().clamp(0.0, 255.0) as u8)
                     .collect(),
             ),
             DepthEncoding::F32 => Displacements::F32(heights.iter().map(|&d| d as f32).collect()),

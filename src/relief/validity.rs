@@ -115,6 +115,130 @@ fn warp(k: &Coefficients, t: &CriticalTexel) -> Option<DVec2> {
     Some(DVec2::new(k.warp_u(t.at.x, t.d)?, k.warp_v(t.at.y, t.d)?))
 }
 
+/// The heuristic made to speak in the brute force's terms, for one impostor: `(heuristic,
+/// ratio)` pairs measured at eyes turned left, right, up and down from the one it was made for,
+/// one curve a direction, from which the ratio at any eye is predicted from the heuristic alone
+/// (piecewise linear and non-decreasing along each curve, the curves blended by the direction
+/// the eye has moved in).
+///
+/// Why: the stretch of the critical pairs grows in step with the interpolated share as the eye
+/// moves, but at a rate that depends on the object and on the direction of motion (one deep
+/// discontinuity against many shallow ones), so no one stretch threshold matches the paper's
+/// 20 % on every object. A few pre-warps when an impostor is made — on the rendering thread —
+/// fix the rates for that impostor; each frame then costs only the critical pairs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Calibration {
+    /// Per direction: the unit direction, in texels, the eye's foot moved in, and the
+    /// `(heuristic, ratio)` samples, sorted by heuristic.
+    pub curves: Vec<(DVec2, Vec<(f64, f64)>)>,
+    /// The foot of the impostor's own eye, texel coordinates.
+    pub origin: DVec2,
+}
+
+/// Angles, degrees, at which [`calibrate`] samples both measures in each of four directions.
+pub const CALIBRATION_ANGLES: [f64; 4] = [3.0, 6.0, 12.0, 24.0];
+
+/// Samples both measures of `impostor` at its own eye and at eyes turned about `centre` by
+/// [`CALIBRATION_ANGLES`] left, right, up and down.
+pub fn calibrate(impostor: &ReliefImpostor, pairs: &CriticalPairs, centre: DVec3) -> Calibration {
+    let fr = &impostor.frame;
+    let foot = |eye: DVec3| {
+        let c = fr.coordinates(eye);
+        DVec2::new(c.x, c.y)
+    };
+    let origin = foot(impostor.eye);
+    let at_source = {
+        let v = verdicts(impostor, pairs, impostor.eye);
+        (v.heuristic, v.ratio)
+    };
+    let r = impostor.eye - centre;
+    let side = r.cross(DVec3::Y).try_normalize().unwrap_or(DVec3::X);
+    let mut curves = Vec::new();
+    for axis in [DVec3::Y, -DVec3::Y, side, -side] {
+        let mut samples = vec![at_source];
+        let mut direction = DVec2::ZERO;
+        for deg in CALIBRATION_ANGLES {
+            let eye = centre + glam::DQuat::from_axis_angle(axis, deg.to_radians()) * r;
+            direction += (foot(eye) - origin).normalize_or_zero();
+            let v = verdicts(impostor, pairs, eye);
+            if v.heuristic.is_finite() && v.ratio.is_finite() {
+                samples.push((v.heuristic, v.ratio));
+            }
+        }
+        samples.retain(|s| s.0.is_finite() && s.1.is_finite());
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let mut top = f64::NEG_INFINITY;
+        for s in &mut samples {
+            top = top.max(s.1);
+            s.1 = top;
+        }
+        curves.push((direction.normalize_or_zero(), samples));
+    }
+    Calibration { curves, origin }
+}
+
+impl Calibration {
+    /// The ratio predicted for a heuristic value at an eye whose foot is `foot` (texel
+    /// coordinates; [`Coefficients::epipole`]); infinite for an infinite error.
+    pub fn predict(&self, heuristic: f64, foot: (f64, f64)) -> f64 {
+        if !heuristic.is_finite() {
+            return f64::INFINITY;
+        }
+        let g = (DVec2::new(foot.0, foot.1) - self.origin).normalize_or_zero();
+        let weights: Vec<f64> = self
+            .curves
+            .iter()
+            .map(|(d, _)| {
+                if g == DVec2::ZERO {
+                    1.0
+                } else {
+                    g.dot(*d).max(0.0).powi(2)
+                }
+            })
+            .collect();
+        let total: f64 = weights.iter().sum();
+        if total <= 0.0 {
+            return self
+                .curves
+                .iter()
+                .map(|(_, s)| along(s, heuristic))
+                .fold(0.0, f64::max);
+        }
+        self.curves
+            .iter()
+            .zip(&weights)
+            .map(|((_, s), w)| w * along(s, heuristic))
+            .sum::<f64>()
+            / total
+    }
+}
+
+/// A curve's ratio at `heuristic`: interpolated between samples, extended past the last by the
+/// slope from the first to the last.
+fn along(s: &[(f64, f64)], heuristic: f64) -> f64 {
+    let (Some(&first), Some(&last)) = (s.first(), s.last()) else {
+        return 0.0;
+    };
+    if heuristic <= first.0 {
+        return first.1;
+    }
+    if let Some(w) = s.windows(2).find(|w| heuristic <= w[1].0) {
+        let (a, b) = (w[0], w[1]);
+        let t = if b.0 > a.0 {
+            (heuristic - a.0) / (b.0 - a.0)
+        } else {
+            1.0
+        };
+        return a.1 + (b.1 - a.1) * t;
+    }
+    let slope = if last.0 > first.0 {
+        (last.1 - first.1) / (last.0 - first.0)
+    } else {
+        0.0
+    };
+    last.1 + slope * (heuristic - last.0)
+}
+
 /// Both verdicts for one eye: the heuristic's error and the brute-force ratio.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Verdicts {

@@ -10,7 +10,7 @@
 
 use super::pipeline::{ObjectFrame, ObjectState, Pipeline, PipelineSettings, raster_subset};
 use super::shader::SoftwareShader;
-use super::validity::{CriticalPairs, RATIO_THRESHOLD, verdicts};
+use super::validity::{Calibration, CriticalPairs, calibrate, verdicts};
 use super::{DepthEncoding, ReliefError};
 use crate::camera::Pinhole;
 use crate::frame::Frame;
@@ -72,7 +72,7 @@ pub struct WalkReport {
     pub regenerations: u64,
     /// Bytes of impostors held at the end (in use and cached).
     pub bytes: usize,
-    /// The heuristic's threshold.
+    /// The interpolated share past which an impostor is obsolete.
     pub threshold: f64,
 }
 
@@ -112,9 +112,9 @@ impl WalkReport {
         )
     }
 
-    /// Share of (frame, object) pairs showing an impostor on which the heuristic (error past
-    /// the threshold) and the brute force (ratio past 20 %) give the same verdict, and how many
-    /// pairs were compared.
+    /// Share of (frame, object) pairs showing an impostor on which the heuristic (its predicted
+    /// share past the threshold) and the brute force (the warp's actual share past it) give the
+    /// same verdict, and how many pairs were compared.
     pub fn agreement(&self) -> (f64, usize) {
         let pairs: Vec<bool> = self
             .frames
@@ -122,7 +122,7 @@ impl WalkReport {
             .flat_map(|f| &f.objects)
             .filter_map(|o| {
                 o.ratio
-                    .map(|r| (o.error > self.threshold) == (r > RATIO_THRESHOLD))
+                    .map(|r| (o.predicted > self.threshold) == (r > self.threshold))
             })
             .collect();
         let agree = pairs.iter().filter(|&&a| a).count();
@@ -170,13 +170,16 @@ pub fn path(scene: &Scene, frames: u32) -> Result<Vec<(f32, Pinhole)>, ReliefErr
     Ok(out)
 }
 
+/// Receives each frame of a walk: its index, the frame, and its true render when scored.
+pub type FrameSink<'a> = dyn FnMut(usize, &Frame, Option<&Frame>) -> Result<(), ReliefError> + 'a;
+
 /// Walks `scene`'s camera path through the relief pipeline. `sink(i, frame, truth)` receives
 /// every frame (and its true render when scored) as it is made.
 pub fn walk(
     scene: &Scene,
     settings: &WalkSettings,
     progress: &dyn Progress,
-    sink: &mut dyn FnMut(usize, &Frame, Option<&Frame>) -> Result<(), ReliefError>,
+    sink: &mut FrameSink<'_>,
 ) -> Result<WalkReport, ReliefError> {
     let view = scene.view(scene.render.time)?;
     let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
@@ -264,8 +267,9 @@ pub fn true_frame(
 }
 
 /// The heuristic against the brute force with no pipeline in between: impostors of `object`
-/// made at every `every`-th eye of `eyes`, each judged by both measures at the `span` eyes that
-/// follow. Returns `(heuristic, ratio)` per judged eye.
+/// made at every `every`-th eye of `eyes` (and calibrated), each judged at the `span` eyes that
+/// follow by the heuristic's predicted share and by the warp's actual share. Returns
+/// `(predicted, actual)` per judged eye.
 pub fn verdicts_along(
     shader: &SoftwareShader,
     object: usize,
@@ -283,10 +287,85 @@ pub fn verdicts_along(
             continue;
         };
         let pairs = CriticalPairs::of(&imp, grid);
+        let (centre, _) = shader.bounds(object)?;
+        let calibration: Calibration = calibrate(&imp, &pairs, centre);
         for e in eyes.iter().skip(start).take(span) {
             let v = verdicts(&imp, &pairs, e.as_dvec3());
-            out.push((v.heuristic, v.ratio));
+            let foot = imp.frame.coordinates(e.as_dvec3());
+            out.push((calibration.predict(v.heuristic, (foot.x, foot.y)), v.ratio));
         }
     }
     Ok(out)
+}
+
+impl std::fmt::Display for WalkReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let n = self.frames.len();
+        let (pipeline, raster) = self.mean_times();
+        writeln!(
+            f,
+            "{n} frames: {} warped, {} valid without a warp, {} stale, {} fallback; {} impostors made, {} cache hits",
+            self.count(ObjectState::Warping),
+            self.count(ObjectState::Valid),
+            self.count(ObjectState::Stale),
+            self.count(ObjectState::Fallback),
+            self.regenerations,
+            self.cache_hits(),
+        )?;
+        writeln!(
+            f,
+            "frame time {:.1} ms through relief impostors, {:.1} ms by direct rasterization",
+            pipeline.as_secs_f64() * 1e3,
+            raster.as_secs_f64() * 1e3
+        )?;
+        if let (Some(p), Some(r)) = (self.mean_psnr(), self.mean_raster_psnr()) {
+            writeln!(
+                f,
+                "against the software shader's true render: relief {p:.2} dB, direct rasterization {r:.2} dB (mean PSNR)"
+            )?;
+        }
+        let (agree, pairs) = self.agreement();
+        write!(
+            f,
+            "heuristic and brute force (obsolete past {:.0} % interpolated) agree on {:.1} % of {pairs} impostor frames; {:.1} MB of impostors held",
+            self.threshold * 100.0,
+            agree * 100.0,
+            self.bytes as f64 / 1e6
+        )
+    }
+}
+
+impl WalkReport {
+    /// The per-frame table as CSV: frame, time, eye, then per object its state, heuristic
+    /// error, ratio, regenerated and cache-hit flags; frame times and PSNRs.
+    pub fn csv(&self) -> String {
+        let mut s = String::from(
+            "frame,time,eye_x,eye_y,eye_z,object,state,error,predicted,ratio,regenerated,cache_hit,resolution,frame_ms,raster_ms,psnr,raster_psnr\n",
+        );
+        let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.4}"));
+        for (i, fr) in self.frames.iter().enumerate() {
+            for o in &fr.objects {
+                s.push_str(&format!(
+                    "{i},{:.4},{:.4},{:.4},{:.4},{},{},{:.4},{:.4},{},{},{},{},{:.3},{:.3},{},{}\n",
+                    fr.time,
+                    fr.eye.x,
+                    fr.eye.y,
+                    fr.eye.z,
+                    o.object,
+                    o.state,
+                    o.error,
+                    o.predicted,
+                    opt(o.ratio),
+                    o.regenerated as u8,
+                    o.cache_hit as u8,
+                    o.resolution,
+                    fr.frame_time.as_secs_f64() * 1e3,
+                    fr.raster_time.as_secs_f64() * 1e3,
+                    opt(fr.psnr),
+                    opt(fr.raster_psnr),
+                ));
+            }
+        }
+        s
+    }
 }
