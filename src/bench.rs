@@ -10,9 +10,15 @@
 //! impostor construction of a maze with bunnies in its corridors beside a rasterization
 //! through the camera's root.
 //!
+//! Relief workloads ([`relief`]): the pre-warp beside a copy of its texel buffers, ray-traced
+//! impostor generation beside rasterizing the same image, a walk's frame beside direct
+//! rasterization and ray tracing.
+//!
 //! Invariant: a timer stops before what it timed is freed, for a workload and its peer alike
 //! (a fresh SPOC impostor's maps are 6.3 MB at 512², and returning them to the system is not
 //! building them).
+
+pub mod relief;
 
 use crate::camera::Pinhole;
 use crate::frame::Frame;
@@ -734,6 +740,18 @@ pub enum BenchError {
     /// The maze did not load.
     #[error(transparent)]
     Maze(#[from] crate::scene::maze::MazeError),
+    /// A shipped scene did not load.
+    #[error(transparent)]
+    Scene(#[from] Box<crate::scene::SceneError>),
+    /// A camera of a shipped scene is invalid.
+    #[error(transparent)]
+    Camera(#[from] crate::camera::CameraError),
+    /// A relief workload failed.
+    #[error(transparent)]
+    Relief(#[from] crate::relief::ReliefError),
+    /// A thread pool could not be made.
+    #[error("a benchmark's thread pool could not be started")]
+    Threads,
 }
 
 /// The heading of a bench run on `mesh`, read from `path`.
@@ -765,6 +783,7 @@ pub fn run(
         .chain(impostors(mesh, &teapot, &bunny, quick))
         .chain(textured_impostor(&duck, "Duck.glb", quick))
         .chain(graph_impostors(&maze, &maze_path, &bunny, quick))
+        .chain(relief::relief(inputs, quick)?)
         .collect();
     Ok(BenchReport {
         heading: heading(path, mesh),

@@ -81,6 +81,9 @@ pub enum Command {
     Relief(ReliefArgs),
     /// Measure throughput against peers measured in the same run.
     Bench {
+        /// Which workloads: every one (the default), or only the relief impostors'.
+        #[arg(value_enum, default_value_t = BenchSuite::All)]
+        suite: BenchSuite,
         /// Shorter timings (less stable figures).
         #[arg(long)]
         quick: bool,
@@ -94,6 +97,15 @@ pub enum Command {
               value_parser = clap::value_parser!(u32).range(1..=1000))]
         goal: Option<u32>,
     },
+}
+
+/// The workloads `trompe bench` times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchSuite {
+    /// Every workload.
+    All,
+    /// The relief impostors' (paper 3): pre-warp, generation, a walk's frames.
+    Relief,
 }
 
 /// `trompe impostor …`.
@@ -973,7 +985,27 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Views(ViewsCommand::Capture(args)) => args.capture()?,
         Command::Views(ViewsCommand::Score(args)) => args.score()?,
         Command::Views(ViewsCommand::Render(args)) => args.render()?,
-        Command::Bench { quick, mesh, goal } => {
+        Command::Bench {
+            suite: BenchSuite::Relief,
+            quick,
+            ..
+        } => {
+            let inputs = trompe::eval::fixtures::Shipped::locate();
+            let figures = with_spinner("timing relief workloads", || {
+                trompe::bench::relief::relief(&inputs, quick)
+            })?;
+            let report = trompe::bench::BenchReport {
+                heading: format!(
+                    "trompe bench relief, {} threads",
+                    rayon::current_num_threads()
+                ),
+                figures,
+            };
+            println!("{report}");
+        }
+        Command::Bench {
+            quick, mesh, goal, ..
+        } => {
             let inputs = trompe::eval::fixtures::Shipped::locate();
             let path = mesh.unwrap_or_else(|| inputs.assets.join("meshes/bunny.obj"));
             let m = load_mesh(&path)?;

@@ -84,6 +84,34 @@ pub enum ReliefError {
     Worker(&'static str),
 }
 
+/// An sRGB-encoded RGBA8 texel (alpha linear).
+pub type Srgba8 = [u8; 4];
+
+/// Encodes a linear colour as [`Srgba8`].
+pub fn encode(c: Rgba) -> Srgba8 {
+    let q = |x: f32| (crate::frame::linear_to_srgb(x.clamp(0.0, 1.0)) * 255.0).round() as u8;
+    [
+        q(c.x),
+        q(c.y),
+        q(c.z),
+        (c.w.clamp(0.0, 1.0) * 255.0).round() as u8,
+    ]
+}
+
+/// Decodes an [`Srgba8`] to linear colour (a table lookup).
+#[inline]
+pub fn decode(c: Srgba8) -> Rgba {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    let t = TABLE
+        .get_or_init(|| std::array::from_fn(|i| crate::frame::srgb_to_linear(i as f32 / 255.0)));
+    Rgba::new(
+        t[c[0] as usize],
+        t[c[1] as usize],
+        t[c[2] as usize],
+        c[3] as f32 / 255.0,
+    )
+}
+
 /// Smallest and largest relief resolution, texels a side.
 pub const RESOLUTION_RANGE: (u32, u32) = (4, 4096);
 
@@ -205,8 +233,9 @@ pub struct ReliefImpostor {
     pub frame: ReliefFrame,
     /// The eye it was made for.
     pub eye: DVec3,
-    /// Linear colour, alpha 0 where the object is absent (row-major, `width × height`).
-    pub color: Vec<Rgba>,
+    /// Colour as sRGB-encoded RGBA8 (as an engine uploads it; paper §5), alpha 0 where the
+    /// object is absent (row-major, `width × height`).
+    pub color: Vec<Srgba8>,
     /// Displacements (meaningless where alpha is 0).
     pub depth: Displacements,
 }
@@ -225,7 +254,7 @@ impl ReliefImpostor {
     /// Whether texel `i` shows the object.
     #[inline]
     pub fn covered(&self, i: usize) -> bool {
-        self.color[i].w > 0.0
+        self.color[i][3] > 0
     }
 
     /// How its displacements are stored.
@@ -238,10 +267,10 @@ impl ReliefImpostor {
 
     /// Texels showing the object.
     pub fn covered_count(&self) -> usize {
-        self.color.iter().filter(|c| c.w > 0.0).count()
+        self.color.iter().filter(|c| c[3] > 0).count()
     }
 
-    /// Bytes of its images (colour as 8-bit RGBA, as an engine would upload it, plus depth).
+    /// Bytes of its images (colour and depth).
     pub fn bytes(&self) -> usize {
         let texels = self.color.len();
         texels * 4
@@ -251,9 +280,10 @@ impl ReliefImpostor {
             }
     }
 
-    /// The colour as an image (for previews and reports).
+    /// The colour as a linear image (for previews and reports).
     pub fn color_image(&self) -> Result<crate::frame::Image<Rgba>, crate::frame::FrameError> {
-        crate::frame::Image::from_vec(self.frame.width, self.frame.height, self.color.clone())
+        let data = self.color.iter().map(|&c| decode(c)).collect();
+        crate::frame::Image::from_vec(self.frame.width, self.frame.height, data)
     }
 
     /// The depth as a grey image, white at the base plane, black `max_depth` behind it,

@@ -18,8 +18,7 @@
 //! (texels that would land past it are counted as dropped); the lookup-table warp gives
 //! bit-identical images to the direct one.
 
-use super::ReliefImpostor;
-use crate::frame::Rgba;
+use super::{ReliefImpostor, Srgba8};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -130,7 +129,8 @@ impl Lut {
             coef3: [0.0; 256],
         };
         for code in 0..256 {
-            let d = -(code as f64) * max_depth / 255.0;
+            // The displacement exactly as a texel carries it (f32).
+            let d = (-(code as f64) * max_depth / 255.0) as f32 as f64;
             let w = 1.0 + k.k3 * d;
             lut.coef1[code] = k.k1 * d;
             lut.coef2[code] = k.k2 * d;
@@ -151,17 +151,28 @@ pub mod flag {
     pub const INTERPOLATED: u8 = 2;
 }
 
-/// Code of a displacement that is not an eight-bit step (interpolated between two).
-const OFF_GRID: u16 = u16::MAX;
+/// Flag bit of a displacement that is not an eight-bit step (interpolated between two).
+const OFF_GRID: u8 = 4;
+/// The bits of a flag that say how a texel was made ([`flag`]).
+const KIND: u8 = 3;
 
-/// One image of a pass, row-major.
+/// `floor(x)` as an integer, without a libm call (x86-64's baseline has no rounding
+/// instruction); exact for |x| < 2⁵³.
+#[inline]
+fn floor_i64(x: f64) -> i64 {
+    let i = x as i64;
+    i - ((i as f64) > x) as i64
+}
+
+/// One image of a pass, row-major; texels as compact as an engine's (sRGB8 colour, f32
+/// displacement, its eight-bit code, a flag).
 #[derive(Clone, Debug, Default)]
 struct Plane {
     width: usize,
     height: usize,
-    color: Vec<Rgba>,
-    d: Vec<f64>,
-    code: Vec<u16>,
+    color: Vec<Srgba8>,
+    d: Vec<f32>,
+    code: Vec<u8>,
     flag: Vec<u8>,
 }
 
@@ -171,9 +182,9 @@ impl Plane {
         Plane {
             width,
             height,
-            color: vec![Rgba::ZERO; n],
+            color: vec![[0; 4]; n],
             d: vec![0.0; n],
-            code: vec![OFF_GRID; n],
+            code: vec![0; n],
             flag: vec![flag::EMPTY; n],
         }
     }
@@ -190,10 +201,12 @@ impl Plane {
             .for_each(|(x, (((c, d), k), f))| {
                 for y in 0..h {
                     let i = y * w + x;
-                    c[y] = self.color[i];
-                    d[y] = self.d[i];
-                    k[y] = self.code[i];
                     f[y] = self.flag[i];
+                    if self.flag[i] != flag::EMPTY {
+                        c[y] = self.color[i];
+                        d[y] = self.d[i];
+                        k[y] = self.code[i];
+                    }
                 }
             });
         t
@@ -210,8 +223,8 @@ pub struct Prewarped {
     /// Extra texels left and right, top and bottom: output texel `(i, j)` is base-plane texel
     /// `(i − margin.0, j − margin.1)`.
     pub margin: (u32, u32),
-    /// Colour, alpha 0 where empty.
-    pub color: Vec<Rgba>,
+    /// Colour, sRGB8 ([`super::decode`] gives it linear), alpha 0 where empty.
+    pub color: Vec<Srgba8>,
     /// Displacement carried with each texel, world units.
     pub displacement: Vec<f32>,
     /// [`flag`] of each texel.
@@ -246,29 +259,37 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
     let fr = &impostor.frame;
     let k = Coefficients::new(fr, eye)?;
     let (w, h) = (fr.width as usize, fr.height as usize);
-    let eight_bit = matches!(impostor.depth, super::Displacements::U8(_));
-    let table = (lut && eight_bit).then(|| Lut::new(&k, fr.max_depth));
+    let codes = match &impostor.depth {
+        super::Displacements::U8(c) => Some(c),
+        super::Displacements::F32(_) => None,
+    };
+    let table = if lut && codes.is_some() {
+        Some(Lut::new(&k, fr.max_depth))
+    } else {
+        None
+    };
 
     // The source as a plane, and its range of displacements.
     let mut src = Plane::empty(w, h);
     let (mut d_min, mut d_max): (f64, f64) = (0.0, 0.0);
     for i in 0..w * h {
         if impostor.covered(i) {
+            let d = impostor.displacement(i) as f32;
             src.color[i] = impostor.color[i];
-            src.d[i] = impostor.displacement(i);
+            src.d[i] = d;
             src.flag[i] = flag::DIRECT;
-            if let super::Displacements::U8(codes) = &impostor.depth {
-                src.code[i] = codes[i] as u16;
+            if let Some(c) = codes {
+                src.code[i] = c[i];
             }
-            d_min = d_min.min(src.d[i]);
-            d_max = d_max.max(src.d[i]);
+            d_min = d_min.min(d as f64);
+            d_max = d_max.max(d as f64);
         }
     }
-    let margin = |n: usize, e_shift: &dyn Fn(f64, f64) -> Option<f64>| -> usize {
+    let margin = |n: usize, shift: &dyn Fn(f64, f64) -> Option<f64>| -> usize {
         let mut m: f64 = 0.0;
         for x in [0.5, n as f64 - 0.5] {
             for d in [d_min, 0.0, d_max] {
-                if let Some(y) = e_shift(x, d) {
+                if let Some(y) = shift(x, d) {
                     m = m.max((y - x).abs());
                 }
             }
@@ -278,48 +299,56 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
     let mx = margin(w, &|x, d| k.warp_u(x, d));
     let my = margin(h, &|y, d| k.warp_v(y, d));
 
-    let map_u = |i: usize, d: f64, code: u16| -> Option<f64> {
-        let u = i as f64 + 0.5;
-        match (&table, code) {
-            (Some(t), c) if c != OFF_GRID => {
-                let c = c as usize;
-                let s = t.coef3[c];
-                (!s.is_nan()).then(|| (u + t.coef1[c]) * s)
-            }
-            _ => k.warp_u(u, d),
+    let (pass1, pass2) = match &table {
+        Some(t) => {
+            let (a, b) = (
+                |i: usize, d: f32, code: u8, off: bool| {
+                    let u = i as f64 + 0.5;
+                    if off {
+                        return k.warp_u(u, d as f64);
+                    }
+                    let s = t.coef3[code as usize];
+                    (!s.is_nan()).then(|| (u + t.coef1[code as usize]) * s)
+                },
+                |i: usize, d: f32, code: u8, off: bool| {
+                    let v = i as f64 + 0.5;
+                    if off {
+                        return k.warp_v(v, d as f64);
+                    }
+                    let s = t.coef3[code as usize];
+                    (!s.is_nan()).then(|| (v + t.coef2[code as usize]) * s)
+                },
+            );
+            let p1 = pass(&src, w + 2 * mx, mx, k.epipole.0, &a);
+            let p2 = pass(&p1.0.transposed(), h + 2 * my, my, k.epipole.1, &b);
+            (p1.1, p2)
+        }
+        None => {
+            let a = |i: usize, d: f32, _: u8, _: bool| k.warp_u(i as f64 + 0.5, d as f64);
+            let b = |i: usize, d: f32, _: u8, _: bool| k.warp_v(i as f64 + 0.5, d as f64);
+            let p1 = pass(&src, w + 2 * mx, mx, k.epipole.0, &a);
+            let p2 = pass(&p1.0.transposed(), h + 2 * my, my, k.epipole.1, &b);
+            (p1.1, p2)
         }
     };
-    let map_v = |i: usize, d: f64, code: u16| -> Option<f64> {
-        let v = i as f64 + 0.5;
-        match (&table, code) {
-            (Some(t), c) if c != OFF_GRID => {
-                let c = c as usize;
-                let s = t.coef3[c];
-                (!s.is_nan()).then(|| (v + t.coef2[c]) * s)
-            }
-            _ => k.warp_v(v, d),
-        }
-    };
-
-    let (pass1, dropped1) = pass(&src, w + 2 * mx, mx, k.epipole.0, &map_u);
-    let (pass2, dropped2) = pass(&pass1.transposed(), h + 2 * my, my, k.epipole.1, &map_v);
-    let out = pass2.transposed();
-    let direct = out.flag.iter().filter(|&&f| f == flag::DIRECT).count();
-    let interpolated = out
-        .flag
-        .iter()
-        .filter(|&&f| f == flag::INTERPOLATED)
-        .count();
+    let (out, dropped2) = pass2;
+    let mut out = out.transposed();
+    let (mut direct, mut interpolated) = (0, 0);
+    for f in &mut out.flag {
+        *f &= KIND;
+        direct += (*f == flag::DIRECT) as usize;
+        interpolated += (*f == flag::INTERPOLATED) as usize;
+    }
     Some(Prewarped {
         width: out.width as u32,
         height: out.height as u32,
         margin: (mx as u32, my as u32),
-        displacement: out.d.iter().map(|&d| d as f32).collect(),
         color: out.color,
+        displacement: out.d,
         flags: out.flag,
         direct,
         interpolated,
-        dropped: dropped1 + dropped2,
+        dropped: pass1 + dropped2,
     })
 }
 
@@ -327,21 +356,19 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
 #[derive(Clone, Copy)]
 struct Moved {
     x: f64,
-    color: Rgba,
-    d: f64,
-    code: u16,
+    color: Srgba8,
+    d: f32,
+    code: u8,
     flag: u8,
 }
 
 /// One 1-D pass over every row of `src` into rows `out_width` long, texel `i` of a row landing
-/// at `floor(map(i, d)) + offset`; rows turn round at the texel centre `epipole`.
-fn pass(
-    src: &Plane,
-    out_width: usize,
-    offset: usize,
-    epipole: f64,
-    map: &(dyn Fn(usize, f64, u16) -> Option<f64> + Sync),
-) -> (Plane, usize) {
+/// at `floor(map(i, d, code, off_grid)) + offset`; rows turn round at the texel centre
+/// `epipole`.
+fn pass<M>(src: &Plane, out_width: usize, offset: usize, epipole: f64, map: &M) -> (Plane, usize)
+where
+    M: Fn(usize, f32, u8, bool) -> Option<f64> + Sync,
+{
     let n = src.width;
     // Texels whose centre is left of the epipole: 0..split, swept ascending.
     let split = if epipole.is_finite() {
@@ -371,10 +398,7 @@ fn pass(
             };
             let take = |i: usize| -> Option<Moved> {
                 let j = base + i;
-                if src.flag[j] == flag::EMPTY {
-                    return None;
-                }
-                Some(Moved {
+                (src.flag[j] != flag::EMPTY).then(|| Moved {
                     x: 0.0,
                     color: src.color[j],
                     d: src.d[j],
@@ -399,9 +423,9 @@ fn pass(
 
 /// One output row of a pass.
 struct Line<'a> {
-    color: &'a mut [Rgba],
-    d: &'a mut [f64],
-    code: &'a mut [u16],
+    color: &'a mut [Srgba8],
+    d: &'a mut [f32],
+    code: &'a mut [u8],
     flag: &'a mut [u8],
     offset: i64,
     dropped: usize,
@@ -411,12 +435,15 @@ impl Line<'_> {
     /// Moves the texels of `order` in turn (later writes win), filling the gaps between
     /// neighbours that spread apart in the sweep's direction. Returns the last texel moved, if
     /// the sweep ended on one.
-    fn sweep(
+    fn sweep<M>(
         &mut self,
         order: impl Iterator<Item = (usize, Option<Moved>)>,
         ascending: bool,
-        map: &(dyn Fn(usize, f64, u16) -> Option<f64> + Sync),
-    ) -> Option<(usize, Moved)> {
+        map: &M,
+    ) -> Option<(usize, Moved)>
+    where
+        M: Fn(usize, f32, u8, bool) -> Option<f64>,
+    {
         let mut prev: Option<Moved> = None;
         let mut last = None;
         for (i, texel) in order {
@@ -425,7 +452,7 @@ impl Line<'_> {
                 prev = None;
                 continue;
             };
-            let Some(x) = map(i, t.d, t.code) else {
+            let Some(x) = map(i, t.d, t.code, t.flag & OFF_GRID != 0) else {
                 self.dropped += 1;
                 prev = None;
                 continue;
@@ -445,8 +472,9 @@ impl Line<'_> {
     }
 
     /// Writes `t` where it lands.
+    #[inline]
     fn put(&mut self, t: &Moved) {
-        let j = t.x.floor() as i64 + self.offset;
+        let j = floor_i64(t.x) + self.offset;
         if j < 0 || j >= self.color.len() as i64 {
             self.dropped += 1;
             return;
@@ -461,24 +489,33 @@ impl Line<'_> {
     /// Fills the texels strictly between where `p` and `q` land by interpolating the two.
     fn fill(&mut self, p: &Moved, q: &Moved) {
         let (lo, hi) = if p.x < q.x { (p.x, q.x) } else { (q.x, p.x) };
-        let first = (lo.floor() as i64 + 1 + self.offset).max(0);
-        let end = (hi.floor() as i64 + self.offset).min(self.color.len() as i64);
+        let first = (floor_i64(lo) + 1 + self.offset).max(0);
+        let end = (floor_i64(hi) + self.offset).min(self.color.len() as i64);
+        if first >= end {
+            return;
+        }
+        let inv = 1.0 / (q.x - p.x);
         for j in first..end {
             let centre = (j - self.offset) as f64 + 0.5;
-            let s = ((centre - p.x) / (q.x - p.x)).clamp(0.0, 1.0);
+            let s = ((centre - p.x) * inv).clamp(0.0, 1.0) as f32;
             let j = j as usize;
-            self.color[j] = p.color.lerp(q.color, s as f32);
+            self.color[j] = lerp8(p.color, q.color, s);
             self.d[j] = p.d + (q.d - p.d) * s;
-            self.code[j] = OFF_GRID;
-            self.flag[j] = flag::INTERPOLATED;
+            self.code[j] = 0;
+            self.flag[j] = flag::INTERPOLATED | OFF_GRID;
         }
     }
+}
+
+/// Per-channel interpolation of two encoded colours.
+#[inline]
+fn lerp8(a: Srgba8, b: Srgba8, s: f32) -> Srgba8 {
+    std::array::from_fn(|c| (a[c] as f32 + (b[c] as f32 - a[c] as f32) * s + 0.5) as u8)
 }
 
 #[cfg(test)]
 pub(crate) mod tests_support {
     use super::super::{Displacements, ReliefFrame, ReliefImpostor};
-    use crate::frame::Rgba;
     use glam::DVec3;
 
     /// A frame with unit texels on z = 0, `f = +z`, and an impostor of `n²` texels with the
@@ -499,11 +536,18 @@ pub(crate) mod tests_support {
             for u in 0..n {
                 match height(u, v) {
                     Some(d) => {
-                        color.push(Rgba::new(u as f32 / n as f32, v as f32 / n as f32, d, 1.0));
+                        // Blue holds the height (of 4), for the tests to read back.
+                        let q = |x: f32| (x * 255.0).round() as u8;
+                        color.push([
+                            q(u as f32 / n as f32),
+                            q(v as f32 / n as f32),
+                            q(d / 4.0),
+                            255,
+                        ]);
                         depth.push(d);
                     }
                     None => {
-                        color.push(Rgba::ZERO);
+                        color.push([0; 4]);
                         depth.push(0.0);
                     }
                 }
@@ -599,7 +643,7 @@ mod tests {
                 let x = k.warp_u(u as f64 + 0.5, 3.0).unwrap().floor() as i64 + p.margin.0 as i64;
                 let y = k.warp_v(8.5, 3.0).unwrap().floor() as i64 + p.margin.1 as i64;
                 let j = y as usize * p.width as usize + x as usize;
-                assert_eq!(p.color[j].z, 3.0, "eye x {ex}, texel {u}");
+                assert_eq!(p.color[j][2], 191, "eye x {ex}, texel {u}");
             }
         }
     }

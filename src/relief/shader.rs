@@ -10,7 +10,7 @@
 
 use super::{DepthEncoding, Displacements, ReliefError, ReliefFrame, ReliefImpostor};
 use crate::camera::{Pinhole, Projection};
-use crate::frame::{Frame, Rgba};
+use crate::frame::Frame;
 use crate::geom::Ray;
 use crate::geom::optics::{facing, fresnel, reflect, refract};
 use crate::render::shading::albedo;
@@ -121,7 +121,7 @@ impl SoftwareShader {
         let bvh = &self.objects[object].bvh;
         // Rays start just in front of the base plane; a hit `t` along them is `top − d`.
         let top = frame.max_depth * 1e-4;
-        let mut color = vec![Rgba::ZERO; n * n];
+        let mut color = vec![[0u8; 4]; n * n];
         let mut heights = vec![0.0f64; n * n];
         for v in 0..n {
             if cancel() {
@@ -136,7 +136,7 @@ impl SoftwareShader {
                 let d = (top - hit.t as f64).clamp(-frame.max_depth, 0.0);
                 let mut hit = hit;
                 hit.object = object as u32;
-                color[v * n + u] = self.shade(&ray, &hit, 0).extend(1.0);
+                color[v * n + u] = super::encode(self.shade(&ray, &hit, 0).extend(1.0));
                 heights[v * n + u] = d;
             }
         }

@@ -120,7 +120,7 @@ fn lookup(image: &Prewarped, x: f64, y: f64, w: usize, h: usize) -> Option<(Rgba
             continue;
         }
         sum += wgt;
-        c += image.color[k].truncate() * wgt as f32;
+        c += super::decode(image.color[k]).truncate() * wgt as f32;
         d += image.displacement[k] as f64 * wgt;
     }
     (sum >= 0.5).then(|| ((c / sum as f32).extend(1.0), d / sum))
