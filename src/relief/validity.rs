@@ -260,8 +260,8 @@ pub fn verdicts(impostor: &ReliefImpostor, pairs: &CriticalPairs, eye: DVec3) ->
 
 /// The map of paper Fig. 3: eyes on an `n × n` grid over the square of half side `extent`
 /// around `centre` in the plane through it spanned by `x` and `y` (unit, orthogonal), each
-/// cell green where the impostor stays valid by the brute-force ratio (at most `threshold`),
-/// red where it does not, grey where the eye is inside `keep_out` or behind the base plane.
+/// cell green where the impostor stays valid by the brute-force ratio (at most `threshold`,
+/// and no texel pushed off the warp's margin), red where it does not, grey where the eye is inside `keep_out` or behind the base plane.
 /// The impostor's own eye is marked white. Returns the image and the valid share of cells.
 #[allow(clippy::too_many_arguments)]
 pub fn validity_map(
@@ -286,7 +286,9 @@ pub fn validity_map(
             }
             match prewarp(impostor, Eye::Point(eye), true) {
                 None => Rgba::new(0.3, 0.3, 0.3, 1.0),
-                Some(p) if p.interpolated_ratio() <= threshold => Rgba::new(0.1, 0.6, 0.15, 1.0),
+                Some(p) if p.dropped == 0 && p.interpolated_ratio() <= threshold => {
+                    Rgba::new(0.1, 0.6, 0.15, 1.0)
+                }
                 Some(_) => Rgba::new(0.7, 0.12, 0.1, 1.0),
             }
         })

@@ -53,7 +53,8 @@ pub struct WalkFrame {
     pub eye: Vec3,
     /// Per relief object.
     pub objects: Vec<ObjectFrame>,
-    /// The pipeline's time for the frame.
+    /// The pipeline's time for the frame (without the wait for the rendering thread that
+    /// deterministic mode imposes).
     pub frame_time: Duration,
     /// Direct rasterization of the whole scene from the same camera.
     pub raster_time: Duration,
@@ -198,7 +199,15 @@ pub fn walk(
     for (i, (time, camera)) in cameras.iter().enumerate() {
         let started = Instant::now();
         let out = pipeline.frame(camera)?;
-        let frame_time = started.elapsed();
+        // Less the wait for the rendering thread that deterministic mode imposes.
+        let waited: Duration = out
+            .timings
+            .0
+            .iter()
+            .filter(|(name, _)| *name == "collect")
+            .map(|(_, d)| *d)
+            .sum();
+        let frame_time = started.elapsed().saturating_sub(waited);
         let started = Instant::now();
         let raster = raster_subset(
             &view,

@@ -1,6 +1,6 @@
 //! The demo report: `trompe demo` renders the scenes shipped in `scenes/`, measures every method
 //! against the exact one, and writes `index.html` — run metadata, a table of contents, then one
-//! `html::Section` per capability (`foundation`, `impostors`, `maze`), each built as data and
+//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `relief`), each built as data and
 //! written by the one HTML writer in `html`. A new capability adds a section file and one line
 //! in `demo`.
 
@@ -8,6 +8,7 @@ mod foundation;
 pub mod html;
 mod impostors;
 mod maze;
+mod relief;
 mod views;
 
 use crate::frame::metrics::{self, Scores};
@@ -44,6 +45,12 @@ pub enum ReportError {
     /// A capture could not be rendered.
     #[error(transparent)]
     Capture(#[from] crate::views::capture::CaptureError),
+    /// A relief walk failed.
+    #[error(transparent)]
+    Relief(Box<crate::relief::ReliefError>),
+    /// A camera of a shipped scene is invalid.
+    #[error(transparent)]
+    Camera(#[from] crate::camera::CameraError),
     /// The output directory holds files `trompe demo` did not write.
     #[error(
         "{dir}: not empty and not a demo report's directory (it holds {files}); give an empty or new directory"
@@ -132,6 +139,9 @@ pub fn demo(
     let t = std::time::Instant::now();
     report.sections.push(views::section(inputs, out)?);
     timed("calibrated views", t);
+    let t = std::time::Instant::now();
+    report.sections.push(relief::section(inputs, out)?);
+    timed("relief impostors", t);
     io::write_png(&out.join(html::SCALE_FILE), &flip_scale()?)?;
     let mut run = Section::new("run", "This run");
     run.paragraph(format!(
