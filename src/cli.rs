@@ -161,7 +161,7 @@ pub struct ReliefArgs {
     deterministic: Option<u32>,
     /// Camera-path prediction: make new impostors for where the eye will be this many frames
     /// ahead.
-    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=1000))]
     predict: u32,
     /// Skip the true render and the scores (the walk then runs at its own pace).
     #[arg(long)]

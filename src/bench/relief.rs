@@ -118,14 +118,8 @@ pub fn relief(
     let frames = if quick { 24 } else { 120 };
     let cameras = crate::relief::walk::path(&scene, frames)?;
     let relief: Vec<usize> = (0..view.meshes.len()).collect();
-    let mut pipeline = crate::relief::Pipeline::new(
-        shader.clone(),
-        &relief,
-        PipelineSettings {
-            predict: 2,
-            ..Default::default()
-        },
-    )?;
+    let mut pipeline =
+        crate::relief::Pipeline::new(shader.clone(), &relief, PipelineSettings::default())?;
     let (mut walk, mut raster, mut traced) = (Vec::new(), Vec::new(), Vec::new());
     for (_, camera) in &cameras {
         let time = |f: &mut dyn FnMut() -> Result<(), BenchError>| {

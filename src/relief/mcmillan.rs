@@ -1,4 +1,4 @@
-//! McMillan's 3-D image warp (paper 3 Eq. 1; McMillan 1997; docs/conventions.md §7.1): a
+//! McMillan's 3-D image warp (paper 3 Eq. 1; McMillan 1997; docs/conventions.md §5.1): a
 //! perspective colour + generalized-disparity image re-projected to another pinhole camera,
 //! `w = M_t⁻¹ M_s x̄_s + δ_s · M_t⁻¹ (C_s − C_t)`, `x̄_t = w / w.z`, `δ_t = δ_s / w.z`. The relief
 //! pre-warp factors this equation for an orthographic source; this full form is the reference

@@ -1,5 +1,5 @@
 //! Relief impostors (paper 3, "Software Shaders in Interactive Environments Using Relief
-//! Impostors", §2–5; docs/conventions.md §7): an orthographic colour + displacement image of an
+//! Impostors", §2–5; docs/conventions.md §5): an orthographic colour + displacement image of an
 //! object, made by a CPU "software shader" (the BVH ray tracer with hard shadows and mirror
 //! bounces), re-used for many frames by 3-D image warping, and replaced when it goes stale.
 //!

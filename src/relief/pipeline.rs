@@ -82,7 +82,7 @@ impl Default for PipelineSettings {
             threshold: RATIO_THRESHOLD,
             fallback: 0.6,
             prefetch: 0.75,
-            predict: 0,
+            predict: 2,
             skip_move: 0.5,
             cache_size: 16,
             grid: 4,
@@ -730,6 +730,7 @@ mod tests {
         PipelineSettings {
             resolution: 48,
             first_resolution: Some(16),
+            predict: 0,
             ..Default::default()
         }
     }

@@ -1,5 +1,5 @@
 //! The relief pre-warp (paper 3 §2, Eq. 2–3, after Oliveira, Bishop and McAllister's "Relief
-//! Texture Mapping"; docs/conventions.md §7.2–7.3): every texel of a relief impostor slides on
+//! Texture Mapping"; docs/conventions.md §5.2–5.3): every texel of a relief impostor slides on
 //! its base plane to where the line from the eye through its 3-D point meets the plane, so that
 //! an ordinary texture map of the result shows the relief in perspective.
 //!
@@ -570,7 +570,7 @@ mod tests {
 
     #[test]
     fn the_paper_case_and_collinearity() {
-        // a = x̂, b = −ŷ here; the check case of docs/conventions.md §7.2 in this frame, and
+        // a = x̂, b = −ŷ here; the check case of docs/conventions.md §5.2 in this frame, and
         // random points: eye, texel point and warped base point lie on one line.
         let imp = bumped(8, |_, _| Some(0.0));
         let fr = imp.frame;

@@ -7,7 +7,7 @@
 //! heuristic is the mean over regions of the stretch `max(0, E − 1)`. (The paper's Eq. 5–6
 //! write `|1 + Δu₁ − Δu₂|` for both axes, which fits a pair one texel apart in `u` for one and
 //! in `v` for the other; the distance between warped positions is the form that holds for
-//! either — docs/conventions.md §7.4.) Also Schaufler's test for skipping a warp: the largest
+//! either — docs/conventions.md §5.4.) Also Schaufler's test for skipping a warp: the largest
 //! move of any critical texel since the last warp.
 //!
 //! Invariants: pairs are chosen in a fixed scan order (the first maximum wins), so the

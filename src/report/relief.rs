@@ -31,7 +31,6 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         frames,
         pipeline: PipelineSettings {
             deterministic: Some(2),
-            predict: 2,
             ..Default::default()
         },
         objects: Vec::new(),
