@@ -404,7 +404,12 @@ impl Pipeline {
             if slot.pending.map(|p| p.0) == Some(id) {
                 slot.pending = None;
             }
-            if let Some(made) = g.result? {
+            let made = match g.result {
+                // The eye moved inside the object before the impostor was made: none.
+                Err(ReliefError::EyeInside { .. }) => None,
+                other => other?,
+            };
+            if let Some(made) = made {
                 if let Some(old) = slot.current.take() {
                     slot.cache.push((old, self.frame));
                     if slot.cache.len() > self.settings.cache_size {
@@ -478,7 +483,15 @@ impl Pipeline {
             .is_some_and(|c| c.impostor.frame.width == settings.resolution);
         // A request when obsolete, or to replace a low-resolution first impostor.
         let mut request = None;
-        if slot.pending.is_none() && (predicted > settings.threshold * settings.prefetch || !full) {
+        // No relief frame faces an eye inside the object's bounding sphere: it falls back.
+        let outside = self
+            .shader
+            .bounds(slot.object)
+            .is_ok_and(|(c, r)| (eye - c).length() > r * 1.01);
+        if outside
+            && slot.pending.is_none()
+            && (predicted > settings.threshold * settings.prefetch || !full)
+        {
             let resolution = match (&slot.current, settings.first_resolution) {
                 (None, Some(r)) => r.min(settings.resolution),
                 _ => settings.resolution,
