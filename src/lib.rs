@@ -37,6 +37,8 @@
 //!   two-thread pipeline.
 //! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility,
 //!   view-dependent projective texturing (VDTM / ULR).
+//! * [`master`] — Master Texture Space: many views of a mesh encoded in pixel-aligned atlases
+//!   with one UV set, rendered view-dependently, edited once for every view.
 //! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.
 //! * [`progress`] — progress reports and step timings of long work.
 //! * [`memory`] — the memory budget every input-sized allocation is checked against.
@@ -64,6 +66,7 @@ pub mod files;
 pub mod frame;
 pub mod geom;
 pub mod impostor;
+pub mod master;
 pub mod memory;
 pub mod progress;
 pub mod raster;

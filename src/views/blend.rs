@@ -249,7 +249,7 @@ const SAME_SURFACE: f64 = 0.05;
 /// background (or an occluder) into the surface's colour. The depth map `gd` is on the image's
 /// own pixel grid (a view without distortion). Falls back to the nearest texel when no tap is on
 /// the surface.
-fn sample_on_surface(img: &Image<Rgba>, gd: &Image<f32>, px: DVec2, z: f64) -> Rgba {
+pub(crate) fn sample_on_surface(img: &Image<Rgba>, gd: &Image<f32>, px: DVec2, z: f64) -> Rgba {
     let (w, h) = img.size();
     let (fx, fy) = (px.x - 0.5, px.y - 0.5);
     let (x0, y0) = (fx.floor(), fy.floor());

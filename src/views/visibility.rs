@@ -34,6 +34,16 @@ impl DepthMap {
         })
     }
 
+    /// Rasterizes `mesh` through a pinhole (a view that is not a calibrated one: a new camera
+    /// whose render is encoded, say).
+    pub fn through(camera: &crate::camera::Pinhole, mesh: &Mesh) -> Result<DepthMap, FrameError> {
+        let (target, _) = rasterize(camera, &[mesh], &NoAttributes, ())?;
+        Ok(DepthMap {
+            camera: camera.clone(),
+            gd: target.gd,
+        })
+    }
+
     /// The depth maps of every view, in parallel (each is drawn on every core in turn).
     pub fn of_all(views: &[CalibratedView], mesh: &Mesh) -> Result<Vec<DepthMap>, FrameError> {
         views.iter().map(|v| DepthMap::of(v, mesh)).collect()

@@ -1,0 +1,217 @@
+//! Storage of a Master Texture encoding, engine-neutral: one PNG per view (`master_NNNN.png`,
+//! alpha = the view sees the texel), the packing map and the one UV set as JSON (`masters.json`),
+//! and the mesh with that single UV set as glTF 2.0 binary (`mesh.glb`: one primitive of
+//! unwelded corners, three a face in face order, textured by a chosen PNG) — written with
+//! `serde_json` and the `gltf` crate's GLB container, and read back by the `gltf` crate to
+//! check it.
+//!
+//! Invariant: every file is written whole or not at all (`files::write_atomically`); the same
+//! encoding gives the same bytes.
+
+use super::layout::Layout;
+use super::{Encoding, MasterError};
+use crate::frame::{Image, Rgba, io};
+use crate::geom::Mesh;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What `masters.json` holds.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Format version.
+    pub version: u32,
+    /// The packing map.
+    pub layout: Layout,
+    /// Per face, its three corners' texture coordinates (`[0, 1]²`, origin top-left).
+    pub uvs: Vec<[f32; 2]>,
+    /// Per view: its name and master texture file.
+    pub views: Vec<(String, String)>,
+}
+
+fn err(path: &Path, reason: impl std::fmt::Display) -> MasterError {
+    MasterError::File {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+/// The file name of view `i`'s master texture.
+pub fn master_name(i: usize) -> String {
+    format!("master_{i:04}.png")
+}
+
+/// Writes `encoding` into `dir`: the master textures, `masters.json` and `mesh.glb` (textured
+/// by `texture`, a PNG in `dir`). Returns the files written.
+pub fn save(
+    dir: &Path,
+    encoding: &Encoding,
+    mesh: &Mesh,
+    texture: &str,
+) -> Result<Vec<PathBuf>, MasterError> {
+    let mut written = Vec::new();
+    let mut views = Vec::new();
+    for (i, m) in encoding.masters.iter().enumerate() {
+        let path = dir.join(master_name(i));
+        io::write_png(&path, m)?;
+        views.push((encoding.cameras[i].0.clone(), master_name(i)));
+        written.push(path);
+    }
+    let manifest = Manifest {
+        version: 1,
+        layout: encoding.atlas.layout.clone(),
+        uvs: encoding.atlas.layout.uvs(),
+        views,
+    };
+    let path = dir.join("masters.json");
+    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| err(&path, e))?;
+    crate::files::write_atomically(&path, &json).map_err(|e| err(&path, e))?;
+    written.push(path);
+    let glb = dir.join("mesh.glb");
+    crate::files::write_atomically(&glb, &gltf_bytes(mesh, &manifest.uvs, texture)?)
+        .map_err(|e| err(&glb, e))?;
+    written.push(glb);
+    Ok(written)
+}
+
+/// Reads `masters.json` and its master textures from `dir`.
+pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
+    let path = dir.join("masters.json");
+    let bytes = std::fs::read(&path).map_err(|e| err(&path, e))?;
+    let manifest: Manifest = serde_json::from_slice(&bytes).map_err(|e| err(&path, e))?;
+    if manifest.uvs.len() != manifest.layout.faces.len() * 3 {
+        return Err(err(
+            &path,
+            format!(
+                "{} texture coordinates for {} faces (3 a face)",
+                manifest.uvs.len(),
+                manifest.layout.faces.len()
+            ),
+        ));
+    }
+    let mut masters = Vec::new();
+    for (index, (_, file)) in manifest.views.iter().enumerate() {
+        if file.contains(['/', '\\']) || file == ".." {
+            return Err(err(
+                &path,
+                format!("view {index}: {file:?} is not a file name"),
+            ));
+        }
+        let m = io::read_png(&dir.join(file))?;
+        let expected = (manifest.layout.width, manifest.layout.height);
+        if m.size() != expected {
+            return Err(MasterError::Size {
+                index,
+                got: m.size(),
+                expected,
+            });
+        }
+        masters.push(m);
+    }
+    Ok((manifest, masters))
+}
+
+/// The mesh as a GLB: positions, normals and the one UV set per face corner, a material whose
+/// base colour is the PNG `texture` (a URI beside the file).
+pub fn gltf_bytes(mesh: &Mesh, uvs: &[[f32; 2]], texture: &str) -> Result<Vec<u8>, MasterError> {
+    let n = mesh.triangle_count() * 3;
+    let mut bin: Vec<u8> = Vec::with_capacity(n * 32);
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for t in 0..mesh.triangle_count() {
+        for p in mesh.corners(t) {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            bin.extend(p.to_array().iter().flat_map(|v| v.to_le_bytes()));
+        }
+    }
+    let normals_at = bin.len();
+    for tri in &mesh.triangles {
+        for &i in tri {
+            let nrm = mesh.normals[i as usize].normalize_or_zero();
+            bin.extend(nrm.to_array().iter().flat_map(|v| v.to_le_bytes()));
+        }
+    }
+    let uvs_at = bin.len();
+    for uv in uvs.iter().take(n) {
+        bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    let length = bin.len();
+    let doc = serde_json::json!({
+        "asset": { "version": "2.0", "generator": "trompe master encode" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{
+            "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 },
+            "material": 0
+        }]}],
+        "materials": [{ "pbrMetallicRoughness": {
+            "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0, "roughnessFactor": 1.0
+        }}],
+        "textures": [{ "source": 0, "sampler": 0 }],
+        "samplers": [{ "magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071 }],
+        "images": [{ "uri": texture }],
+        "buffers": [{ "byteLength": length }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": normals_at, "target": 34962 },
+            { "buffer": 0, "byteOffset": normals_at, "byteLength": uvs_at - normals_at, "target": 34962 },
+            { "buffer": 0, "byteOffset": uvs_at, "byteLength": length - uvs_at, "target": 34962 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi },
+            { "bufferView": 1, "componentType": 5126, "count": n, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5126, "count": n, "type": "VEC2" }
+        ]
+    });
+    let json = serde_json::to_vec(&doc).map_err(|e| err(Path::new("mesh.glb"), e))?;
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
+        json: std::borrow::Cow::Owned(pad(json, b' ')),
+        bin: Some(std::borrow::Cow::Owned(pad(bin, 0))),
+    };
+    glb.to_vec().map_err(|e| err(Path::new("mesh.glb"), e))
+}
+
+/// `bytes` padded to a multiple of four (GLB chunks).
+fn pad(mut bytes: Vec<u8>, with: u8) -> Vec<u8> {
+    while !bytes.len().is_multiple_of(4) {
+        bytes.push(with);
+    }
+    bytes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_glb_loads_back_with_its_one_uv_set() {
+        let mesh = crate::geom::icosphere(1);
+        let sizes = vec![[6, 4]; mesh.triangle_count()];
+        let layout = Layout::new(&sizes);
+        let uvs = layout.uvs();
+        let bytes = gltf_bytes(&mesh, &uvs, "bake.png").unwrap();
+        let g = gltf::Gltf::from_slice(&bytes).unwrap();
+        let blob = g.blob.as_deref().unwrap();
+        let prim = g.meshes().next().unwrap().primitives().next().unwrap();
+        let reader = prim.reader(|_| Some(blob));
+        let read: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        assert_eq!(read, uvs);
+        let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+        assert_eq!(positions.len(), mesh.triangle_count() * 3);
+        assert_eq!(positions[4], mesh.corners(1)[1].to_array());
+        let image = g.images().next().unwrap();
+        assert!(matches!(
+            image.source(),
+            gltf::image::Source::Uri {
+                uri: "bake.png",
+                ..
+            }
+        ));
+    }
+}

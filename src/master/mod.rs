@@ -1,0 +1,531 @@
+//! Master Texture Space (paper 5, "Master Texture Space: an efficient encoding for projectively
+//! mapped objects", Guinnip, Rice, Jaynes, Stevens; docs/conventions.md §6): many calibrated
+//! photographs of one mesh encoded into pixel-aligned atlases — one master texture per view,
+//! one packing map and one set of texture coordinates for all — then rendered view-dependently
+//! from them, and edited once for every view.
+//!
+//! * [`layout`] — face sizes, pairing, packing: the packing map and the one UV set.
+//! * [`Atlas`] — the layout and, per texel, the face and surface point it holds.
+//! * [`encode`] — a view's image warped into the atlas, occluded texels marked (alpha 0).
+//! * [`render`] — VDTM / ULR rendering from the master textures.
+//! * [`edit`] — edits propagated to every view by their delta in master space.
+//! * [`file`] — master textures as PNG, the map as JSON, the mesh with its one UV set as glTF.
+//!
+//! Invariants: texel `(i, j)` of every master texture holds the same surface point (its centre
+//! mapped through the face's barycentrics; the surface point is the same in every view); a
+//! texel a view does not see has alpha 0 and colour 0; encoding is deterministic and
+//! independent of the thread count.
+
+pub mod edit;
+pub mod file;
+pub mod layout;
+pub mod render;
+
+use crate::camera::{Pinhole, Projection};
+use crate::frame::{FrameError, Image, Rgba};
+use crate::geom::Mesh;
+use crate::views::visibility::DepthMap;
+use glam::{DVec2, Vec3, Vec4};
+use layout::{Layout, MAX_FACE_SIDE};
+use rayon::prelude::*;
+use thiserror::Error;
+
+/// Errors of Master Texture encoding.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum MasterError {
+    /// No view sees any face.
+    #[error("no view sees the mesh: there is nothing to encode")]
+    NothingSeen,
+    /// The mesh has no triangles.
+    #[error("the mesh has no triangles")]
+    EmptyMesh,
+    /// An image or buffer could not be made.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+    /// The atlas would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OverBudget),
+    /// A master texture does not have the atlas's size.
+    #[error("master texture {index} is {got:?}, the packing map is {expected:?}")]
+    Size {
+        /// Which master texture.
+        index: usize,
+        /// Its size.
+        got: (u32, u32),
+        /// The atlas's.
+        expected: (u32, u32),
+    },
+    /// A stored encoding could not be read or written.
+    #[error("{path}: {reason}")]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// The atlas every master texture shares: the layout and, per texel, what it holds.
+#[derive(Clone, Debug)]
+pub struct Atlas {
+    /// The packing map.
+    pub layout: Layout,
+    /// Per texel: the face it belongs to (`u32::MAX`: none).
+    pub face: Vec<u32>,
+    /// Per texel: the surface point its centre maps to (in the gutter ring, the face's point
+    /// nearest to it).
+    pub point: Vec<Vec3>,
+}
+
+/// Bytes an atlas texel costs while encoding (face, point, and one master's colour).
+pub const BYTES_PER_TEXEL: u64 = 4 + 12 + 16;
+
+/// The common size of every face of `mesh` (paper 5 §3): the largest bounding box its
+/// projection has in any of `cameras` that has it in front, in pixels, times `scale` texels a
+/// pixel (1 in the paper), at least 2 and at most [`MAX_FACE_SIDE`] a side.
+pub fn face_sizes(mesh: &Mesh, cameras: &[Pinhole], scale: f64) -> Vec<[u32; 2]> {
+    (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|t| {
+            let corners = mesh.corners(t).map(|p| p.as_dvec3());
+            let mut size = DVec2::splat(2.0);
+            for cam in cameras {
+                let px: Option<Vec<DVec2>> = corners
+                    .iter()
+                    .map(|&p| cam.project(p).map(|q| q.uv))
+                    .collect();
+                let Some(px) = px else { continue };
+                let lo = px[0].min(px[1]).min(px[2]);
+                let hi = px[0].max(px[1]).max(px[2]);
+                size = size.max(hi - lo);
+            }
+            let side = |v: f64| ((v * scale).ceil() as u32).clamp(2, MAX_FACE_SIDE);
+            [side(size.x), side(size.y)]
+        })
+        .collect()
+}
+
+impl Atlas {
+    /// The atlas of `mesh` for faces of legs `sizes` (from [`face_sizes`]).
+    pub fn new(mesh: &Mesh, sizes: &[[u32; 2]]) -> Result<Atlas, MasterError> {
+        if mesh.triangle_count() == 0 {
+            return Err(MasterError::EmptyMesh);
+        }
+        let layout = Layout::new(sizes);
+        let (w, h) = crate::frame::check_size(layout.width as u64, layout.height as u64)?;
+        crate::memory::check(
+            || format!("a {w} × {h} master-texture atlas"),
+            (w as u64 * h as u64).saturating_mul(BYTES_PER_TEXEL),
+        )?;
+        let n = w as usize * h as usize;
+        let mut face = vec![u32::MAX; n];
+        let mut point = vec![Vec3::ZERO; n];
+        // Each face writes only texels of its own box that it holds; boxes are disjoint and a
+        // box's two faces hold disjoint texels (layout invariants), so the order is immaterial.
+        for (t, place) in layout.faces.iter().enumerate() {
+            let [bx, by, bw, bh] = place.bbox;
+            let c = mesh.corners(t).map(|p| p.as_dvec3());
+            for y in by..by + bh {
+                for x in bx..bx + bw {
+                    let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    if !place.holds(centre) {
+                        continue;
+                    }
+                    // Texels of the gutter ring take the face's nearest point (the edge's
+                    // colour, as a clamp-to-edge texture would): every view sees the same.
+                    let (b1, b2) = clamp_to_triangle(place.barycentrics(centre));
+                    let p = c[0] * (1.0 - b1 - b2) + c[1] * b1 + c[2] * b2;
+                    let i = (y * w + x) as usize;
+                    face[i] = t as u32;
+                    point[i] = p.as_vec3();
+                }
+            }
+        }
+        Ok(Atlas {
+            layout,
+            face,
+            point,
+        })
+    }
+
+    /// Atlas size `(width, height)`.
+    pub fn size(&self) -> (u32, u32) {
+        (self.layout.width, self.layout.height)
+    }
+
+    /// Texels that hold a face.
+    pub fn used(&self) -> usize {
+        self.face.iter().filter(|&&f| f != u32::MAX).count()
+    }
+}
+
+/// Default texels a pixel of a face's largest view: 2, so that the two resamplings (view to
+/// master, master to frame) lose less than at the paper's 1 (on the Duck, rendering at an
+/// exemplar's camera: 31.7 dB at 1, 34.9 dB at 2, for four times the texels).
+pub const DEFAULT_SCALE: f64 = 2.0;
+
+/// Barycentrics `(b1, b2)` moved into the triangle (`b1, b2 ≥ 0`, `b1 + b2 ≤ 1`).
+fn clamp_to_triangle((b1, b2): (f64, f64)) -> (f64, f64) {
+    let (b1, b2) = (b1.max(0.0), b2.max(0.0));
+    let sum = b1 + b2;
+    if sum > 1.0 {
+        (b1 / sum, b2 / sum)
+    } else {
+        (b1, b2)
+    }
+}
+
+/// Relative depth tolerance of the visibility test while encoding (as the views module's).
+pub const TOLERANCE: f64 = crate::views::visibility::DEFAULT_TOLERANCE;
+
+/// Encodes one view — `image` seen through `camera` (undistorted), with `depth` its depth map
+/// of the mesh — into a master texture: each texel the colour the view shows at the texel's
+/// surface point, filtered over the view's pixels of that surface; alpha 0 where the view does
+/// not see it (outside the frame, behind, or hidden by the mesh).
+pub fn encode(
+    atlas: &Atlas,
+    camera: &Pinhole,
+    image: &Image<Rgba>,
+    depth: &DepthMap,
+) -> Result<Image<Rgba>, MasterError> {
+    let (w, h) = atlas.size();
+    let mut out = Image::new(w, h, Vec4::ZERO)?;
+    out.pixels_mut()
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, texel) in row.iter_mut().enumerate() {
+                let i = y * w as usize + x;
+                if atlas.face[i] == u32::MAX {
+                    continue;
+                }
+                let p = atlas.point[i].as_dvec3();
+                if !depth.sees(p, TOLERANCE) {
+                    continue;
+                }
+                let Some(q) = camera.project(p) else { continue };
+                let c = crate::views::blend::sample_on_surface(image, depth.gd(), q.uv, 1.0 / q.gd);
+                *texel = c.truncate().extend(1.0);
+            }
+        });
+    Ok(out)
+}
+
+/// One encoded set: the atlas, the views' cameras (undistorted pinholes) and their master
+/// textures.
+#[derive(Clone, Debug)]
+pub struct Encoding {
+    /// The shared atlas.
+    pub atlas: Atlas,
+    /// Per view: its name, its undistorted pinhole.
+    pub cameras: Vec<(String, Pinhole)>,
+    /// Per view: its master texture.
+    pub masters: Vec<Image<Rgba>>,
+}
+
+/// Encodes every view of `views` (images loaded) of `mesh`: face sizes over all views (`scale`
+/// texels a pixel, [`face_sizes`]), the layout, then each view's master texture, one view at a
+/// time (a view's image and depth map are dropped once it is encoded). `progress` advances one
+/// step a view.
+pub fn encode_views(
+    mesh: &Mesh,
+    views: &[crate::views::CalibratedView],
+    scale: f64,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Encoding, MasterError> {
+    let cameras: Vec<Pinhole> = views.iter().map(|v| v.pinhole()).collect();
+    let sizes = face_sizes(mesh, &cameras, scale);
+    let atlas = Atlas::new(mesh, &sizes)?;
+    let mut masters = Vec::with_capacity(views.len());
+    for (v, cam) in views.iter().zip(&cameras) {
+        let image = crate::views::blend::undistorted_image(v).ok_or(MasterError::NothingSeen)?;
+        let depth = DepthMap::through(cam, mesh)?;
+        masters.push(encode(&atlas, cam, &image, &depth)?);
+        progress.advance(1);
+    }
+    if masters
+        .iter()
+        .all(|m| m.pixels().iter().all(|c| c.w == 0.0))
+    {
+        return Err(MasterError::NothingSeen);
+    }
+    Ok(Encoding {
+        atlas,
+        cameras: views.iter().map(|v| v.name.clone()).zip(cameras).collect(),
+        masters,
+    })
+}
+
+/// The view-independent bake: per face, the view that sees it largest (projected area) with
+/// every texel of the face seen, its texels copied from that view's master texture; a face no
+/// view sees whole takes, texel by texel, the mean of the views that see it. No colour levelling
+/// across seams. Returns the texture (alpha 0 where no view sees the texel) and per face the
+/// view chosen (`None`: texel-by-texel mean).
+pub fn bake(
+    encoding: &Encoding,
+    mesh: &Mesh,
+) -> Result<(Image<Rgba>, Vec<Option<usize>>), MasterError> {
+    let atlas = &encoding.atlas;
+    let (w, _) = atlas.size();
+    let masters = &encoding.masters;
+    // Per face: which views see all its texels.
+    let faces = mesh.triangle_count();
+    let mut whole = vec![vec![true; masters.len()]; faces];
+    for (i, &f) in atlas.face.iter().enumerate() {
+        if f == u32::MAX {
+            continue;
+        }
+        // Only texels inside the triangle count (the gutter ring may graze a silhouette).
+        let place = atlas.layout.faces[f as usize];
+        let centre = DVec2::new((i % w as usize) as f64 + 0.5, (i / w as usize) as f64 + 0.5);
+        let (b1, b2) = place.barycentrics(centre);
+        if b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0 {
+            continue;
+        }
+        for (v, m) in masters.iter().enumerate() {
+            if m.pixels()[i].w == 0.0 {
+                whole[f as usize][v] = false;
+            }
+        }
+    }
+    let choice: Vec<Option<usize>> = (0..faces)
+        .map(|t| {
+            let c = mesh.corners(t).map(|p| p.as_dvec3());
+            let mut best: Option<(usize, f64)> = None;
+            for (v, (_, cam)) in encoding.cameras.iter().enumerate() {
+                if !whole[t][v] {
+                    continue;
+                }
+                let px: Option<Vec<DVec2>> =
+                    c.iter().map(|&p| cam.project(p).map(|q| q.uv)).collect();
+                let Some(px) = px else { continue };
+                let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs();
+                if best.is_none_or(|(_, a)| area > a) {
+                    best = Some((v, area));
+                }
+            }
+            best.map(|b| b.0)
+        })
+        .collect();
+    let (aw, ah) = atlas.size();
+    let mut out = Image::new(aw, ah, Vec4::ZERO)?;
+    for (i, texel) in out.pixels_mut().iter_mut().enumerate() {
+        let f = atlas.face[i];
+        if f == u32::MAX {
+            continue;
+        }
+        match choice[f as usize] {
+            Some(v) if masters[v].pixels()[i].w > 0.0 => *texel = masters[v].pixels()[i],
+            _ => {
+                let seen: Vec<Rgba> = masters
+                    .iter()
+                    .map(|m| m.pixels()[i])
+                    .filter(|c| c.w > 0.0)
+                    .collect();
+                if !seen.is_empty() {
+                    let sum: Vec4 = seen.iter().copied().sum();
+                    *texel = (sum / seen.len() as f32).truncate().extend(1.0);
+                }
+            }
+        }
+    }
+    Ok((out, choice))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::views::capture::{CaptureSettings, capture};
+    use std::path::PathBuf;
+
+    pub(crate) fn duck_capture(count: usize) -> (Mesh, crate::views::ViewSet) {
+        let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/gltf/Duck.glb");
+        let settings = CaptureSettings {
+            count,
+            size: (160, 120),
+            ..Default::default()
+        };
+        let set = capture(&model, &settings, &()).unwrap();
+        let mesh = crate::geom::io::load(&model).unwrap().mesh;
+        (mesh, set)
+    }
+
+    #[test]
+    fn an_edit_propagated_by_its_delta_equals_encoding_the_edited_views() {
+        use crate::views::capture::CaptureSettings;
+        // The Duck, and the Duck with a red band painted on its surface (its texture edited):
+        // both captured from the same ring.
+        let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/gltf/Duck.glb");
+        let settings = CaptureSettings {
+            count: 8,
+            size: (160, 120),
+            ..Default::default()
+        };
+        let set = capture(&model, &settings, &()).unwrap();
+        let mesh = crate::geom::io::load(&model).unwrap().mesh;
+        let mut scene = crate::views::capture::capture_scene(&model).unwrap();
+        let edited_mesh = {
+            let mut m = (*scene.objects[0].mesh).clone();
+            for mat in &mut m.materials {
+                if let Some(t) = &mut mat.texture {
+                    let mut image = (**t).clone();
+                    let (w, h) = image.size();
+                    // A smooth tint (a hard-edged decal would score the two encodings'
+                    // different blurs of its edge, not the propagation).
+                    for y in 0..h {
+                        for x in 0..w {
+                            let a = std::f32::consts::TAU * x as f32 / w as f32;
+                            let k = glam::Vec4::new(1.0, 0.55 + 0.4 * a.sin(), 0.6, 1.0);
+                            image.set(x, y, image.get(x, y) * k);
+                        }
+                    }
+                    *t = std::sync::Arc::new(image);
+                }
+            }
+            m
+        };
+        scene.objects[0].mesh = std::sync::Arc::new(edited_mesh);
+        // Each view re-rendered as the capture rendered it.
+        let b = mesh.bounds();
+        let centre = (b.min + b.max) * 0.5;
+        let edited: Vec<Image<Rgba>> = set
+            .views
+            .iter()
+            .map(|v| {
+                scene.camera.position = v.pose.centre().as_vec3();
+                scene.camera.look_at = centre;
+                scene.camera.up = glam::Vec3::Y;
+                scene.camera.fov_y = settings.fov_y;
+                (scene.camera.width, scene.camera.height) = settings.size;
+                scene.camera.near = (b.extent().length() * 0.5) as f64 * 1e-3;
+                crate::render::render(&scene, crate::render::Method::Trace, &())
+                    .unwrap()
+                    .0
+                    .color
+            })
+            .collect();
+        // The unedited captures agree with this re-rendering (same cameras).
+        let again = {
+            let mut s = crate::views::capture::capture_scene(&model).unwrap();
+            s.camera = scene.camera.clone();
+            s.camera.position = set.views[0].pose.centre().as_vec3();
+            crate::render::render(&s, crate::render::Method::Trace, &())
+                .unwrap()
+                .0
+                .color
+        };
+        assert_eq!(
+            again.pixels(),
+            set.views[0].image.as_ref().unwrap().pixels()
+        );
+        let enc = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
+        // The edit as view 0 saw it, propagated by its delta to every view.
+        let (_, cam0) = &enc.cameras[0];
+        let depth0 = DepthMap::through(cam0, &mesh).unwrap();
+        let after0 = encode(&enc.atlas, cam0, &edited[0], &depth0).unwrap();
+        let d = edit::delta(&enc.masters[0], &after0, 0.02).unwrap();
+        let mut masters = enc.masters.clone();
+        let changed = edit::propagate(&mut masters, &d, &after0, edit::Apply::Add).unwrap();
+        assert!(changed > 500, "{changed}");
+        // Against each view's own edited image encoded, where both views see the surface.
+        for v in 1..set.views.len() {
+            let (_, cam) = &enc.cameras[v];
+            let depth = DepthMap::through(cam, &mesh).unwrap();
+            let truth = encode(&enc.atlas, cam, &edited[v], &depth).unwrap();
+            let (mut n, mut err) = (0usize, 0.0f64);
+            let mut abs = Vec::new();
+            for i in 0..truth.pixels().len() {
+                if d.pixels()[i].w > 0.0
+                    && truth.pixels()[i].w > 0.0
+                    && masters[v].pixels()[i].w > 0.0
+                {
+                    let e = (truth.pixels()[i] - masters[v].pixels()[i]).truncate();
+                    err += e.length_squared() as f64 / 3.0;
+                    n += 1;
+                    abs.push(e.abs().max_element());
+                }
+            }
+            if n < 50 {
+                continue;
+            }
+            // Without the edit propagated: how far the view was from its edited self.
+            let mut base = 0.0f64;
+            for i in 0..truth.pixels().len() {
+                if d.pixels()[i].w > 0.0
+                    && truth.pixels()[i].w > 0.0
+                    && masters[v].pixels()[i].w > 0.0
+                {
+                    base += (truth.pixels()[i] - enc.masters[v].pixels()[i])
+                        .truncate()
+                        .length_squared() as f64
+                        / 3.0;
+                }
+            }
+            let unedited = 10.0 * (1.0 / (base / n as f64)).log10();
+            abs.sort_by(f32::total_cmp);
+            let median = abs[abs.len() / 2];
+            let psnr = 10.0 * (1.0 / (err / n as f64)).log10();
+            println!(
+                "view {v}: {n} edited texels, {psnr:.2} dB (unedited {unedited:.2} dB), median error {median:.4}"
+            );
+            // Texels seen at grazing angles or at visibility edges differ between any two
+            // views' encodings; the typical texel carries the edit to within 3 % (measured medians
+            // 0.3–2.2 %).
+            assert!(psnr >= unedited + 10.0, "view {v}: {psnr:.2} dB");
+            assert!(median <= 0.03, "view {v}: median error {median}");
+        }
+    }
+
+    #[test]
+    fn a_master_texel_is_the_same_surface_point_in_every_view() {
+        let (mesh, set) = duck_capture(8);
+        let enc = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
+        // For texels seen by two views, each view's pixel of the texel's point reprojects,
+        // through that view's depth, to within half a texel of the texel in master space.
+        let (w, _) = enc.atlas.size();
+        let mut checked = 0;
+        for (i, &f) in enc.atlas.face.iter().enumerate().step_by(7) {
+            if f == u32::MAX {
+                continue;
+            }
+            let place = enc.atlas.layout.faces[f as usize];
+            let texel = DVec2::new((i % w as usize) as f64 + 0.5, (i / w as usize) as f64 + 0.5);
+            // Inside the triangle (the gutter ring holds the nearest edge point instead).
+            let (b1, b2) = place.barycentrics(texel);
+            if b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0 {
+                continue;
+            }
+            let p = enc.atlas.point[i].as_dvec3();
+            for (v, (_, cam)) in enc.cameras.iter().enumerate() {
+                if enc.masters[v].pixels()[i].w == 0.0 {
+                    continue;
+                }
+                // The view's pixel of p, back to the surface by the view's ray onto the face's
+                // plane, then into master space.
+                let q = cam.project(p).unwrap();
+                let c = mesh.corners(f as usize).map(|x| x.as_dvec3());
+                let n = (c[1] - c[0]).cross(c[2] - c[0]);
+                let ray = cam.ray(q.uv);
+                let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+                // Grazing views leave the plane crossing ill-conditioned: skip them.
+                if d.dot(n.normalize()).abs() < 0.25 {
+                    continue;
+                }
+                let t = (c[0] - o).dot(n) / d.dot(n);
+                let x = o + d * t;
+                // Barycentrics of x on the face.
+                let (e1, e2, r) = (c[1] - c[0], c[2] - c[0], x - c[0]);
+                let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+                let (r1, r2) = (r.dot(e1), r.dot(e2));
+                let den = d11 * d22 - d12 * d12;
+                let b1 = (d22 * r1 - d12 * r2) / den;
+                let b2 = (d11 * r2 - d12 * r1) / den;
+                let back = place.at(b1, b2);
+                assert!((back - texel).length() < 0.5, "{back} vs {texel}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+    }
+}
