@@ -24,8 +24,30 @@ pub struct Manifest {
     pub layout: Layout,
     /// Per face, its three corners' texture coordinates (`[0, 1]²`, origin top-left).
     pub uvs: Vec<[f32; 2]>,
-    /// Per view: its name and master texture file.
-    pub views: Vec<(String, String)>,
+    /// Per view: its name, master texture file and camera.
+    pub views: Vec<StoredView>,
+}
+
+/// One view in `masters.json`: its undistorted pinhole in McMillan's form (docs/conventions.md
+/// §1.1): centre `C`, pixel steps `a`, `b`, corner vector `c`, size.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct StoredView {
+    /// The view's image name.
+    pub name: String,
+    /// Its master texture, a file name beside `masters.json`.
+    pub master: String,
+    /// `[C, a, b, c]`.
+    pub camera: [[f64; 3]; 4],
+    /// Width and height, pixels.
+    pub size: [u32; 2],
+}
+
+impl StoredView {
+    /// The view's pinhole.
+    pub fn pinhole(&self) -> crate::camera::Pinhole {
+        let [c, a, b, k] = self.camera.map(glam::DVec3::from_array);
+        crate::camera::Pinhole::from_mcmillan(c, a, b, k, self.size[0], self.size[1])
+    }
 }
 
 fn err(path: &Path, reason: impl std::fmt::Display) -> MasterError {
@@ -53,7 +75,15 @@ pub fn save(
     for (i, m) in encoding.masters.iter().enumerate() {
         let path = dir.join(master_name(i));
         io::write_png(&path, m)?;
-        views.push((encoding.cameras[i].0.clone(), master_name(i)));
+        let (name, cam) = &encoding.cameras[i];
+        let (a, b, c) = cam.mcmillan();
+        let (w, h) = crate::camera::Projection::resolution(cam);
+        views.push(StoredView {
+            name: name.clone(),
+            master: master_name(i),
+            camera: [cam.position(), a, b, c].map(|v| v.to_array()),
+            size: [w, h],
+        });
         written.push(path);
     }
     let manifest = Manifest {
@@ -89,11 +119,18 @@ pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
         ));
     }
     let mut masters = Vec::new();
-    for (index, (_, file)) in manifest.views.iter().enumerate() {
+    for (index, view) in manifest.views.iter().enumerate() {
+        let file = &view.master;
         if file.contains(['/', '\\']) || file == ".." {
             return Err(err(
                 &path,
                 format!("view {index}: {file:?} is not a file name"),
+            ));
+        }
+        if !view.camera.iter().flatten().all(|v| v.is_finite()) || view.size.contains(&0) {
+            return Err(err(
+                &path,
+                format!("view {index}: its camera is not finite or has no size"),
             ));
         }
         let m = io::read_png(&dir.join(file))?;

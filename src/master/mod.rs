@@ -18,6 +18,7 @@
 
 pub mod edit;
 pub mod file;
+pub mod job;
 pub mod layout;
 pub mod render;
 
@@ -56,6 +57,25 @@ pub enum MasterError {
         /// The atlas's.
         expected: (u32, u32),
     },
+    /// The mesh is not the one the packing map was made for.
+    #[error("the mesh has {mesh} triangles, the packing map was made for {map}")]
+    Faces {
+        /// The mesh's triangles.
+        mesh: usize,
+        /// The map's faces.
+        map: usize,
+    },
+    /// A view the command names is not in the encoding.
+    #[error("view {view}: the encoding has {count} views")]
+    NoView {
+        /// The view asked for.
+        view: usize,
+        /// How many there are.
+        count: usize,
+    },
+    /// The views could not be read.
+    #[error(transparent)]
+    Views(#[from] crate::views::ViewsError),
     /// A stored encoding could not be read or written.
     #[error("{path}: {reason}")]
     File {
@@ -149,6 +169,22 @@ impl Atlas {
         })
     }
 
+    /// The atlas of a stored layout (the face sizes must be the layout's own).
+    pub fn from_layout(
+        mesh: &Mesh,
+        layout: Layout,
+        sizes: &[[u32; 2]],
+    ) -> Result<Atlas, MasterError> {
+        let atlas = Atlas::new(mesh, sizes)?;
+        if atlas.layout != layout {
+            return Err(MasterError::File {
+                path: std::path::PathBuf::from("masters.json"),
+                reason: "its packing map is not the one this mesh's face sizes give".into(),
+            });
+        }
+        Ok(atlas)
+    }
+
     /// Atlas size `(width, height)`.
     pub fn size(&self) -> (u32, u32) {
         (self.layout.width, self.layout.height)
@@ -222,6 +258,13 @@ pub struct Encoding {
     pub cameras: Vec<(String, Pinhole)>,
     /// Per view: its master texture.
     pub masters: Vec<Image<Rgba>>,
+}
+
+impl Encoding {
+    /// The views' centres of projection.
+    pub fn centres(&self) -> Vec<glam::DVec3> {
+        self.cameras.iter().map(|(_, c)| c.position()).collect()
+    }
 }
 
 /// Encodes every view of `views` (images loaded) of `mesh`: face sizes over all views (`scale`

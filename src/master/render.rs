@@ -6,7 +6,8 @@
 //!
 //! Invariant: the same camera, masters and settings give the same pixels on any thread count.
 
-use super::{Encoding, MasterError};
+use super::MasterError;
+use super::layout::Layout;
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
 use crate::raster::{StoreFragment, rasterize};
@@ -49,20 +50,27 @@ fn sees(master: &Image<Rgba>, p: DVec2) -> bool {
     x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64 && master.get(x as u32, y as u32).w > 0.0
 }
 
-/// Renders `mesh` through `camera` from the master textures of `encoding`.
+/// Renders `mesh` through `camera` from `masters` (one a view, laid out by `layout`; the views'
+/// centres of projection `centres`, for the weights).
 pub fn render(
     camera: &Pinhole,
     mesh: &crate::geom::Mesh,
-    encoding: &Encoding,
+    layout: &Layout,
+    centres: &[DVec3],
+    masters: &[Image<Rgba>],
     settings: &BlendSettings,
 ) -> Result<Blend, MasterError> {
+    if layout.faces.len() != mesh.triangle_count() {
+        return Err(MasterError::Faces {
+            mesh: mesh.triangle_count(),
+            map: layout.faces.len(),
+        });
+    }
     let (target, _) = rasterize(camera, &[mesh], &StoreFragment, None)?;
     let (w, h) = camera.resolution();
     let eye = camera.position();
-    let centres: Vec<DVec3> = encoding.cameras.iter().map(|(_, c)| c.position()).collect();
     let fragments = target.attributes.pixels();
-    let masters = &encoding.masters;
-    let faces = &encoding.atlas.layout.faces;
+    let faces = &layout.faces;
     let mut image = Image::new(w, h, Vec4::ZERO)?;
     let counts: Vec<(usize, usize)> = image
         .pixels_mut()
@@ -137,7 +145,15 @@ mod tests {
         let enc = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
         for v in [0, 3] {
             let view = &set.views[v];
-            let out = render(&view.pinhole(), &mesh, &enc, &settings).unwrap();
+            let out = render(
+                &view.pinhole(),
+                &mesh,
+                &enc.atlas.layout,
+                &enc.centres(),
+                &enc.masters,
+                &settings,
+            )
+            .unwrap();
             let truth = view.image.as_ref().unwrap();
             let mask = out.image.map(|c| c.w > 0.0);
             let p = psnr(truth, &out.image, Some(&mask)).unwrap();
@@ -168,7 +184,15 @@ mod tests {
                 .unwrap();
         let mask = from_exemplars.image.map(|c| c.w > 0.0);
         let enc = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
-        let from_masters = render(&camera, &mesh, &enc, &settings).unwrap();
+        let from_masters = render(
+            &camera,
+            &mesh,
+            &enc.atlas.layout,
+            &enc.centres(),
+            &enc.masters,
+            &settings,
+        )
+        .unwrap();
         let p = psnr(&from_exemplars.image, &from_masters.image, Some(&mask)).unwrap();
         println!(
             "masters against exemplars: {p:.2} dB, atlas {:?}",

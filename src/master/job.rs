@@ -1,0 +1,227 @@
+//! The three jobs of `trompe master`: encode a COLMAP model's views of a mesh into a folder,
+//! render from a folder through a new camera, propagate an edit of one view to every view.
+//! Each returns a summary the command line prints.
+
+use super::edit::{Apply, delta, propagate};
+use super::file::{Manifest, load, save};
+use super::{DEFAULT_SCALE, Encoding, MasterError, bake, encode, encode_views};
+use crate::camera::Pinhole;
+use crate::frame::{Image, Rgba, io};
+use crate::geom::Mesh;
+use crate::progress::Progress;
+use crate::views::blend::{Blend, BlendSettings};
+use crate::views::visibility::DepthMap;
+use std::path::{Path, PathBuf};
+
+/// What an encoding stored, against storing the exemplars (paper 5 Table 1).
+#[derive(Clone, Debug)]
+pub struct EncodeSummary {
+    /// Views encoded.
+    pub views: usize,
+    /// Faces of the mesh.
+    pub faces: usize,
+    /// Atlas size.
+    pub atlas: (u32, u32),
+    /// Atlas texels that hold a face.
+    pub used: usize,
+    /// Bytes of the exemplars as 8-bit RGB, and of their per-view texture coordinates
+    /// (`3m·n` pairs of f32).
+    pub exemplar_bytes: (u64, u64),
+    /// Bytes of the master textures as 8-bit RGB, and of the one UV set (`3m` pairs).
+    pub master_bytes: (u64, u64),
+    /// Faces the view-independent bake took whole from one view.
+    pub baked_whole: usize,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+impl EncodeSummary {
+    /// Exemplars' bytes over masters' bytes (above 1: the encoding is smaller).
+    pub fn compression(&self) -> f64 {
+        let e = self.exemplar_bytes.0 + self.exemplar_bytes.1;
+        let m = self.master_bytes.0 + self.master_bytes.1;
+        e as f64 / m.max(1) as f64
+    }
+}
+
+impl std::fmt::Display for EncodeSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mb = |b: u64| b as f64 / 1e6;
+        writeln!(
+            f,
+            "{} views of {} faces encoded in a {} × {} atlas ({:.0} % of its texels hold a face)",
+            self.views,
+            self.faces,
+            self.atlas.0,
+            self.atlas.1,
+            100.0 * self.used as f64 / (self.atlas.0 as f64 * self.atlas.1 as f64).max(1.0)
+        )?;
+        writeln!(
+            f,
+            "storage: exemplars {:.2} MB + per-view UVs {:.2} MB, master textures {:.2} MB + one UV set {:.3} MB: {:.2} : 1",
+            mb(self.exemplar_bytes.0),
+            mb(self.exemplar_bytes.1),
+            mb(self.master_bytes.0),
+            mb(self.master_bytes.1),
+            self.compression()
+        )?;
+        write!(
+            f,
+            "view-independent bake: {} of {} faces from one view whole, the rest texel by texel",
+            self.baked_whole, self.faces
+        )
+    }
+}
+
+/// The storage figures of an encoding of `n` exemplars of `sizes`.
+pub fn storage(encoding: &Encoding, sizes: &[(u32, u32)]) -> ((u64, u64), (u64, u64)) {
+    let n = encoding.masters.len() as u64;
+    let corners = encoding.atlas.layout.faces.len() as u64 * 3;
+    let exemplars: u64 = sizes.iter().map(|&(w, h)| w as u64 * h as u64 * 3).sum();
+    let (aw, ah) = encoding.atlas.size();
+    (
+        (exemplars, corners * n * 8),
+        (n * aw as u64 * ah as u64 * 3, corners * 8),
+    )
+}
+
+/// Encodes the views of the COLMAP model `model` (images in `images`, or found beside it) of
+/// `mesh` into `out`: master textures, `masters.json`, the view-independent `bake.png` and
+/// `mesh.glb` textured by it.
+pub fn encode_folder(
+    model: &Path,
+    images: Option<&Path>,
+    mesh: &Mesh,
+    scale: Option<f64>,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<EncodeSummary, MasterError> {
+    let mut set = crate::views::ViewSet::load(model, images)?;
+    set.load_images()?;
+    let sizes: Vec<(u32, u32)> = set.views.iter().map(|v| v.intrinsics.size()).collect();
+    let enc = encode_views(mesh, &set.views, scale.unwrap_or(DEFAULT_SCALE), progress)?;
+    drop(set);
+    let (baked, choice) = bake(&enc, mesh)?;
+    let bake_path = out.join("bake.png");
+    io::write_png(&bake_path, &baked)?;
+    let mut files = save(out, &enc, mesh, "bake.png")?;
+    files.push(bake_path);
+    let (exemplar_bytes, master_bytes) = storage(&enc, &sizes);
+    Ok(EncodeSummary {
+        views: enc.masters.len(),
+        faces: mesh.triangle_count(),
+        atlas: enc.atlas.size(),
+        used: enc.atlas.used(),
+        exemplar_bytes,
+        master_bytes,
+        baked_whole: choice.iter().filter(|c| c.is_some()).count(),
+        files,
+    })
+}
+
+/// Renders `mesh` through `camera` from the encoding in `dir`.
+pub fn render_folder(
+    dir: &Path,
+    mesh: &Mesh,
+    camera: &Pinhole,
+    settings: &BlendSettings,
+) -> Result<Blend, MasterError> {
+    let (manifest, masters) = load(dir)?;
+    let centres: Vec<glam::DVec3> = manifest
+        .views
+        .iter()
+        .map(|v| v.pinhole().position())
+        .collect();
+    super::render::render(camera, mesh, &manifest.layout, &centres, &masters, settings)
+}
+
+/// What an edit changed.
+#[derive(Clone, Debug)]
+pub struct EditSummary {
+    /// Texels of the edited view's master texture the edit changed.
+    pub edited: usize,
+    /// Texels changed over every master texture.
+    pub changed: usize,
+    /// Views.
+    pub views: usize,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+impl std::fmt::Display for EditSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the edit changed {} texels of its view's master texture; propagated to {} views, {} texels in all",
+            self.edited, self.views, self.changed
+        )
+    }
+}
+
+/// Propagates an edit: `edited` is view `view`'s image as an artist changed it; its encoding's
+/// difference from the view's master texture is applied to every master texture, and the
+/// edited encoding written into `out` (which may not be `dir`).
+pub fn edit_folder(
+    dir: &Path,
+    mesh: &Mesh,
+    view: usize,
+    edited: &Image<Rgba>,
+    apply: Apply,
+    out: &Path,
+) -> Result<EditSummary, MasterError> {
+    let (manifest, mut masters) = load(dir)?;
+    if manifest.layout.faces.len() != mesh.triangle_count() {
+        return Err(MasterError::Faces {
+            mesh: mesh.triangle_count(),
+            map: manifest.layout.faces.len(),
+        });
+    }
+    let stored = manifest.views.get(view).ok_or(MasterError::NoView {
+        view,
+        count: manifest.views.len(),
+    })?;
+    let camera = stored.pinhole();
+    let expected = (stored.size[0], stored.size[1]);
+    if edited.size() != expected {
+        return Err(MasterError::Size {
+            index: view,
+            got: edited.size(),
+            expected,
+        });
+    }
+    let sizes: Vec<[u32; 2]> = manifest.layout.faces.iter().map(|f| f.size).collect();
+    let atlas = super::Atlas::from_layout(mesh, manifest.layout.clone(), &sizes)?;
+    let depth = DepthMap::through(&camera, mesh)?;
+    let after = encode(&atlas, &camera, edited, &depth)?;
+    let d = delta(&masters[view], &after, EDIT_THRESHOLD)?;
+    let edited_texels = d.pixels().iter().filter(|p| p.w > 0.0).count();
+    let changed = propagate(&mut masters, &d, &after, apply)?;
+    let encoding = Encoding {
+        atlas,
+        cameras: manifest
+            .views
+            .iter()
+            .map(|v| (v.name.clone(), v.pinhole()))
+            .collect(),
+        masters,
+    };
+    let (baked, _) = bake(&encoding, mesh)?;
+    let bake_path = out.join("bake.png");
+    io::write_png(&bake_path, &baked)?;
+    let mut files = save(out, &encoding, mesh, "bake.png")?;
+    files.push(bake_path);
+    Ok(EditSummary {
+        edited: edited_texels,
+        changed,
+        views: manifest.views.len(),
+        files,
+    })
+}
+
+/// Smallest per-channel change an edit carries (linear): below it, resampling noise.
+pub const EDIT_THRESHOLD: f32 = 0.02;
+
+/// Reads `masters.json` of `dir` only (for `trompe info`-like summaries).
+pub fn manifest(dir: &Path) -> Result<Manifest, MasterError> {
+    Ok(load(dir)?.0)
+}
