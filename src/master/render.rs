@@ -92,12 +92,12 @@ pub fn render(
                     Weighting::ViewMap | Weighting::BestFace => weights(
                         p,
                         eye,
-                        &centres,
+                        centres,
                         |i| sees(&masters[i], at),
                         Weighting::Vdtm,
                         1,
                     ),
-                    wt => weights(p, eye, &centres, |i| sees(&masters[i], at), wt, settings.k),
+                    wt => weights(p, eye, centres, |i| sees(&masters[i], at), wt, settings.k),
                 };
                 let mut colour = Vec4::ZERO;
                 let mut total = 0.0;
