@@ -62,6 +62,48 @@ pub fn master_name(i: usize) -> String {
     format!("master_{i:04}.png")
 }
 
+/// The stored form of views `cameras`.
+pub fn stored_views(cameras: &[(String, crate::camera::Pinhole)]) -> Vec<StoredView> {
+    cameras
+        .iter()
+        .enumerate()
+        .map(|(i, (name, cam))| {
+            let (a, b, c) = cam.mcmillan();
+            let (w, h) = crate::camera::Projection::resolution(cam);
+            StoredView {
+                name: name.clone(),
+                master: master_name(i),
+                camera: [cam.position(), a, b, c].map(|v| v.to_array()),
+                size: [w, h],
+            }
+        })
+        .collect()
+}
+
+/// Writes `masters.json` and `mesh.glb` (textured by `texture`, a PNG in `dir`) into `dir`;
+/// the master textures are written apart ([`master_name`]). Returns the files written.
+pub fn save_manifest(
+    dir: &Path,
+    layout: &Layout,
+    cameras: &[(String, crate::camera::Pinhole)],
+    mesh: &Mesh,
+    texture: &str,
+) -> Result<Vec<PathBuf>, MasterError> {
+    let manifest = Manifest {
+        version: 1,
+        layout: layout.clone(),
+        uvs: layout.uvs(),
+        views: stored_views(cameras),
+    };
+    let path = dir.join("masters.json");
+    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| err(&path, e))?;
+    crate::files::write_atomically(&path, &json).map_err(|e| err(&path, e))?;
+    let glb = dir.join("mesh.glb");
+    crate::files::write_atomically(&glb, &gltf_bytes(mesh, &manifest.uvs, texture)?)
+        .map_err(|e| err(&glb, e))?;
+    Ok(vec![path, glb])
+}
+
 /// Writes `encoding` into `dir`: the master textures, `masters.json` and `mesh.glb` (textured
 /// by `texture`, a PNG in `dir`). Returns the files written.
 pub fn save(
@@ -71,40 +113,23 @@ pub fn save(
     texture: &str,
 ) -> Result<Vec<PathBuf>, MasterError> {
     let mut written = Vec::new();
-    let mut views = Vec::new();
     for (i, m) in encoding.masters.iter().enumerate() {
         let path = dir.join(master_name(i));
         io::write_png(&path, m)?;
-        let (name, cam) = &encoding.cameras[i];
-        let (a, b, c) = cam.mcmillan();
-        let (w, h) = crate::camera::Projection::resolution(cam);
-        views.push(StoredView {
-            name: name.clone(),
-            master: master_name(i),
-            camera: [cam.position(), a, b, c].map(|v| v.to_array()),
-            size: [w, h],
-        });
         written.push(path);
     }
-    let manifest = Manifest {
-        version: 1,
-        layout: encoding.atlas.layout.clone(),
-        uvs: encoding.atlas.layout.uvs(),
-        views,
-    };
-    let path = dir.join("masters.json");
-    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| err(&path, e))?;
-    crate::files::write_atomically(&path, &json).map_err(|e| err(&path, e))?;
-    written.push(path);
-    let glb = dir.join("mesh.glb");
-    crate::files::write_atomically(&glb, &gltf_bytes(mesh, &manifest.uvs, texture)?)
-        .map_err(|e| err(&glb, e))?;
-    written.push(glb);
+    written.extend(save_manifest(
+        dir,
+        &encoding.atlas.layout,
+        &encoding.cameras,
+        mesh,
+        texture,
+    )?);
     Ok(written)
 }
 
-/// Reads `masters.json` and its master textures from `dir`.
-pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
+/// Reads and checks `masters.json` of `dir`.
+pub fn load_manifest(dir: &Path) -> Result<Manifest, MasterError> {
     let path = dir.join("masters.json");
     let bytes = std::fs::read(&path).map_err(|e| err(&path, e))?;
     let manifest: Manifest = serde_json::from_slice(&bytes).map_err(|e| err(&path, e))?;
@@ -118,7 +143,6 @@ pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
             ),
         ));
     }
-    let mut masters = Vec::new();
     for (index, view) in manifest.views.iter().enumerate() {
         let file = &view.master;
         if file.contains(['/', '\\']) || file == ".." {
@@ -133,17 +157,34 @@ pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
                 format!("view {index}: its camera is not finite or has no size"),
             ));
         }
-        let m = io::read_png(&dir.join(file))?;
-        let expected = (manifest.layout.width, manifest.layout.height);
-        if m.size() != expected {
-            return Err(MasterError::Size {
-                index,
-                got: m.size(),
-                expected,
-            });
-        }
-        masters.push(m);
     }
+    Ok(manifest)
+}
+
+/// Reads master texture `index` of the encoding in `dir`, checking its size.
+pub fn load_master(
+    dir: &Path,
+    manifest: &Manifest,
+    index: usize,
+) -> Result<Image<Rgba>, MasterError> {
+    let m = io::read_png(&dir.join(&manifest.views[index].master))?;
+    let expected = (manifest.layout.width, manifest.layout.height);
+    if m.size() != expected {
+        return Err(MasterError::Size {
+            index,
+            got: m.size(),
+            expected,
+        });
+    }
+    Ok(m)
+}
+
+/// Reads `masters.json` and every master texture from `dir`.
+pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
+    let manifest = load_manifest(dir)?;
+    let masters = (0..manifest.views.len())
+        .map(|i| load_master(dir, &manifest, i))
+        .collect::<Result<_, _>>()?;
     Ok((manifest, masters))
 }
 

@@ -3,8 +3,8 @@
 //! Each returns a summary the command line prints.
 
 use super::edit::{Apply, delta, propagate};
-use super::file::{Manifest, load, save};
-use super::{DEFAULT_SCALE, Encoding, MasterError, bake, encode, encode_views};
+use super::file::{Manifest, load, load_manifest, load_master, master_name, save_manifest};
+use super::{Atlas, DEFAULT_SCALE, MasterError, encode, encode_stream};
 use crate::camera::Pinhole;
 use crate::frame::{Image, Rgba, io};
 use crate::geom::Mesh;
@@ -73,12 +73,13 @@ impl std::fmt::Display for EncodeSummary {
     }
 }
 
-/// The storage figures of an encoding of `n` exemplars of `sizes`.
-pub fn storage(encoding: &Encoding, sizes: &[(u32, u32)]) -> ((u64, u64), (u64, u64)) {
-    let n = encoding.masters.len() as u64;
-    let corners = encoding.atlas.layout.faces.len() as u64 * 3;
+/// The storage figures of `n` exemplars of `sizes` against their master textures in `atlas`:
+/// `((exemplar bytes, their UV bytes), (master bytes, one UV set's bytes))`.
+pub fn storage(atlas: &Atlas, sizes: &[(u32, u32)]) -> ((u64, u64), (u64, u64)) {
+    let n = sizes.len() as u64;
+    let corners = atlas.layout.faces.len() as u64 * 3;
     let exemplars: u64 = sizes.iter().map(|&(w, h)| w as u64 * h as u64 * 3).sum();
-    let (aw, ah) = encoding.atlas.size();
+    let (aw, ah) = atlas.size();
     (
         (exemplars, corners * n * 8),
         (n * aw as u64 * ah as u64 * 3, corners * 8),
@@ -86,8 +87,8 @@ pub fn storage(encoding: &Encoding, sizes: &[(u32, u32)]) -> ((u64, u64), (u64, 
 }
 
 /// Encodes the views of the COLMAP model `model` (images in `images`, or found beside it) of
-/// `mesh` into `out`: master textures, `masters.json`, the view-independent `bake.png` and
-/// `mesh.glb` textured by it.
+/// `mesh` into `out`, one view in memory at a time: master textures, `masters.json`, the
+/// view-independent `bake.png` and `mesh.glb` textured by it.
 pub fn encode_folder(
     model: &Path,
     images: Option<&Path>,
@@ -96,22 +97,52 @@ pub fn encode_folder(
     out: &Path,
     progress: &dyn Progress,
 ) -> Result<EncodeSummary, MasterError> {
-    let mut set = crate::views::ViewSet::load(model, images)?;
-    set.load_images()?;
+    let set = crate::views::ViewSet::load(model, images)?;
     let sizes: Vec<(u32, u32)> = set.views.iter().map(|v| v.intrinsics.size()).collect();
-    let enc = encode_views(mesh, &set.views, scale.unwrap_or(DEFAULT_SCALE), progress)?;
-    drop(set);
-    let (baked, choice) = bake(&enc, mesh)?;
+    let cameras: Vec<(String, Pinhole)> = set
+        .views
+        .iter()
+        .map(|v| (v.name.clone(), v.pinhole()))
+        .collect();
+    let mut files = Vec::new();
+    let (atlas, baked, choice) = encode_stream(
+        mesh,
+        &cameras,
+        scale.unwrap_or(DEFAULT_SCALE),
+        &mut |v| {
+            let mut view = set.views[v].clone();
+            let path = set.image_folder.join(&view.name);
+            let img = io::read_color(&path).map_err(|source| crate::views::ViewsError::Image {
+                name: view.name.clone(),
+                source,
+            })?;
+            view.image = Some(img);
+            crate::views::blend::undistorted_image(&view).ok_or(MasterError::NothingSeen)
+        },
+        &mut |v, master| {
+            let path = out.join(master_name(v));
+            io::write_png(&path, &master)?;
+            files.push(path);
+            Ok(())
+        },
+        progress,
+    )?;
     let bake_path = out.join("bake.png");
     io::write_png(&bake_path, &baked)?;
-    let mut files = save(out, &enc, mesh, "bake.png")?;
+    files.extend(save_manifest(
+        out,
+        &atlas.layout,
+        &cameras,
+        mesh,
+        "bake.png",
+    )?);
     files.push(bake_path);
-    let (exemplar_bytes, master_bytes) = storage(&enc, &sizes);
+    let (exemplar_bytes, master_bytes) = storage(&atlas, &sizes);
     Ok(EncodeSummary {
-        views: enc.masters.len(),
+        views: cameras.len(),
         faces: mesh.triangle_count(),
-        atlas: enc.atlas.size(),
-        used: enc.atlas.used(),
+        atlas: atlas.size(),
+        used: atlas.used(),
         exemplar_bytes,
         master_bytes,
         baked_whole: choice.iter().filter(|c| c.is_some()).count(),
@@ -159,8 +190,9 @@ impl std::fmt::Display for EditSummary {
 }
 
 /// Propagates an edit: `edited` is view `view`'s image as an artist changed it; its encoding's
-/// difference from the view's master texture is applied to every master texture, and the
-/// edited encoding written into `out` (which may not be `dir`).
+/// difference from the view's master texture is applied to every master texture — read,
+/// edited and written one at a time — and the edited encoding written into `out` (a folder
+/// other than `dir`).
 pub fn edit_folder(
     dir: &Path,
     mesh: &Mesh,
@@ -169,7 +201,7 @@ pub fn edit_folder(
     apply: Apply,
     out: &Path,
 ) -> Result<EditSummary, MasterError> {
-    let (manifest, mut masters) = load(dir)?;
+    let manifest = load_manifest(dir)?;
     if manifest.layout.faces.len() != mesh.triangle_count() {
         return Err(MasterError::Faces {
             mesh: mesh.triangle_count(),
@@ -190,25 +222,38 @@ pub fn edit_folder(
         });
     }
     let sizes: Vec<[u32; 2]> = manifest.layout.faces.iter().map(|f| f.size).collect();
-    let atlas = super::Atlas::from_layout(mesh, manifest.layout.clone(), &sizes)?;
+    let atlas = Atlas::from_layout(mesh, manifest.layout.clone(), &sizes)?;
     let depth = DepthMap::through(&camera, mesh)?;
     let after = encode(&atlas, &camera, edited, &depth)?;
-    let d = delta(&masters[view], &after, EDIT_THRESHOLD)?;
+    let before = load_master(dir, &manifest, view)?;
+    let d = delta(&before, &after, EDIT_THRESHOLD)?;
+    drop(before);
     let edited_texels = d.pixels().iter().filter(|p| p.w > 0.0).count();
-    let changed = propagate(&mut masters, &d, &after, apply)?;
-    let encoding = Encoding {
-        atlas,
-        cameras: manifest
-            .views
-            .iter()
-            .map(|v| (v.name.clone(), v.pinhole()))
-            .collect(),
-        masters,
-    };
-    let (baked, _) = bake(&encoding, mesh)?;
+    let cameras: Vec<(String, Pinhole)> = manifest
+        .views
+        .iter()
+        .map(|v| (v.name.clone(), v.pinhole()))
+        .collect();
+    let mut baker = super::bake::Baker::new(&atlas)?;
+    let (mut changed, mut files) = (0, Vec::new());
+    for (i, (_, cam)) in cameras.iter().enumerate() {
+        let mut m = [load_master(dir, &manifest, i)?];
+        changed += propagate(&mut m, &d, &after, apply)?;
+        baker.add(&atlas, mesh, i, cam, &m[0]);
+        let path = out.join(master_name(i));
+        io::write_png(&path, &m[0])?;
+        files.push(path);
+    }
+    let (baked, _) = baker.finish(&atlas);
     let bake_path = out.join("bake.png");
     io::write_png(&bake_path, &baked)?;
-    let mut files = save(out, &encoding, mesh, "bake.png")?;
+    files.extend(save_manifest(
+        out,
+        &atlas.layout,
+        &cameras,
+        mesh,
+        "bake.png",
+    )?);
     files.push(bake_path);
     Ok(EditSummary {
         edited: edited_texels,
@@ -221,7 +266,7 @@ pub fn edit_folder(
 /// Smallest per-channel change an edit carries (linear): below it, resampling noise.
 pub const EDIT_THRESHOLD: f32 = 0.02;
 
-/// Reads `masters.json` of `dir` only (for `trompe info`-like summaries).
+/// Reads `masters.json` of `dir` only.
 pub fn manifest(dir: &Path) -> Result<Manifest, MasterError> {
-    Ok(load(dir)?.0)
+    load_manifest(dir)
 }

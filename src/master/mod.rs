@@ -16,6 +16,7 @@
 //! texel a view does not see has alpha 0 and colour 0; encoding is deterministic and
 //! independent of the thread count.
 
+pub mod bake;
 pub mod edit;
 pub mod file;
 pub mod job;
@@ -267,113 +268,73 @@ impl Encoding {
     }
 }
 
-/// Encodes every view of `views` (images loaded) of `mesh`: face sizes over all views (`scale`
-/// texels a pixel, [`face_sizes`]), the layout, then each view's master texture, one view at a
-/// time (a view's image and depth map are dropped once it is encoded). `progress` advances one
-/// step a view.
+/// What [`encode_stream`] returns: the atlas, the view-independent bake and per face the view
+/// the bake took it from.
+pub type Streamed = (Atlas, Image<Rgba>, Vec<Option<usize>>);
+
+/// Encodes the views `cameras` (names and undistorted pinholes) of `mesh`, streaming: face
+/// sizes over all cameras (`scale` texels a pixel, [`face_sizes`]) and the layout first, then
+/// one view at a time — its image asked of `image_of`, its depth map drawn, its master texture
+/// encoded, folded into the bake and handed to `sink` — so that one image and one master
+/// texture are in memory at a time. Returns the atlas and the view-independent bake.
+pub fn encode_stream(
+    mesh: &Mesh,
+    cameras: &[(String, Pinhole)],
+    scale: f64,
+    image_of: &mut dyn FnMut(usize) -> Result<Image<Rgba>, MasterError>,
+    sink: &mut dyn FnMut(usize, Image<Rgba>) -> Result<(), MasterError>,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Streamed, MasterError> {
+    let pinholes: Vec<Pinhole> = cameras.iter().map(|(_, c)| c.clone()).collect();
+    let sizes = face_sizes(mesh, &pinholes, scale);
+    let atlas = Atlas::new(mesh, &sizes)?;
+    let mut baker = bake::Baker::new(&atlas)?;
+    let mut seen = false;
+    for (v, cam) in pinholes.iter().enumerate() {
+        let image = image_of(v)?;
+        let depth = DepthMap::through(cam, mesh)?;
+        let master = encode(&atlas, cam, &image, &depth)?;
+        drop((image, depth));
+        seen |= master.pixels().iter().any(|c| c.w > 0.0);
+        baker.add(&atlas, mesh, v, cam, &master);
+        sink(v, master)?;
+        progress.advance(1);
+    }
+    if !seen {
+        return Err(MasterError::NothingSeen);
+    }
+    let (baked, choice) = baker.finish(&atlas);
+    Ok((atlas, baked, choice))
+}
+
+/// Encodes every view of `views` (images loaded) of `mesh` in memory ([`encode_stream`]).
 pub fn encode_views(
     mesh: &Mesh,
     views: &[crate::views::CalibratedView],
     scale: f64,
     progress: &dyn crate::progress::Progress,
 ) -> Result<Encoding, MasterError> {
-    let cameras: Vec<Pinhole> = views.iter().map(|v| v.pinhole()).collect();
-    let sizes = face_sizes(mesh, &cameras, scale);
-    let atlas = Atlas::new(mesh, &sizes)?;
-    let mut masters = Vec::with_capacity(views.len());
-    for (v, cam) in views.iter().zip(&cameras) {
-        let image = crate::views::blend::undistorted_image(v).ok_or(MasterError::NothingSeen)?;
-        let depth = DepthMap::through(cam, mesh)?;
-        masters.push(encode(&atlas, cam, &image, &depth)?);
-        progress.advance(1);
-    }
-    if masters
+    let cameras: Vec<(String, Pinhole)> = views
         .iter()
-        .all(|m| m.pixels().iter().all(|c| c.w == 0.0))
-    {
-        return Err(MasterError::NothingSeen);
-    }
+        .map(|v| (v.name.clone(), v.pinhole()))
+        .collect();
+    let mut masters = Vec::with_capacity(views.len());
+    let (atlas, _, _) = encode_stream(
+        mesh,
+        &cameras,
+        scale,
+        &mut |v| crate::views::blend::undistorted_image(&views[v]).ok_or(MasterError::NothingSeen),
+        &mut |_, m| {
+            masters.push(m);
+            Ok(())
+        },
+        progress,
+    )?;
     Ok(Encoding {
         atlas,
-        cameras: views.iter().map(|v| v.name.clone()).zip(cameras).collect(),
+        cameras,
         masters,
     })
-}
-
-/// The view-independent bake: per face, the view that sees it largest (projected area) with
-/// every texel of the face seen, its texels copied from that view's master texture; a face no
-/// view sees whole takes, texel by texel, the mean of the views that see it. No colour levelling
-/// across seams. Returns the texture (alpha 0 where no view sees the texel) and per face the
-/// view chosen (`None`: texel-by-texel mean).
-pub fn bake(
-    encoding: &Encoding,
-    mesh: &Mesh,
-) -> Result<(Image<Rgba>, Vec<Option<usize>>), MasterError> {
-    let atlas = &encoding.atlas;
-    let (w, _) = atlas.size();
-    let masters = &encoding.masters;
-    // Per face: which views see all its texels.
-    let faces = mesh.triangle_count();
-    let mut whole = vec![vec![true; masters.len()]; faces];
-    for (i, &f) in atlas.face.iter().enumerate() {
-        if f == u32::MAX {
-            continue;
-        }
-        // Only texels inside the triangle count (the gutter ring may graze a silhouette).
-        let place = atlas.layout.faces[f as usize];
-        let centre = DVec2::new((i % w as usize) as f64 + 0.5, (i / w as usize) as f64 + 0.5);
-        let (b1, b2) = place.barycentrics(centre);
-        if b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0 {
-            continue;
-        }
-        for (v, m) in masters.iter().enumerate() {
-            if m.pixels()[i].w == 0.0 {
-                whole[f as usize][v] = false;
-            }
-        }
-    }
-    let choice: Vec<Option<usize>> = (0..faces)
-        .map(|t| {
-            let c = mesh.corners(t).map(|p| p.as_dvec3());
-            let mut best: Option<(usize, f64)> = None;
-            for (v, (_, cam)) in encoding.cameras.iter().enumerate() {
-                if !whole[t][v] {
-                    continue;
-                }
-                let px: Option<Vec<DVec2>> =
-                    c.iter().map(|&p| cam.project(p).map(|q| q.uv)).collect();
-                let Some(px) = px else { continue };
-                let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs();
-                if best.is_none_or(|(_, a)| area > a) {
-                    best = Some((v, area));
-                }
-            }
-            best.map(|b| b.0)
-        })
-        .collect();
-    let (aw, ah) = atlas.size();
-    let mut out = Image::new(aw, ah, Vec4::ZERO)?;
-    for (i, texel) in out.pixels_mut().iter_mut().enumerate() {
-        let f = atlas.face[i];
-        if f == u32::MAX {
-            continue;
-        }
-        match choice[f as usize] {
-            Some(v) if masters[v].pixels()[i].w > 0.0 => *texel = masters[v].pixels()[i],
-            _ => {
-                let seen: Vec<Rgba> = masters
-                    .iter()
-                    .map(|m| m.pixels()[i])
-                    .filter(|c| c.w > 0.0)
-                    .collect();
-                if !seen.is_empty() {
-                    let sum: Vec4 = seen.iter().copied().sum();
-                    *texel = (sum / seen.len() as f32).truncate().extend(1.0);
-                }
-            }
-        }
-    }
-    Ok((out, choice))
 }
 
 #[cfg(test)]
