@@ -18,6 +18,7 @@
 //! (a fresh SPOC impostor's maps are 6.3 MB at 512², and returning them to the system is not
 //! building them).
 
+pub mod master;
 pub mod relief;
 
 use crate::camera::Pinhole;
@@ -749,6 +750,12 @@ pub enum BenchError {
     /// A relief workload failed.
     #[error(transparent)]
     Relief(#[from] crate::relief::ReliefError),
+    /// A Master Texture workload failed.
+    #[error(transparent)]
+    Master(#[from] crate::master::MasterError),
+    /// An image could not be made.
+    #[error(transparent)]
+    Frame(#[from] crate::frame::FrameError),
     /// A thread pool could not be made.
     #[error("a benchmark's thread pool could not be started")]
     Threads,
@@ -784,6 +791,7 @@ pub fn run(
         .chain(textured_impostor(&duck, "Duck.glb", quick))
         .chain(graph_impostors(&maze, &maze_path, &bunny, quick))
         .chain(relief::relief(inputs, quick)?)
+        .chain(master::master(inputs, quick)?)
         .collect();
     Ok(BenchReport {
         heading: heading(path, mesh),

@@ -85,7 +85,7 @@ pub enum Command {
     Relief(ReliefArgs),
     /// Measure throughput against peers measured in the same run.
     Bench {
-        /// Which workloads: every one (the default), or only the relief impostors'.
+        /// Which workloads: every one (the default), or one paper's.
         #[arg(value_enum, default_value_t = BenchSuite::All)]
         suite: BenchSuite,
         /// Shorter timings (less stable figures).
@@ -110,6 +110,8 @@ pub enum BenchSuite {
     All,
     /// The relief impostors' (paper 3): pre-warp, generation, a walk's frames.
     Relief,
+    /// Master Texture encoding (paper 5): 360 views of 720 × 576.
+    Master,
 }
 
 /// `trompe impostor …`.
@@ -1197,6 +1199,24 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let report = trompe::bench::BenchReport {
                 heading: format!(
                     "trompe bench relief, {} threads",
+                    rayon::current_num_threads()
+                ),
+                figures,
+            };
+            println!("{report}");
+        }
+        Command::Bench {
+            suite: BenchSuite::Master,
+            quick,
+            ..
+        } => {
+            let inputs = trompe::eval::fixtures::Shipped::locate();
+            let figures = with_spinner("timing master-texture encoding", || {
+                trompe::bench::master::master(&inputs, quick)
+            })?;
+            let report = trompe::bench::BenchReport {
+                heading: format!(
+                    "trompe bench master, {} threads",
                     rayon::current_num_threads()
                 ),
                 figures,

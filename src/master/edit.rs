@@ -88,3 +88,22 @@ pub fn propagate(
     }
     Ok(changed)
 }
+
+/// An effect seen from any camera (paper 5 §4.1, e.g. a shadow): `without` and `with` are two
+/// renders of the mesh through `camera` (undistorted), one without the effect and one with it;
+/// both are encoded with the packing map of `atlas` and their difference returned (as
+/// [`delta`]), with the encoding of `with` (for [`Apply::Replace`]). Texels `camera` does not
+/// see carry no change.
+pub fn delta_from_camera(
+    atlas: &super::Atlas,
+    mesh: &crate::geom::Mesh,
+    camera: &crate::camera::Pinhole,
+    without: &Image<Rgba>,
+    with: &Image<Rgba>,
+    threshold: f32,
+) -> Result<(Image<Rgba>, Image<Rgba>), MasterError> {
+    let depth = crate::views::visibility::DepthMap::through(camera, mesh)?;
+    let before = super::encode(atlas, camera, without, &depth)?;
+    let after = super::encode(atlas, camera, with, &depth)?;
+    Ok((delta(&before, &after, threshold)?, after))
+}

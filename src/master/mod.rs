@@ -228,6 +228,8 @@ pub fn encode(
 ) -> Result<Image<Rgba>, MasterError> {
     let (w, h) = atlas.size();
     let mut out = Image::new(w, h, Vec4::ZERO)?;
+    let gd = depth.gd();
+    let (gw, gh) = gd.size();
     out.pixels_mut()
         .par_chunks_mut(w as usize)
         .enumerate()
@@ -237,12 +239,21 @@ pub fn encode(
                 if atlas.face[i] == u32::MAX {
                     continue;
                 }
+                // Projected once: the visibility test of `DepthMap::sees` (the depth map's
+                // texel under the point, the point at most TOLERANCE behind it), then the
+                // surface-aware lookup.
                 let p = atlas.point[i].as_dvec3();
-                if !depth.sees(p, TOLERANCE) {
+                let Some(q) = camera.project(p) else { continue };
+                let (u, v) = (q.uv.x, q.uv.y);
+                if !(u >= 0.0 && v >= 0.0 && u < gw as f64 && v < gh as f64) {
                     continue;
                 }
-                let Some(q) = camera.project(p) else { continue };
-                let c = crate::views::blend::sample_on_surface(image, depth.gd(), q.uv, 1.0 / q.gd);
+                let stored = gd.pixels()[v as usize * gw as usize + u as usize] as f64;
+                let z = 1.0 / q.gd;
+                if stored <= 0.0 || z > (1.0 / stored) * (1.0 + TOLERANCE) {
+                    continue;
+                }
+                let c = crate::views::blend::sample_on_surface(image, gd, q.uv, z);
                 *texel = c.truncate().extend(1.0);
             }
         });

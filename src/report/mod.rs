@@ -1,12 +1,13 @@
 //! The demo report: `trompe demo` renders the scenes shipped in `scenes/`, measures every method
 //! against the exact one, and writes `index.html` — run metadata, a table of contents, then one
-//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `relief`), each built as data and
+//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `relief`, `master`), each built as data and
 //! written by the one HTML writer in `html`. A new capability adds a section file and one line
 //! in `demo`.
 
 mod foundation;
 pub mod html;
 mod impostors;
+mod master;
 mod maze;
 mod relief;
 mod views;
@@ -48,6 +49,9 @@ pub enum ReportError {
     /// A relief walk failed.
     #[error(transparent)]
     Relief(Box<crate::relief::ReliefError>),
+    /// A Master Texture encoding failed.
+    #[error(transparent)]
+    Master(Box<crate::master::MasterError>),
     /// A camera of a shipped scene is invalid.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
@@ -142,6 +146,9 @@ pub fn demo(
     let t = std::time::Instant::now();
     report.sections.push(relief::section(inputs, out)?);
     timed("relief impostors", t);
+    let t = std::time::Instant::now();
+    report.sections.push(master::section(inputs, out)?);
+    timed("master textures", t);
     io::write_png(&out.join(html::SCALE_FILE), &flip_scale()?)?;
     let mut run = Section::new("run", "This run");
     run.paragraph(format!(

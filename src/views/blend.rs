@@ -252,7 +252,12 @@ const SAME_SURFACE: f64 = 0.05;
 pub(crate) fn sample_on_surface(img: &Image<Rgba>, gd: &Image<f32>, px: DVec2, z: f64) -> Rgba {
     let (w, h) = img.size();
     let (fx, fy) = (px.x - 0.5, px.y - 0.5);
-    let (x0, y0) = (fx.floor(), fy.floor());
+    // floor without a libm call (x86-64's baseline has no rounding instruction).
+    let floor = |v: f64| {
+        let i = v as i64 as f64;
+        if i > v { i - 1.0 } else { i }
+    };
+    let (x0, y0) = (floor(fx), floor(fy));
     let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
     let clamp = |v: f64, n: u32| (v as i64).clamp(0, n as i64 - 1) as u32;
     let mut sum = Vec4::ZERO;
