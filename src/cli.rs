@@ -145,7 +145,8 @@ pub enum MasterCommand {
     Encode(MasterEncodeArgs),
     /// Render the mesh from a scene's camera, view-dependently from the master textures.
     Render(MasterRenderArgs),
-    /// Propagate an edit of one view's image to every view's master texture.
+    /// Propagate an edit to every view's master texture: one view's image as an artist changed
+    /// it, or an effect (a shadow) rendered from a new camera with and without it.
     Edit(MasterEditArgs),
 }
 
@@ -199,9 +200,16 @@ pub struct MasterEditArgs {
     #[arg(long)]
     mesh: PathBuf,
     /// The view that was edited (its index in masters.json, from 0).
-    #[arg(long)]
-    view: usize,
-    /// That view's image as edited (same size).
+    #[arg(long, required_unless_present = "scene", conflicts_with = "scene")]
+    view: Option<usize>,
+    /// Or an effect seen from a new camera: this scene file's camera, with --without the render
+    /// without the effect and --edited the render with it.
+    #[arg(long, requires = "without")]
+    scene: Option<PathBuf>,
+    /// The new camera's render without the effect (with --scene).
+    #[arg(long, requires = "scene")]
+    without: Option<PathBuf>,
+    /// The view's image as edited, or the new camera's render with the effect (same size).
     #[arg(long)]
     edited: PathBuf,
     /// Write the edited texels as they are instead of adding their change.
@@ -304,6 +312,7 @@ impl MasterEditArgs {
         }
         let mut plan = OutputPlan::new();
         plan.reads([&self.mesh, &self.edited, &self.encoding])
+            .reads(self.scene.iter().chain(self.without.iter()))
             .writes(self.output.join("masters.json"), &["json"])
             .creating_folders();
         check_plan(&plan)?;
@@ -316,10 +325,23 @@ impl MasterEditArgs {
         } else {
             trompe::master::edit::Apply::Add
         };
+        use trompe::master::job::EditSource;
+        let source = match (&self.scene, &self.without, self.view) {
+            (Some(scene), Some(without), _) => {
+                let scene = Scene::load(scene).context("loading the scene")?;
+                EditSource::Camera {
+                    camera: scene.view(scene.render.time)?.camera,
+                    without: io::read_png(without)
+                        .with_context(|| format!("reading {}", without.display()))?,
+                }
+            }
+            (_, _, Some(view)) => EditSource::View(view),
+            _ => bail!("give --view N, or --scene S with --without and --edited"),
+        };
         let summary = trompe::master::job::edit_folder(
             &self.encoding,
             &mesh,
-            self.view,
+            &source,
             &edited,
             apply,
             &self.output,

@@ -122,6 +122,44 @@ fn encode_render_and_edit_through_the_command_line() {
         .count();
     assert!(bluer > 100, "view 1 took {bluer} texels of the edit");
 
+    // An effect seen from a new camera: the scene's camera, a render without and with it.
+    let without = dir.join("without.png");
+    let with = dir.join("with.png");
+    let mut img = trompe::frame::io::read_png(&frame).unwrap();
+    trompe::frame::io::write_png(&without, &img).unwrap();
+    let (w, h) = img.size();
+    for y in h / 3..h / 2 {
+        for x in w / 5..w / 3 {
+            if img.get(x, y).w > 0.0 {
+                img.set(x, y, trompe::glam::Vec4::new(0.1, 0.1, 0.1, 1.0));
+            }
+        }
+    }
+    trompe::frame::io::write_png(&with, &img).unwrap();
+    let printed = ok(&trompe(&[
+        "master",
+        "edit",
+        &s(&enc),
+        "--mesh",
+        duck,
+        "--scene",
+        &s(&scene),
+        "--without",
+        &s(&without),
+        "--edited",
+        &s(&with),
+        "-o",
+        &s(&dir.join("shadowed")),
+    ]));
+    assert!(printed.contains("propagated to 8 views"), "{printed}");
+    let changed: usize = printed
+        .split("changed ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    assert!(changed > 100, "{printed}");
+
     // Errors that name what is wrong.
     let teapot = common::asset("meshes/teapot.obj");
     let e = err(&trompe(&[

@@ -1,5 +1,5 @@
 //! The three jobs of `trompe master`: encode a COLMAP model's views of a mesh into a folder,
-//! render from a folder through a new camera, propagate an edit of one view to every view.
+//! render from a folder through a new camera, propagate an edit (of one view, or seen from a new camera) to every view.
 //! Each returns a summary the command line prints.
 
 use super::edit::{Apply, delta, propagate};
@@ -189,14 +189,30 @@ impl std::fmt::Display for EditSummary {
     }
 }
 
-/// Propagates an edit: `edited` is view `view`'s image as an artist changed it; its encoding's
-/// difference from the view's master texture is applied to every master texture — read,
-/// edited and written one at a time — and the edited encoding written into `out` (a folder
-/// other than `dir`).
+/// Where an edit comes from.
+#[derive(Clone, Debug)]
+pub enum EditSource {
+    /// View `N`'s image as an artist changed it: compared with its master texture.
+    View(usize),
+    /// A render through a new camera without the effect (the edited image is the render with
+    /// it): a shadow, a decal seen from anywhere.
+    Camera {
+        /// The camera (undistorted) both renders were made through.
+        camera: Pinhole,
+        /// The render without the effect.
+        without: Image<Rgba>,
+    },
+}
+
+/// Propagates an edit: `edited` is, per `source`, view N's image as changed or a new camera's
+/// render with the effect; the difference of its encoding (from the view's master texture, or
+/// from the encoding of the render without the effect) is applied to every master texture —
+/// read, edited and written one at a time — and the edited encoding written into `out` (a
+/// folder other than `dir`).
 pub fn edit_folder(
     dir: &Path,
     mesh: &Mesh,
-    view: usize,
+    source: &EditSource,
     edited: &Image<Rgba>,
     apply: Apply,
     out: &Path,
@@ -208,24 +224,43 @@ pub fn edit_folder(
             map: manifest.layout.faces.len(),
         });
     }
-    let stored = manifest.views.get(view).ok_or(MasterError::NoView {
-        view,
-        count: manifest.views.len(),
-    })?;
-    let camera = stored.pinhole();
-    let expected = (stored.size[0], stored.size[1]);
-    if edited.size() != expected {
-        return Err(MasterError::Size {
-            index: view,
-            got: edited.size(),
-            expected,
-        });
+    let (camera, index) = match source {
+        EditSource::View(view) => {
+            let stored = manifest.views.get(*view).ok_or(MasterError::NoView {
+                view: *view,
+                count: manifest.views.len(),
+            })?;
+            (stored.pinhole(), *view)
+        }
+        EditSource::Camera { camera, .. } => (camera.clone(), manifest.views.len()),
+    };
+    let expected = crate::camera::Projection::resolution(&camera);
+    for image in [
+        Some(edited),
+        match source {
+            EditSource::Camera { without, .. } => Some(without),
+            EditSource::View(_) => None,
+        },
+    ]
+    .into_iter()
+    .flatten()
+    {
+        if image.size() != expected {
+            return Err(MasterError::Size {
+                index,
+                got: image.size(),
+                expected,
+            });
+        }
     }
     let sizes: Vec<[u32; 2]> = manifest.layout.faces.iter().map(|f| f.size).collect();
     let atlas = Atlas::from_layout(mesh, manifest.layout.clone(), &sizes)?;
     let depth = DepthMap::through(&camera, mesh)?;
     let after = encode(&atlas, &camera, edited, &depth)?;
-    let before = load_master(dir, &manifest, view)?;
+    let before = match source {
+        EditSource::View(view) => load_master(dir, &manifest, *view)?,
+        EditSource::Camera { without, .. } => encode(&atlas, &camera, without, &depth)?,
+    };
     let d = delta(&before, &after, EDIT_THRESHOLD)?;
     drop(before);
     let edited_texels = d.pixels().iter().filter(|p| p.w > 0.0).count();
