@@ -330,7 +330,7 @@ impl MasterEditArgs {
             (Some(scene), Some(without), _) => {
                 let scene = Scene::load(scene).context("loading the scene")?;
                 EditSource::Camera {
-                    camera: scene.view(scene.render.time)?.camera,
+                    camera: Box::new(scene.view(scene.render.time)?.camera),
                     without: io::read_png(without)
                         .with_context(|| format!("reading {}", without.display()))?,
                 }

@@ -198,7 +198,7 @@ pub enum EditSource {
     /// it): a shadow, a decal seen from anywhere.
     Camera {
         /// The camera (undistorted) both renders were made through.
-        camera: Pinhole,
+        camera: Box<Pinhole>,
         /// The render without the effect.
         without: Image<Rgba>,
     },
@@ -232,7 +232,7 @@ pub fn edit_folder(
             })?;
             (stored.pinhole(), *view)
         }
-        EditSource::Camera { camera, .. } => (camera.clone(), manifest.views.len()),
+        EditSource::Camera { camera, .. } => ((**camera).clone(), manifest.views.len()),
     };
     let expected = crate::camera::Projection::resolution(&camera);
     for image in [
