@@ -143,6 +143,21 @@ pub fn load_manifest(dir: &Path) -> Result<Manifest, MasterError> {
             ),
         ));
     }
+    crate::frame::check_size(manifest.layout.width as u64, manifest.layout.height as u64)?;
+    for (face, f) in manifest.layout.faces.iter().enumerate() {
+        let [x, y, w, h] = f.bbox.map(u64::from);
+        let legs_ok = f
+            .size
+            .iter()
+            .all(|&s| (2..=super::layout::MAX_FACE_SIDE).contains(&s));
+        if !legs_ok || x + w > manifest.layout.width as u64 || y + h > manifest.layout.height as u64
+        {
+            return Err(err(
+                &path,
+                format!("face {face}: its box or legs do not fit the packing map"),
+            ));
+        }
+    }
     for (index, view) in manifest.views.iter().enumerate() {
         let file = &view.master;
         if file.contains(['/', '\\']) || file == ".." {

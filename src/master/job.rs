@@ -116,6 +116,18 @@ pub fn encode_folder(
                 name: view.name.clone(),
                 source,
             })?;
+            let (w, h) = view.intrinsics.size();
+            if img.size() != (w, h) {
+                return Err(crate::views::ViewsError::ImageSize {
+                    name: view.name.clone(),
+                    width: img.size().0,
+                    height: img.size().1,
+                    camera: view.camera_id,
+                    cw: w,
+                    ch: h,
+                }
+                .into());
+            }
             view.image = Some(img);
             crate::views::blend::undistorted_image(&view).ok_or(MasterError::NothingSeen)
         },

@@ -92,8 +92,8 @@ pub struct Layout {
 /// The box holding faces `a` and `b` (legs `(w, h)` each), `b` turned into the far corner with
 /// its hypotenuse at least [`GUTTER`] texels from `a`'s; sizes without the border.
 pub fn pair_box(a: [u32; 2], b: [u32; 2]) -> [u32; 2] {
-    let (wa, ha) = (a[0] as f64, a[1] as f64);
-    let (wb, hb) = (b[0] as f64, b[1] as f64);
+    let (wa, ha) = (a[0].max(1) as f64, a[1].max(1) as f64);
+    let (wb, hb) = (b[0].max(1) as f64, b[1].max(1) as f64);
     let norm = (1.0 / (wa * wa) + 1.0 / (ha * ha)).sqrt();
     let clear = |w: f64, h: f64| {
         // B's corners in the box: (W, H), (W − w_b, H), (W, H − h_b); each GUTTER beyond A's
