@@ -1,5 +1,7 @@
 //! Cameras: the [`Projection`] trait every camera model implements; the pinhole, orthographic and
-//! single-pole occlusion cameras (paper 1 §3–4; docs/conventions.md §1, §3).
+//! single-pole occlusion cameras (paper 1 §3–4; docs/conventions.md §1, §3); and the continuous
+//! 3-ray camera of paper 2 ([`C3rc`]), which is not a [`Projection`]: a point may have up to
+//! three images.
 //!
 //! A projection maps a world point to continuous image coordinates `(u, v)` (pixels, origin
 //! top-left, pixel centres at `+0.5`) and a **generalized depth** `gd` (docs/conventions.md §1.2):
@@ -10,11 +12,13 @@
 //! in the world point and non-negative exactly where `project` is valid. Projection arithmetic is
 //! `f64` (docs/conventions.md: "use f64 for all geometry").
 
+mod c3rc;
 mod graph;
 mod orthographic;
 mod pinhole;
 mod spoc;
 
+pub use c3rc::{C3rc, C3rcProjection, real_roots};
 pub use graph::{Frustum, FrustumProjection, GraphCamera, Plane, face_map};
 pub use orthographic::Orthographic;
 pub use pinhole::Pinhole;
