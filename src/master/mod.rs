@@ -9,7 +9,7 @@
 //! * [`encode`] — a view's image warped into the atlas, occluded texels marked (alpha 0).
 //! * [`render`] — VDTM / ULR rendering from the master textures.
 //! * [`edit`] — edits propagated to every view by their delta in master space.
-//! * [`file`] — master textures as PNG, the map as JSON, the mesh with its one UV set as glTF.
+//! * [`file`](mod@file) — master textures as PNG, the map as JSON, the mesh with its one UV set as glTF.
 //!
 //! Invariants: texel `(i, j)` of every master texture holds the same surface point (its centre
 //! mapped through the face's barycentrics; the surface point is the same in every view); a

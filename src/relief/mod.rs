@@ -5,14 +5,14 @@
 //!
 //! * [`ReliefFrame`], [`ReliefImpostor`] — the base plane, its texel axes and the images on it.
 //! * [`shader`] — the software shader: impostor generation and the true render it stands for.
-//! * [`prewarp`] — the relief pre-warp (paper Eq. 2–3), two 1-D passes in occlusion-compatible
+//! * [`prewarp`](mod@prewarp) — the relief pre-warp (paper Eq. 2–3), two 1-D passes in occlusion-compatible
 //!   order with two-neighbour hole filling, direct and by lookup table (§5).
 //! * [`texture`] — the texture-mapping phase: the pre-warped image on the base quad, drawn into
 //!   a frame with per-pixel depth.
 //! * [`mcmillan`] — McMillan's full 3-D warp of a perspective depth image (Eq. 1), the reference.
 //! * [`validity`] — the interpolated-texel ratio and the critical-point heuristic (§3).
 //! * [`pipeline`] — the warping loop and the rendering thread, the state machine, the cache.
-//! * [`walk`] — a camera path walked through the pipeline and scored against the true render.
+//! * [`walk`](mod@walk) — a camera path walked through the pipeline and scored against the true render.
 //!
 //! Invariants: the base plane is the front of the object (paper Fig. 2: the image plane of the
 //! orthographic camera that made it); a displacement `d` is a signed height along its unit
