@@ -190,7 +190,6 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     // orbit, judged over the 45° that follow.
     let eyes: Vec<glam::Vec3> = cameras
         .iter()
-        .step_by(1)
         .map(|(_, c)| c.position().as_vec3())
         .collect();
     let mut judged_table = Table::new([
