@@ -13,6 +13,12 @@ use trompe::impostor::{BakeSettings, CameraChoice, Subject, ViewCamera, bake};
 use trompe::render::{self, Method, Progress, Timings};
 use trompe::scene::Scene;
 
+mod master;
+mod relief;
+
+pub use master::MasterCommand;
+pub use relief::ReliefArgs;
+
 /// Largest impostor side the CLI accepts: a square image within the frame limits
 /// ([`trompe::frame::MAX_PIXELS`]).
 const MAX_IMPOSTOR_SIDE: i64 = 8192;
@@ -135,355 +141,6 @@ pub enum ViewsCommand {
     Score(ScoreArgs),
     /// Render the mesh from a scene file's camera, textured from the views.
     Render(ViewsRenderArgs),
-}
-
-/// `trompe master …`.
-#[derive(Subcommand, Debug)]
-pub enum MasterCommand {
-    /// Encode every view of a COLMAP model of a mesh: master_NNNN.png, masters.json (packing
-    /// map, one UV set, cameras), bake.png (view-independent) and mesh.glb textured by it.
-    Encode(MasterEncodeArgs),
-    /// Render the mesh from a scene's camera, view-dependently from the master textures.
-    Render(MasterRenderArgs),
-    /// Propagate an edit to every view's master texture: one view's image as an artist changed
-    /// it, or an effect (a shadow) rendered from a new camera with and without it.
-    Edit(MasterEditArgs),
-}
-
-/// `trompe master encode`.
-#[derive(clap::Args, Debug)]
-pub struct MasterEncodeArgs {
-    /// The COLMAP model's folder (text or binary).
-    model: PathBuf,
-    /// The mesh, in the model's frame.
-    #[arg(long)]
-    mesh: PathBuf,
-    /// The images' folder (default: the model's folder, or its images/).
-    #[arg(long)]
-    images: Option<PathBuf>,
-    /// Texels a pixel of a face's largest view (the paper: 1).
-    #[arg(long, default_value_t = trompe::master::DEFAULT_SCALE)]
-    scale: f64,
-    /// Output folder (new or empty, or an earlier encoding's).
-    #[arg(short, long)]
-    output: PathBuf,
-}
-
-/// `trompe master render`.
-#[derive(clap::Args, Debug)]
-pub struct MasterRenderArgs {
-    /// A folder `trompe master encode` wrote.
-    encoding: PathBuf,
-    /// The mesh it was encoded for.
-    #[arg(long)]
-    mesh: PathBuf,
-    /// A scene file whose camera to render from (its objects are ignored).
-    #[arg(long)]
-    scene: PathBuf,
-    /// Weighting (ulr or vdtm; the per-face ones fall back to the nearest view).
-    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
-    weights: WeightsArg,
-    /// Most views blended at a point.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
-    k: u32,
-    /// Output image (.png or .exr).
-    #[arg(short, long)]
-    output: PathBuf,
-}
-
-/// `trompe master edit`.
-#[derive(clap::Args, Debug)]
-pub struct MasterEditArgs {
-    /// A folder `trompe master encode` wrote.
-    encoding: PathBuf,
-    /// The mesh it was encoded for.
-    #[arg(long)]
-    mesh: PathBuf,
-    /// The view that was edited (its index in masters.json, from 0).
-    #[arg(long, required_unless_present = "scene", conflicts_with = "scene")]
-    view: Option<usize>,
-    /// Or an effect seen from a new camera: this scene file's camera, with --without the render
-    /// without the effect and --edited the render with it.
-    #[arg(long, requires = "without")]
-    scene: Option<PathBuf>,
-    /// The new camera's render without the effect (with --scene).
-    #[arg(long, requires = "scene")]
-    without: Option<PathBuf>,
-    /// The view's image as edited, or the new camera's render with the effect (same size).
-    #[arg(long)]
-    edited: PathBuf,
-    /// Write the edited texels as they are instead of adding their change.
-    #[arg(long)]
-    replace: bool,
-    /// Output folder for the edited encoding (new or empty; not the input).
-    #[arg(short, long)]
-    output: PathBuf,
-}
-
-/// Refuses a folder holding files a master encoding did not write.
-fn claim_master_folder(out: &Path) -> Result<()> {
-    if out.exists() {
-        let foreign = std::fs::read_dir(out)
-            .with_context(|| format!("reading {}", out.display()))?
-            .next()
-            .is_some()
-            && !out.join("masters.json").is_file();
-        if foreign {
-            bail!(
-                "{}: the folder holds files that are not a master encoding; give an empty or new folder",
-                out.display()
-            );
-        }
-    }
-    std::fs::create_dir_all(out).with_context(|| format!("making {}", out.display()))
-}
-
-impl MasterEncodeArgs {
-    fn encode(&self) -> Result<()> {
-        if !(self.scale.is_finite() && (0.25..=16.0).contains(&self.scale)) {
-            bail!("--scale {}: must be between 0.25 and 16", self.scale);
-        }
-        let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.model])
-            .reads(self.images.iter())
-            .writes(self.output.join("masters.json"), &["json"])
-            .creating_folders();
-        check_plan(&plan)?;
-        claim_master_folder(&self.output)?;
-        let mesh = load_mesh(&self.mesh)?;
-        let count = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?
-            .views
-            .len();
-        let progress = bar("encoding views", count as u64);
-        let summary = trompe::master::job::encode_folder(
-            &self.model,
-            self.images.as_deref(),
-            &mesh,
-            Some(self.scale),
-            &self.output,
-            progress.as_ref(),
-        )?;
-        println!("{summary}");
-        println!(
-            "wrote {} files to {}",
-            summary.files.len(),
-            self.output.display()
-        );
-        Ok(())
-    }
-}
-
-impl MasterRenderArgs {
-    fn render(&self) -> Result<()> {
-        let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.scene, &self.encoding])
-            .writes(&self.output, &["png", "exr"]);
-        check_plan(&plan)?;
-        let mesh = load_mesh(&self.mesh)?;
-        let scene = Scene::load(&self.scene).context("loading the scene")?;
-        let camera = scene.view(scene.render.time)?.camera;
-        let settings = trompe::views::BlendSettings {
-            weighting: self.weights.weighting(),
-            k: self.k as usize,
-            ..Default::default()
-        };
-        let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
-        io::write_color(&self.output, &b.image)?;
-        println!(
-            "wrote {}: {} pixels show the mesh, {} of them seen by no view",
-            self.output.display(),
-            b.covered,
-            b.holes
-        );
-        Ok(())
-    }
-}
-
-impl MasterEditArgs {
-    fn edit(&self) -> Result<()> {
-        let same = std::fs::canonicalize(&self.output).ok().is_some()
-            && std::fs::canonicalize(&self.output).ok()
-                == std::fs::canonicalize(&self.encoding).ok();
-        if same {
-            bail!(
-                "{}: the edited encoding goes into a new folder, not over the one it edits",
-                self.output.display()
-            );
-        }
-        let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.edited, &self.encoding])
-            .reads(self.scene.iter().chain(self.without.iter()))
-            .writes(self.output.join("masters.json"), &["json"])
-            .creating_folders();
-        check_plan(&plan)?;
-        claim_master_folder(&self.output)?;
-        let mesh = load_mesh(&self.mesh)?;
-        let edited = io::read_png(&self.edited)
-            .with_context(|| format!("reading {}", self.edited.display()))?;
-        let apply = if self.replace {
-            trompe::master::edit::Apply::Replace
-        } else {
-            trompe::master::edit::Apply::Add
-        };
-        use trompe::master::job::EditSource;
-        let source = match (&self.scene, &self.without, self.view) {
-            (Some(scene), Some(without), _) => {
-                let scene = Scene::load(scene).context("loading the scene")?;
-                EditSource::Camera {
-                    camera: Box::new(scene.view(scene.render.time)?.camera),
-                    without: io::read_png(without)
-                        .with_context(|| format!("reading {}", without.display()))?,
-                }
-            }
-            (_, _, Some(view)) => EditSource::View(view),
-            _ => bail!("give --view N, or --scene S with --without and --edited"),
-        };
-        let summary = trompe::master::job::edit_folder(
-            &self.encoding,
-            &mesh,
-            &source,
-            &edited,
-            apply,
-            &self.output,
-        )?;
-        println!("{summary}");
-        println!("wrote {}", self.output.display());
-        Ok(())
-    }
-}
-
-/// `trompe relief`.
-#[derive(clap::Args, Debug)]
-pub struct ReliefArgs {
-    /// Scene file (its camera path, or an orbit around its `look_at` when it has none).
-    scene: PathBuf,
-    /// Output folder: frame_NNNN.png for every frame, walk.csv, and with --truth the true
-    /// renders truth_NNNN.png.
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Frames along the path.
-    #[arg(long, default_value_t = 120, value_parser = clap::value_parser!(u32).range(1..=100_000))]
-    frames: u32,
-    /// Relief resolution, texels a side.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(4..=4096))]
-    resolution: u32,
-    /// Objects drawn as relief impostors, by scene name (repeatable; default: every object).
-    #[arg(long = "object", value_name = "NAME")]
-    objects: Vec<String>,
-    /// Interpolated share (interpolated over direct texels) past which an impostor is
-    /// obsolete; the critical-point heuristic judges it each frame.
-    #[arg(long, default_value_t = trompe::relief::validity::RATIO_THRESHOLD)]
-    threshold: f64,
-    /// Store displacements as f32 instead of the paper's eight bits.
-    #[arg(long)]
-    f32_depth: bool,
-    /// Deterministic mode: use each new impostor exactly this many frames after its request.
-    #[arg(long, value_name = "FRAMES", value_parser = clap::value_parser!(u32).range(0..=1000))]
-    deterministic: Option<u32>,
-    /// Camera-path prediction: make new impostors for where the eye will be this many frames
-    /// ahead.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=1000))]
-    predict: u32,
-    /// Skip the true render and the scores (the walk then runs at its own pace).
-    #[arg(long)]
-    no_score: bool,
-    /// Also write each frame's true render.
-    #[arg(long)]
-    truth: bool,
-}
-
-impl ReliefArgs {
-    fn walk(&self) -> Result<()> {
-        use trompe::relief::{DepthEncoding, PipelineSettings, WalkSettings, walk};
-        if !(self.threshold.is_finite() && self.threshold > 0.0) {
-            bail!(
-                "--threshold {}: must be a positive share, e.g. 0.2",
-                self.threshold
-            );
-        }
-        let out = &self.output;
-        if out.exists() {
-            let foreign = std::fs::read_dir(out)
-                .with_context(|| format!("reading {}", out.display()))?
-                .next()
-                .is_some()
-                && !out.join("walk.csv").is_file();
-            if foreign {
-                bail!(
-                    "{}: the folder holds files that are not a relief walk; give an empty or new folder",
-                    out.display()
-                );
-            }
-        }
-        let scene = Scene::load(&self.scene).context("loading the scene")?;
-        for w in &scene.warnings {
-            eprintln!("warning: {w}");
-        }
-        let mut objects = Vec::new();
-        for name in &self.objects {
-            let id = scene
-                .objects
-                .iter()
-                .position(|o| &o.name == name)
-                .with_context(|| {
-                    let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
-                    format!(
-                        "{}: no object named {name:?} (it has {})",
-                        self.scene.display(),
-                        names.join(", ")
-                    )
-                })?;
-            objects.push(id);
-        }
-        let mut plan = OutputPlan::new();
-        plan.reads(scene.files.iter().cloned())
-            .writes(out.join("walk.csv"), &["csv"])
-            .creating_folders();
-        check_plan(&plan)?;
-        plan.make_folders()
-            .with_context(|| format!("making {}", out.display()))?;
-        let settings = WalkSettings {
-            frames: self.frames,
-            pipeline: PipelineSettings {
-                resolution: self.resolution,
-                first_resolution: Some((self.resolution / 4).max(4)),
-                encoding: if self.f32_depth {
-                    DepthEncoding::F32
-                } else {
-                    DepthEncoding::U8
-                },
-                threshold: self.threshold,
-                deterministic: self.deterministic,
-                predict: self.predict,
-                ..Default::default()
-            },
-            objects,
-            score: !self.no_score,
-        };
-        let progress = bar("walking", self.frames as u64);
-        let write = |path: PathBuf, image: &trompe::Image<trompe::Rgba>| {
-            io::write_png(&path, image).map_err(trompe::relief::ReliefError::Frame)
-        };
-        let mut sink = |i: usize, frame: &trompe::Frame, truth: Option<&trompe::Frame>| {
-            write(out.join(format!("frame_{i:04}.png")), &frame.color)?;
-            if let (true, Some(t)) = (self.truth, truth) {
-                write(out.join(format!("truth_{i:04}.png")), &t.color)?;
-            }
-            Ok(())
-        };
-        let report = walk(&scene, &settings, progress.as_ref(), &mut sink)
-            .with_context(|| format!("walking {}", self.scene.display()))?;
-        let csv = out.join("walk.csv");
-        trompe::files::write_atomically(&csv, report.csv().as_bytes())
-            .with_context(|| format!("writing {}", csv.display()))?;
-        println!("{report}");
-        println!(
-            "wrote {} frames and walk.csv to {}",
-            self.frames,
-            out.display()
-        );
-        Ok(())
-    }
 }
 
 /// `trompe views capture`.
@@ -618,19 +275,7 @@ impl CaptureArgs {
     fn capture(&self) -> Result<()> {
         use trompe::views::capture::{CaptureSettings, Rig, capture, write_capture};
         let out = &self.output;
-        if out.exists() {
-            let foreign = std::fs::read_dir(out)
-                .with_context(|| format!("reading {}", out.display()))?
-                .next()
-                .is_some()
-                && !out.join("cameras.txt").is_file();
-            if foreign {
-                bail!(
-                    "{}: the folder holds files that are not a capture; give an empty or new folder",
-                    out.display()
-                );
-            }
-        }
+        refuse_foreign_folder(out, "cameras.txt", "a capture")?;
         let mut plan = OutputPlan::new();
         plan.reads([&self.mesh])
             .writes(out.join("cameras.txt"), &["txt"])
@@ -967,6 +612,25 @@ fn load_mesh(path: &Path) -> Result<trompe::Mesh> {
     Ok(loaded.mesh)
 }
 
+/// Refuses an output folder that holds files but not `marker` (the file a `what` always
+/// writes): nothing of a user's is overwritten by a command that fills a folder.
+fn refuse_foreign_folder(out: &Path, marker: &str, what: &str) -> Result<()> {
+    if out.exists() {
+        let foreign = std::fs::read_dir(out)
+            .with_context(|| format!("reading {}", out.display()))?
+            .next()
+            .is_some()
+            && !out.join(marker).is_file();
+        if foreign {
+            bail!(
+                "{}: the folder holds files that are not {what}; give an empty or new folder",
+                out.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Checks a command's outputs against what it reads, before any work ([`OutputPlan::check`]).
 fn check_plan(plan: &OutputPlan) -> Result<()> {
     Ok(plan.check()?)
@@ -1203,45 +867,26 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             print_timings(verbose, &report.timings);
         }
         Command::Relief(args) => args.walk()?,
-        Command::Master(MasterCommand::Encode(args)) => args.encode()?,
-        Command::Master(MasterCommand::Render(args)) => args.render()?,
-        Command::Master(MasterCommand::Edit(args)) => args.edit()?,
+        Command::Master(command) => command.run()?,
         Command::Views(ViewsCommand::Capture(args)) => args.capture()?,
         Command::Views(ViewsCommand::Score(args)) => args.score()?,
         Command::Views(ViewsCommand::Render(args)) => args.render()?,
         Command::Bench {
-            suite: BenchSuite::Relief,
+            suite: suite @ (BenchSuite::Relief | BenchSuite::Master),
             quick,
             ..
         } => {
             let inputs = trompe::eval::fixtures::Shipped::locate();
-            let figures = with_spinner("timing relief workloads", || {
-                trompe::bench::relief::relief(&inputs, quick)
-            })?;
+            let (name, figures) = with_spinner("timing", || match suite {
+                BenchSuite::Master => ("master", trompe::bench::master::master(&inputs, quick)),
+                _ => ("relief", trompe::bench::relief::relief(&inputs, quick)),
+            });
             let report = trompe::bench::BenchReport {
                 heading: format!(
-                    "trompe bench relief, {} threads",
+                    "trompe bench {name}, {} threads",
                     rayon::current_num_threads()
                 ),
-                figures,
-            };
-            println!("{report}");
-        }
-        Command::Bench {
-            suite: BenchSuite::Master,
-            quick,
-            ..
-        } => {
-            let inputs = trompe::eval::fixtures::Shipped::locate();
-            let figures = with_spinner("timing master-texture encoding", || {
-                trompe::bench::master::master(&inputs, quick)
-            })?;
-            let report = trompe::bench::BenchReport {
-                heading: format!(
-                    "trompe bench master, {} threads",
-                    rayon::current_num_threads()
-                ),
-                figures,
+                figures: figures?,
             };
             println!("{report}");
         }

@@ -111,23 +111,7 @@ pub fn encode_folder(
         scale.unwrap_or(DEFAULT_SCALE),
         &mut |v| {
             let mut view = set.views[v].clone();
-            let path = set.image_folder.join(&view.name);
-            let img = io::read_color(&path).map_err(|source| crate::views::ViewsError::Image {
-                name: view.name.clone(),
-                source,
-            })?;
-            let (w, h) = view.intrinsics.size();
-            if img.size() != (w, h) {
-                return Err(crate::views::ViewsError::ImageSize {
-                    name: view.name.clone(),
-                    width: img.size().0,
-                    height: img.size().1,
-                    camera: view.camera_id,
-                    cw: w,
-                    ch: h,
-                }
-                .into());
-            }
+            let img = set.read_image(&view)?;
             view.image = Some(img);
             crate::views::blend::undistorted_image(&view).ok_or(MasterError::NothingSeen)
         },
@@ -139,16 +123,7 @@ pub fn encode_folder(
         },
         progress,
     )?;
-    let bake_path = out.join("bake.png");
-    io::write_png(&bake_path, &baked)?;
-    files.extend(save_manifest(
-        out,
-        &atlas.layout,
-        &cameras,
-        mesh,
-        "bake.png",
-    )?);
-    files.push(bake_path);
+    files.extend(finish_folder(out, &atlas, &cameras, mesh, &baked)?);
     let (exemplar_bytes, master_bytes) = storage(&atlas, &sizes);
     Ok(EncodeSummary {
         views: cameras.len(),
@@ -160,6 +135,22 @@ pub fn encode_folder(
         baked_whole: choice.iter().filter(|c| c.is_some()).count(),
         files,
     })
+}
+
+/// Writes what follows the master textures into `out`: the bake, `masters.json` and
+/// `mesh.glb` textured by the bake. Returns the files written.
+fn finish_folder(
+    out: &Path,
+    atlas: &Atlas,
+    cameras: &[(String, Pinhole)],
+    mesh: &Mesh,
+    baked: &Image<Rgba>,
+) -> Result<Vec<PathBuf>, MasterError> {
+    let bake_path = out.join("bake.png");
+    io::write_png(&bake_path, baked)?;
+    let mut files = save_manifest(out, &atlas.layout, cameras, mesh, "bake.png")?;
+    files.push(bake_path);
+    Ok(files)
 }
 
 /// Renders `mesh` through `camera` from the encoding in `dir`.
@@ -292,16 +283,7 @@ pub fn edit_folder(
         files.push(path);
     }
     let (baked, _) = baker.finish(&atlas);
-    let bake_path = out.join("bake.png");
-    io::write_png(&bake_path, &baked)?;
-    files.extend(save_manifest(
-        out,
-        &atlas.layout,
-        &cameras,
-        mesh,
-        "bake.png",
-    )?);
-    files.push(bake_path);
+    files.extend(finish_folder(out, &atlas, &cameras, mesh, &baked)?);
     Ok(EditSummary {
         edited: edited_texels,
         changed,

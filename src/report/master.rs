@@ -5,7 +5,7 @@
 //! module's software shader), and the storage table (paper Table 1).
 
 use super::html::{Figure, Section, Table};
-use super::{DemoInputs, ReportError};
+use super::{DemoInputs, ReportError, over};
 use crate::camera::Pinhole;
 use crate::frame::{Image, Rgba, io, metrics};
 use crate::master::edit::{Apply, delta, delta_from_camera, propagate};
@@ -25,16 +25,8 @@ impl From<MasterError> for ReportError {
     }
 }
 
-/// `image` over a light grey (alpha 0 shows as the grey).
-fn over_grey(image: &Image<Rgba>) -> Image<Rgba> {
-    image.map(|c| {
-        if c.w > 0.0 {
-            c
-        } else {
-            Vec4::new(0.8, 0.8, 0.8, 1.0)
-        }
-    })
-}
+/// What a texel or pixel no view sees shows in the figures: a light grey.
+const GREY: Vec4 = Vec4::new(0.8, 0.8, 0.8, 1.0);
 
 pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, ReportError> {
     let model = inputs.assets.join("gltf/Duck.glb");
@@ -57,7 +49,10 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         .clone()
         .ok_or_else(|| crate::views::ViewsError::Empty(model.clone()))?;
     io::write_png(&out.join("master-exemplar.png"), &exemplar)?;
-    io::write_png(&out.join("master-texture.png"), &over_grey(&enc.masters[0]))?;
+    io::write_png(
+        &out.join("master-texture.png"),
+        &over(GREY, &enc.masters[0]),
+    )?;
 
     // A new camera above the ring: from the masters and from the exemplars.
     let b = mesh.bounds();
@@ -93,11 +88,11 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let agreement = metrics::psnr(&from_exemplars.image, &from_masters.image, Some(&mask))?;
     io::write_png(
         &out.join("master-novel.png"),
-        &over_grey(&from_masters.image),
+        &over(GREY, &from_masters.image),
     )?;
     io::write_png(
         &out.join("master-novel-exemplars.png"),
-        &over_grey(&from_exemplars.image),
+        &over(GREY, &from_exemplars.image),
     )?;
 
     // Edit (a): a disc painted into exemplar 0, propagated, seen from the new camera.
@@ -121,7 +116,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let edited_view = render(&camera, &mesh, &enc.atlas.layout, &centres, &edited, &blend)?;
     io::write_png(
         &out.join("master-edit-a.png"),
-        &over_grey(&edited_view.image),
+        &over(GREY, &edited_view.image),
     )?;
 
     // Edit (b): the shadow of a sphere added above the Duck, seen from a new camera and
@@ -286,6 +281,6 @@ fn shadow_edit(
         192,
     )?;
     let shown = render(&seen_from, mesh, &enc.atlas.layout, centres, &edited, blend)?;
-    io::write_png(&out.join("master-edit-b.png"), &over_grey(&shown.image))?;
+    io::write_png(&out.join("master-edit-b.png"), &over(GREY, &shown.image))?;
     Ok(("master-edit-b.png".into(), changed))
 }

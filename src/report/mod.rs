@@ -189,6 +189,15 @@ fn claim_directory(out: &Path) -> Result<(), ReportError> {
     crate::files::write_atomically(&marker, b"written by trompe demo\n").map_err(io_err(&marker))
 }
 
+/// `image` over a uniform `background` (alpha 0 shows it): how a blend with holes or a master
+/// texture with unseen texels is shown beside a full image.
+fn over(
+    background: crate::frame::Rgba,
+    image: &crate::frame::Image<crate::frame::Rgba>,
+) -> crate::frame::Image<crate::frame::Rgba> {
+    image.map(|c| if c.w > 0.0 { c } else { background })
+}
+
 /// The FLIP colour scale, 0 on the left to 1 on the right.
 fn flip_scale() -> Result<crate::frame::Image<crate::frame::Rgba>, FrameError> {
     let mut ramp = crate::frame::Image::new(256, 1, 0.0f32)?;

@@ -4,8 +4,8 @@
 //! against the exact render — for ULR, VDTM and a best-view-per-face baseline.
 
 use super::html::{Figure, Section, Table};
-use super::{DemoInputs, ReportError};
-use crate::frame::{Image, Rgba, io, metrics};
+use super::{DemoInputs, ReportError, over};
+use crate::frame::{io, metrics};
 use crate::views::blend::{self, BlendSettings, Weighting};
 use crate::views::capture::{CaptureSettings, capture, capture_scene};
 use crate::views::score::{leave_one_out, name};
@@ -15,11 +15,6 @@ use std::path::Path;
 
 /// The capture's background radiance (capture scenes escape to a uniform grey).
 const BACKGROUND: Vec4 = Vec4::new(0.5, 0.5, 0.5, 1.0);
-
-/// `image` over the capture's background: what a holed blend looks like beside the truth.
-fn over_background(image: &Image<Rgba>) -> Image<Rgba> {
-    image.map(|c| if c.w > 0.0 { c } else { BACKGROUND })
-}
 
 pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, ReportError> {
     let model = inputs.assets.join("gltf/Duck.glb");
@@ -79,13 +74,13 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         };
         let b = blend::render(&view.pinhole(), &mesh, &set.views, &depth, &s, Some(left))?;
         let file = format!("views-left-out-{}.png", name(w).replace(' ', "-"));
-        io::write_png(&out.join(&file), &over_background(&b.image))?;
+        io::write_png(&out.join(&file), &over(BACKGROUND, &b.image))?;
         figures.push(Figure::new(
             file,
             format!("left out, rebuilt by {}", name(w)),
         ));
         if matches!(w, Weighting::Ulr { .. }) {
-            let heat = metrics::heat_map(&metrics::flip_map(&truth, &over_background(&b.image))?);
+            let heat = metrics::heat_map(&metrics::flip_map(&truth, &over(BACKGROUND, &b.image))?);
             io::write_png(&out.join("views-left-out-flip.png"), &heat)?;
             figures.push(Figure::heat_map(
                 "views-left-out-flip.png",
@@ -143,11 +138,11 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
                 io::write_png(&out.join("views-novel-exact.png"), &frame.color)?;
                 io::write_png(
                     &out.join("views-novel-ulr.png"),
-                    &over_background(&bl.image),
+                    &over(BACKGROUND, &bl.image),
                 )?;
                 let heat = metrics::heat_map(&metrics::flip_map(
                     &frame.color,
-                    &over_background(&bl.image),
+                    &over(BACKGROUND, &bl.image),
                 )?);
                 io::write_png(&out.join("views-novel-flip.png"), &heat)?;
                 novel_figures = vec![

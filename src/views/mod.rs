@@ -204,25 +204,31 @@ impl ViewSet {
 
     /// Loads every view's image, checking its size against its camera.
     pub fn load_images(&mut self) -> Result<(), ViewsError> {
-        for v in &mut self.views {
-            let path = self.image_folder.join(&v.name);
-            let img = crate::frame::io::read_color(&path).map_err(|source| ViewsError::Image {
-                name: v.name.clone(),
-                source,
-            })?;
-            let (w, h) = v.intrinsics.size();
-            if img.size() != (w, h) {
-                return Err(ViewsError::ImageSize {
-                    name: v.name.clone(),
-                    width: img.size().0,
-                    height: img.size().1,
-                    camera: v.camera_id,
-                    cw: w,
-                    ch: h,
-                });
-            }
-            v.image = Some(img);
+        for i in 0..self.views.len() {
+            let img = self.read_image(&self.views[i])?;
+            self.views[i].image = Some(img);
         }
         Ok(())
+    }
+
+    /// Reads `view`'s image from the image folder, checking its size against its camera.
+    pub fn read_image(&self, view: &CalibratedView) -> Result<Image<Rgba>, ViewsError> {
+        let path = self.image_folder.join(&view.name);
+        let img = crate::frame::io::read_color(&path).map_err(|source| ViewsError::Image {
+            name: view.name.clone(),
+            source,
+        })?;
+        let (w, h) = view.intrinsics.size();
+        if img.size() != (w, h) {
+            return Err(ViewsError::ImageSize {
+                name: view.name.clone(),
+                width: img.size().0,
+                height: img.size().1,
+                camera: view.camera_id,
+                cw: w,
+                ch: h,
+            });
+        }
+        Ok(img)
     }
 }

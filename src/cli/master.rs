@@ -1,0 +1,222 @@
+//! `trompe master encode|render|edit`: Master Texture Space (paper 5) on the command line —
+//! parse, call one `trompe::master::job` function, print its summary.
+
+use super::{WeightsArg, bar, check_plan, load_mesh, refuse_foreign_folder};
+use anyhow::{Context, Result, bail};
+use clap::Subcommand;
+use std::path::PathBuf;
+use trompe::files::OutputPlan;
+use trompe::frame::io;
+use trompe::scene::Scene;
+
+/// `trompe master …`.
+#[derive(Subcommand, Debug)]
+pub enum MasterCommand {
+    /// Encode every view of a COLMAP model of a mesh: master_NNNN.png, masters.json (packing
+    /// map, one UV set, cameras), bake.png (view-independent) and mesh.glb textured by it.
+    Encode(MasterEncodeArgs),
+    /// Render the mesh from a scene's camera, view-dependently from the master textures.
+    Render(MasterRenderArgs),
+    /// Propagate an edit to every view's master texture: one view's image as an artist changed
+    /// it, or an effect (a shadow) rendered from a new camera with and without it.
+    Edit(MasterEditArgs),
+}
+
+impl MasterCommand {
+    /// Runs the subcommand.
+    pub(super) fn run(&self) -> Result<()> {
+        match self {
+            MasterCommand::Encode(args) => args.encode(),
+            MasterCommand::Render(args) => args.render(),
+            MasterCommand::Edit(args) => args.edit(),
+        }
+    }
+}
+
+/// `trompe master encode`.
+#[derive(clap::Args, Debug)]
+pub struct MasterEncodeArgs {
+    /// The COLMAP model's folder (text or binary).
+    model: PathBuf,
+    /// The mesh, in the model's frame.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// The images' folder (default: the model's folder, or its images/).
+    #[arg(long)]
+    images: Option<PathBuf>,
+    /// Texels a pixel of a face's largest view (the paper: 1).
+    #[arg(long, default_value_t = trompe::master::DEFAULT_SCALE)]
+    scale: f64,
+    /// Output folder (new or empty, or an earlier encoding's).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `trompe master render`.
+#[derive(clap::Args, Debug)]
+pub struct MasterRenderArgs {
+    /// A folder `trompe master encode` wrote.
+    encoding: PathBuf,
+    /// The mesh it was encoded for.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// A scene file whose camera to render from (its objects are ignored).
+    #[arg(long)]
+    scene: PathBuf,
+    /// Weighting (ulr or vdtm; the per-face ones fall back to the nearest view).
+    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
+    weights: WeightsArg,
+    /// Most views blended at a point.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    k: u32,
+    /// Output image (.png or .exr).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `trompe master edit`.
+#[derive(clap::Args, Debug)]
+pub struct MasterEditArgs {
+    /// A folder `trompe master encode` wrote.
+    encoding: PathBuf,
+    /// The mesh it was encoded for.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// The view that was edited (its index in masters.json, from 0).
+    #[arg(long, required_unless_present = "scene", conflicts_with = "scene")]
+    view: Option<usize>,
+    /// Or an effect seen from a new camera: this scene file's camera, with --without the render
+    /// without the effect and --edited the render with it.
+    #[arg(long, requires = "without")]
+    scene: Option<PathBuf>,
+    /// The new camera's render without the effect (with --scene).
+    #[arg(long, requires = "scene")]
+    without: Option<PathBuf>,
+    /// The view's image as edited, or the new camera's render with the effect (same size).
+    #[arg(long)]
+    edited: PathBuf,
+    /// Write the edited texels as they are instead of adding their change.
+    #[arg(long)]
+    replace: bool,
+    /// Output folder for the edited encoding (new or empty; not the input).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+impl MasterEncodeArgs {
+    fn encode(&self) -> Result<()> {
+        if !(self.scale.is_finite() && (0.25..=16.0).contains(&self.scale)) {
+            bail!("--scale {}: must be between 0.25 and 16", self.scale);
+        }
+        let mut plan = OutputPlan::new();
+        plan.reads([&self.mesh, &self.model])
+            .reads(self.images.iter())
+            .writes(self.output.join("masters.json"), &["json"])
+            .creating_folders();
+        check_plan(&plan)?;
+        refuse_foreign_folder(&self.output, "masters.json", "a master encoding")?;
+        std::fs::create_dir_all(&self.output)
+            .with_context(|| format!("making {}", self.output.display()))?;
+        let mesh = load_mesh(&self.mesh)?;
+        let count = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?
+            .views
+            .len();
+        let progress = bar("encoding views", count as u64);
+        let summary = trompe::master::job::encode_folder(
+            &self.model,
+            self.images.as_deref(),
+            &mesh,
+            Some(self.scale),
+            &self.output,
+            progress.as_ref(),
+        )?;
+        println!("{summary}");
+        println!(
+            "wrote {} files to {}",
+            summary.files.len(),
+            self.output.display()
+        );
+        Ok(())
+    }
+}
+
+impl MasterRenderArgs {
+    fn render(&self) -> Result<()> {
+        let mut plan = OutputPlan::new();
+        plan.reads([&self.mesh, &self.scene, &self.encoding])
+            .writes(&self.output, &["png", "exr"]);
+        check_plan(&plan)?;
+        let mesh = load_mesh(&self.mesh)?;
+        let scene = Scene::load(&self.scene).context("loading the scene")?;
+        let camera = scene.view(scene.render.time)?.camera;
+        let settings = trompe::views::BlendSettings {
+            weighting: self.weights.weighting(),
+            k: self.k as usize,
+            ..Default::default()
+        };
+        let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
+        io::write_color(&self.output, &b.image)?;
+        println!(
+            "wrote {}: {} pixels show the mesh, {} of them seen by no view",
+            self.output.display(),
+            b.covered,
+            b.holes
+        );
+        Ok(())
+    }
+}
+
+impl MasterEditArgs {
+    fn edit(&self) -> Result<()> {
+        let same = std::fs::canonicalize(&self.output).ok().is_some()
+            && std::fs::canonicalize(&self.output).ok()
+                == std::fs::canonicalize(&self.encoding).ok();
+        if same {
+            bail!(
+                "{}: the edited encoding goes into a new folder, not over the one it edits",
+                self.output.display()
+            );
+        }
+        let mut plan = OutputPlan::new();
+        plan.reads([&self.mesh, &self.edited, &self.encoding])
+            .reads(self.scene.iter().chain(self.without.iter()))
+            .writes(self.output.join("masters.json"), &["json"])
+            .creating_folders();
+        check_plan(&plan)?;
+        refuse_foreign_folder(&self.output, "masters.json", "a master encoding")?;
+        std::fs::create_dir_all(&self.output)
+            .with_context(|| format!("making {}", self.output.display()))?;
+        let mesh = load_mesh(&self.mesh)?;
+        let edited = io::read_png(&self.edited)
+            .with_context(|| format!("reading {}", self.edited.display()))?;
+        let apply = if self.replace {
+            trompe::master::edit::Apply::Replace
+        } else {
+            trompe::master::edit::Apply::Add
+        };
+        use trompe::master::job::EditSource;
+        let source = match (&self.scene, &self.without, self.view) {
+            (Some(scene), Some(without), _) => {
+                let scene = Scene::load(scene).context("loading the scene")?;
+                EditSource::Camera {
+                    camera: Box::new(scene.view(scene.render.time)?.camera),
+                    without: io::read_png(without)
+                        .with_context(|| format!("reading {}", without.display()))?,
+                }
+            }
+            (_, _, Some(view)) => EditSource::View(view),
+            _ => bail!("give --view N, or --scene S with --without and --edited"),
+        };
+        let summary = trompe::master::job::edit_folder(
+            &self.encoding,
+            &mesh,
+            &source,
+            &edited,
+            apply,
+            &self.output,
+        )?;
+        println!("{summary}");
+        println!("wrote {}", self.output.display());
+        Ok(())
+    }
+}
