@@ -9,6 +9,8 @@
 //! Invariants: geometry in `f64`; construction rays unit length; a projection's barycentrics are
 //! all `≥ −`[`BARY_EPS`] and its `λ ≥ 0`; the image point is `Σ bᵢ vᵢ` on the reflector.
 
+mod volume;
+
 use glam::DVec3;
 
 /// Tolerance on barycentrics for a projection to count as inside the base triangle.
@@ -75,7 +77,15 @@ impl C3rc {
     /// Every projection of `q` with `0 ≤ λ ≤ lambda_max`, nearest sweep first.
     pub fn project(&self, q: DVec3, lambda_max: f64) -> Vec<C3rcProjection> {
         let mut out = Vec::new();
-        for lambda in real_roots(self.cubic(q)) {
+        self.project_each(q, lambda_max, |p| out.push(p));
+        out
+    }
+
+    /// Calls `f` with every projection of `q` with `0 ≤ λ ≤ lambda_max`, nearest sweep first,
+    /// without allocating (the splatting loop's form of [`C3rc::project`]).
+    pub fn project_each(&self, q: DVec3, lambda_max: f64, mut f: impl FnMut(C3rcProjection)) {
+        let roots = roots_of(self.cubic(q));
+        for &lambda in roots.as_slice() {
             // A root a rounding error below 0 is the base itself.
             let lambda = if (-1e-12..0.0).contains(&lambda) {
                 0.0
@@ -99,14 +109,20 @@ impl C3rc {
                 continue;
             }
             let dir: DVec3 = (0..3).map(|k| self.d[k] * bary[k]).sum();
-            out.push(C3rcProjection {
+            f(C3rcProjection {
                 lambda,
                 bary,
                 point: (0..3).map(|k| self.v[k] * bary[k]).sum(),
                 distance: lambda * dir.length(),
             });
         }
-        out
+    }
+
+    /// Whether `q` has at least one projection with `0 ≤ λ ≤ lambda_max`.
+    pub fn sees(&self, q: DVec3, lambda_max: f64) -> bool {
+        let mut any = false;
+        self.project_each(q, lambda_max, |_| any = true);
+        any
     }
 
     /// The sweep ranges `[λa, λb]` (within `[0, lambda_max]`) where a point may have more than
@@ -150,69 +166,103 @@ impl C3rc {
 /// degrees when leading coefficients vanish (relative to the largest), each polished by Newton
 /// steps; sorted, duplicates within 1e-12 merged.
 pub fn real_roots(c: [f64; 4]) -> Vec<f64> {
+    roots_of(c).as_slice().to_vec()
+}
+
+/// At most three real roots, without allocating.
+#[derive(Clone, Copy, Debug, Default)]
+struct Roots {
+    r: [f64; 3],
+    len: usize,
+}
+
+impl Roots {
+    fn push(&mut self, x: f64) {
+        if self.len < 3 && x.is_finite() {
+            self.r[self.len] = x;
+            self.len += 1;
+        }
+    }
+    fn as_slice(&self) -> &[f64] {
+        &self.r[..self.len]
+    }
+}
+
+/// [`real_roots`] into a fixed array.
+fn roots_of(c: [f64; 4]) -> Roots {
+    let mut roots = Roots::default();
     let scale = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if scale == 0.0 || !scale.is_finite() {
-        return Vec::new();
+        return roots;
     }
     let c = c.map(|v| v / scale);
     let eval = |x: f64| ((c[3] * x + c[2]) * x + c[1]) * x + c[0];
     let deriv = |x: f64| (3.0 * c[3] * x + 2.0 * c[2]) * x + c[1];
     let tiny = 1e-12;
-    let mut roots: Vec<f64> = if c[3].abs() > tiny {
-        cubic_roots(c[2] / c[3], c[1] / c[3], c[0] / c[3])
+    if c[3].abs() > tiny {
+        roots = cubic_roots(c[2] / c[3], c[1] / c[3], c[0] / c[3]);
     } else if c[2].abs() > tiny {
         let (a, b, k) = (c[2], c[1], c[0]);
         let disc = b * b - 4.0 * a * k;
-        if disc < 0.0 {
-            Vec::new()
-        } else {
+        if disc >= 0.0 {
             // The stable form: no cancellation between −b and √disc.
             let s = -0.5 * (b + b.signum() * disc.sqrt());
             if s == 0.0 {
-                vec![0.0]
+                roots.push(0.0);
             } else {
-                vec![s / a, k / s]
+                roots.push(s / a);
+                roots.push(k / s);
             }
         }
     } else if c[1].abs() > tiny {
-        vec![-c[0] / c[1]]
-    } else {
-        Vec::new()
-    };
-    for r in &mut roots {
+        roots.push(-c[0] / c[1]);
+    }
+    let mut out = Roots::default();
+    for &r0 in roots.as_slice() {
+        let mut r = r0;
         for _ in 0..2 {
-            let d = deriv(*r);
+            let d = deriv(r);
             if d.abs() > 1e-300 {
-                let next = *r - eval(*r) / d;
+                let next = r - eval(r) / d;
                 if next.is_finite() {
-                    *r = next;
+                    r = next;
                 }
             }
         }
+        out.push(r);
     }
-    roots.retain(|r| r.is_finite());
-    roots.sort_by(f64::total_cmp);
-    roots.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * (1.0 + b.abs()));
-    roots
+    let s = &mut out.r[..out.len];
+    s.sort_by(f64::total_cmp);
+    // Merge duplicates.
+    let mut merged = Roots::default();
+    for &r in out.as_slice() {
+        match merged.as_slice().last() {
+            Some(&last) if (r - last).abs() <= 1e-12 * (1.0 + last.abs()) => {}
+            _ => merged.push(r),
+        }
+    }
+    merged
 }
 
 /// Real roots of the monic cubic `x³ + a x² + b x + c` (trigonometric form for three roots,
 /// Cardano's for one).
-fn cubic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
+fn cubic_roots(a: f64, b: f64, c: f64) -> Roots {
     let q = (a * a - 3.0 * b) / 9.0;
     let r = (2.0 * a * a * a - 9.0 * a * b + 27.0 * c) / 54.0;
     let shift = a / 3.0;
+    let mut roots = Roots::default();
     if r * r < q * q * q {
         let theta = (r / (q * q * q).sqrt()).clamp(-1.0, 1.0).acos();
         let m = -2.0 * q.sqrt();
-        (0..3)
-            .map(|k| m * ((theta + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos() - shift)
-            .collect()
+        for k in 0..3 {
+            roots.push(m * ((theta + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos() - shift);
+        }
     } else {
         let s = -r.signum() * (r.abs() + (r * r - q * q * q).sqrt()).cbrt();
         let t = if s == 0.0 { 0.0 } else { q / s };
-        vec![s + t - shift]
+        roots.push(s + t - shift);
     }
+    roots
 }
 
 #[cfg(test)]
@@ -412,5 +462,55 @@ mod tests {
         // The test means something: the concave mirrors do project points several times.
         println!("{multiple} of 3000 points had more than one projection");
         assert!(multiple > 50, "{multiple}");
+    }
+
+    #[test]
+    fn box_culling_never_drops_a_box_holding_a_seen_point() {
+        let mut seed = 41;
+        let (mut kept_seen, mut dropped, mut kept_empty) = (0, 0, 0);
+        for case in 0..600 {
+            let c = if case % 2 == 0 {
+                camera(&mut seed)
+            } else {
+                concave(&mut seed)
+            };
+            let lambda_max = if case % 3 == 0 { f64::INFINITY } else { 4.0 };
+            // Boxes of every size around the volume's first few units.
+            let centre = DVec3::new(
+                3.0 * rng(&mut seed) - 1.0,
+                3.0 * rng(&mut seed) - 1.0,
+                4.0 * rng(&mut seed) - 0.5,
+            );
+            let half = DVec3::new(rng(&mut seed), rng(&mut seed), rng(&mut seed))
+                * (0.05 + 0.6 * rng(&mut seed));
+            let (lo, hi) = (centre - half, centre + half);
+            let keep = c.may_see_box(lo, hi, lambda_max);
+            // Brute force: a fine grid of points in the box.
+            let steps = 9;
+            let mut seen = false;
+            'grid: for x in 0..steps {
+                for y in 0..steps {
+                    for z in 0..steps {
+                        let f = DVec3::new(x as f64, y as f64, z as f64) / (steps - 1) as f64;
+                        if c.sees(lo + (hi - lo) * f, lambda_max) {
+                            seen = true;
+                            break 'grid;
+                        }
+                    }
+                }
+            }
+            assert!(
+                keep || !seen,
+                "case {case}: dropped a box with a seen point"
+            );
+            match (keep, seen) {
+                (true, true) => kept_seen += 1,
+                (false, _) => dropped += 1,
+                (true, false) => kept_empty += 1,
+            }
+        }
+        println!("kept with points {kept_seen}, dropped {dropped}, kept empty {kept_empty}");
+        // The test culls, and is not merely "keep everything".
+        assert!(dropped > 100 && kept_seen > 100, "{dropped} {kept_seen}");
     }
 }
