@@ -452,6 +452,13 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
           value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
     impostor_resolution: u32,
+    /// Splat side in pixels, for --method c3rc.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=2))]
+    splat: u32,
+    /// Point spacing in scene units, for --method c3rc; default: derived per object from its
+    /// closest reflection distance.
+    #[arg(long)]
+    spacing: Option<f32>,
     /// Time in seconds (camera path and animation); default: the scene's.
     #[arg(long)]
     time: Option<f32>,
@@ -553,15 +560,20 @@ pub enum MethodArg {
     /// Exact primary rays; rays from mirrors and glass answered by SPOC impostors of the diffuse
     /// objects (paper 1).
     Impostor,
+    /// Exact primary rays; first reflections splatted from points of the diffuse objects through
+    /// continuous 3-ray cameras (paper 2).
+    C3rc,
 }
 
 impl MethodArg {
-    /// The renderer, with the impostor resolution for `Impostor`.
-    fn method(self, impostor_resolution: u32) -> Method {
+    /// The renderer, with the impostor resolution for `Impostor`; `None` for the hybrid method,
+    /// which has its own entry point.
+    fn method(self, impostor_resolution: u32) -> Option<Method> {
         match self {
-            MethodArg::Raster => Method::Raster,
-            MethodArg::Trace => Method::Trace,
-            MethodArg::Impostor => Method::Impostor(impostor_resolution),
+            MethodArg::Raster => Some(Method::Raster),
+            MethodArg::Trace => Some(Method::Trace),
+            MethodArg::Impostor => Some(Method::Impostor(impostor_resolution)),
+            MethodArg::C3rc => None,
         }
     }
 }
@@ -709,11 +721,34 @@ impl RenderArgs {
             .context("loading the scene")?;
         check_plan(plan.reads(s.files.iter().cloned()))?;
         s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
-        let method = self.method.method(self.impostor_resolution);
-        let pb = bar(&format!("{method}"), s.camera.height as u64);
         let t = self.time.unwrap_or(s.render.time);
-        let (frame, steps) = render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
-        timings.0.extend(steps.0);
+        let frame = match self.method.method(self.impostor_resolution) {
+            Some(method) => {
+                let pb = bar(&format!("{method}"), s.camera.height as u64);
+                let (frame, steps) =
+                    render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
+                timings.0.extend(steps.0);
+                frame
+            }
+            None => {
+                let settings = trompe::hybrid::HybridSettings {
+                    splat: self.splat,
+                    spacing: self.spacing,
+                    ..Default::default()
+                };
+                if let Some(sp) = self.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
+                    anyhow::bail!("--spacing {sp}: must be a positive number of scene units");
+                }
+                let pb = bar("c3rc", s.camera.height as u64);
+                let (frame, report) = timings
+                    .time("render", || {
+                        trompe::hybrid::render(&s, t, settings, pb.as_ref())
+                    })
+                    .context("rendering")?;
+                eprintln!("{report}");
+                frame
+            }
+        };
         let (depth, normals) = (self.depth.as_deref(), self.normals.as_deref());
         timings
             .time("write", || {

@@ -65,6 +65,7 @@ pub mod eval;
 pub mod files;
 pub mod frame;
 pub mod geom;
+pub mod hybrid;
 pub mod impostor;
 pub mod master;
 pub mod memory;

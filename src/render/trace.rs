@@ -44,6 +44,11 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
         }
     }
 
+    /// Radiance leaving `hit` back along `ray`, a primary hit found elsewhere (a G-buffer).
+    pub fn shade_primary(&self, ray: &Ray, hit: &Hit) -> Vec3 {
+        self.shade(ray, hit, 0)
+    }
+
     fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
         if let Some(l) = hit.radiance {
             return l;

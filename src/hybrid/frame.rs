@@ -1,0 +1,534 @@
+//! One frame of hybrid reflections (paper 2 §3.2, §5–6): the G-buffer, a C3RC per reflector
+//! triangle the eye sees, kd-tree culling, projection and splatting, then the Whitted tracer
+//! shading the G-buffer with the splats answering first reflections.
+//!
+//! Invariants: a splat lands only on pixels where the eye sees the splatting reflector at the
+//! depth of the image point (2 % slack), so hidden parts of a reflector show nothing; each pixel
+//! keeps the point with the smallest unfolded path `|p − E| + |Q − p|` (the paper's push-back),
+//! ties broken by point index, so the frame is the same for any thread count.
+
+use super::HybridReflections;
+use crate::camera::{C3rc, Pinhole, Projection};
+use crate::frame::Frame;
+use crate::geom::Ray;
+use crate::geom::optics::facing;
+use crate::progress::Progress;
+use crate::render::shading::lambert;
+use crate::render::{RenderError, Tracer};
+use crate::scene::{Scene, Surface, View};
+use crate::trace::{Bvh, Exact, Hit, RayQuery, SecondaryQuery};
+use glam::{DMat4, DVec2, DVec3, Mat3, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// Bytes a pixel costs in a hybrid frame beyond a traced one: the G-buffer hit, the splat key,
+/// the resolved radiance.
+pub const BYTES_PER_PIXEL: u64 = 128;
+
+/// Relative depth slack between a splat's image point and the surface the eye sees there.
+const DEPTH_SLACK: f32 = 0.02;
+
+/// What one frame did (paper 2 Table 2's columns, and more).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// C3RCs built: reflector triangles the eye sees.
+    pub c3rcs: u64,
+    /// kd-tree nodes tested against view volumes.
+    pub nodes_tested: u64,
+    /// Leaves kept.
+    pub leaves_kept: u64,
+    /// Points projected (each point of each kept leaf, once per C3RC).
+    pub points_projected: u64,
+    /// Valid projections found.
+    pub projections: u64,
+    /// Projections that reached a pixel where the reflector is seen.
+    pub splats: u64,
+    /// Pixels whose reflection a point gave.
+    pub pixels_splatted: u64,
+    /// Pixels where the eye sees a reflector.
+    pub reflector_pixels: u64,
+    /// Wall time of the G-buffer (primary rays).
+    pub gbuffer: Duration,
+    /// Wall time of the culling.
+    pub cull: Duration,
+    /// Wall time of the projection and splatting.
+    pub project: Duration,
+    /// Wall time of shading.
+    pub shade: Duration,
+    /// Wall time of the BVH build.
+    pub bvh: Duration,
+}
+
+impl FrameStats {
+    /// Share of projected points with a valid projection (paper: about 20 %).
+    pub fn valid_ratio(&self) -> f64 {
+        self.projections as f64 / self.points_projected.max(1) as f64
+    }
+
+    /// Culling plus projection: the reflection's own cost.
+    pub fn reflection_time(&self) -> Duration {
+        self.cull + self.project
+    }
+
+    /// The frame's wall time.
+    pub fn total(&self) -> Duration {
+        self.bvh + self.gbuffer + self.cull + self.project + self.shade
+    }
+}
+
+impl std::fmt::Display for FrameStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        writeln!(
+            f,
+            "C3RCs {}, nodes tested {}, leaves kept {}",
+            self.c3rcs, self.nodes_tested, self.leaves_kept
+        )?;
+        writeln!(
+            f,
+            "points projected {}, valid projections {} ({:.1} %), splats {}",
+            self.points_projected,
+            self.projections,
+            100.0 * self.valid_ratio(),
+            self.splats
+        )?;
+        writeln!(
+            f,
+            "reflector pixels {}, reached by a point {} ({:.1} %)",
+            self.reflector_pixels,
+            self.pixels_splatted,
+            100.0 * self.pixels_splatted as f64 / self.reflector_pixels.max(1) as f64
+        )?;
+        write!(
+            f,
+            "BVH {:.1} ms, G-buffer {:.1} ms, culling {:.1} ms, projection {:.1} ms, shading {:.1} ms",
+            ms(self.bvh),
+            ms(self.gbuffer),
+            ms(self.cull),
+            ms(self.project),
+            ms(self.shade)
+        )
+    }
+}
+
+/// A reflector triangle's camera, with what splatting needs.
+struct Camera3 {
+    /// The reflector object.
+    object: u32,
+    /// World space.
+    world: C3rc,
+    /// Largest sweep parameter any diffuse point can have.
+    lambda_max: f64,
+}
+
+/// Renders `scene` at time `t` with the hybrid method over `clouds`.
+pub fn render_frame(
+    clouds: &HybridReflections,
+    scene: &Scene,
+    t: f32,
+    progress: &dyn Progress,
+) -> Result<(Frame, FrameStats), RenderError> {
+    if !t.is_finite() {
+        return Err(RenderError::Time(t));
+    }
+    let view = scene.view(t)?;
+    crate::render::check_memory(&view, crate::render::Method::Trace)?;
+    let (w, h) = view.camera.resolution();
+    crate::memory::check(
+        || format!("a {w} × {h} hybrid frame"),
+        crate::memory::times(u64::from(w) * u64::from(h), BYTES_PER_PIXEL),
+    )?;
+    if let Some(object) = view
+        .meshes
+        .iter()
+        .position(|m| !m.bounds().extent().is_finite())
+    {
+        return Err(RenderError::NonFinite { object });
+    }
+    let mut stats = FrameStats::default();
+    let start = Instant::now();
+    let bvh = Bvh::build(view.meshes.clone());
+    stats.bvh = start.elapsed();
+
+    let start = Instant::now();
+    let camera = &view.camera;
+    let gbuffer: Vec<Option<Hit>> = (0..h as usize)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let bvh = &bvh;
+            (0..w as usize).map(move |x| {
+                let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                bvh.closest_hit(&ray, f32::INFINITY)
+            })
+        })
+        .collect();
+    stats.gbuffer = start.elapsed();
+
+    let cameras = reflector_cameras(&view, &gbuffer, clouds);
+    stats.c3rcs = cameras.len() as u64;
+    stats.reflector_pixels = gbuffer
+        .iter()
+        .flatten()
+        .filter(|h| is_reflector(&view.surfaces[h.object as usize]))
+        .count() as u64;
+    // Each cloud's object → world, and the cameras moved into object space.
+    let placements: Vec<DMat4> = clouds
+        .clouds
+        .iter()
+        .map(|c| {
+            scene.objects[c.object as usize]
+                .world_from_object_at(t)
+                .as_dmat4()
+        })
+        .collect();
+    let inverse: Vec<DMat4> = placements.iter().map(|m| m.inverse()).collect();
+
+    let start = Instant::now();
+    let culled: Vec<(Vec<(u32, u32)>, u64)> = cameras
+        .par_iter()
+        .map(|cam| cull(cam, clouds, &inverse))
+        .collect();
+    stats.cull = start.elapsed();
+    for (leaves, tested) in &culled {
+        stats.leaves_kept += leaves.len() as u64;
+        stats.nodes_tested += tested;
+    }
+
+    let start = Instant::now();
+    let keys: Vec<AtomicU64> = (0..gbuffer.len())
+        .map(|_| AtomicU64::new(u64::MAX))
+        .collect();
+    let offsets: Vec<u32> = clouds
+        .clouds
+        .iter()
+        .scan(0u32, |acc, c| {
+            let o = *acc;
+            *acc += c.points.len() as u32;
+            Some(o)
+        })
+        .collect();
+    let splat = Splat {
+        camera,
+        gbuffer: &gbuffer,
+        keys: &keys,
+        size: clouds.settings.splat.clamp(1, 2),
+    };
+    let counts = cameras
+        .par_iter()
+        .zip(&culled)
+        .map(|(cam, (leaves, _))| {
+            project(cam, leaves, clouds, &placements, &inverse, &offsets, &splat)
+        })
+        .reduce(|| [0u64; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
+    stats.points_projected = counts[0];
+    stats.projections = counts[1];
+    stats.splats = counts[2];
+    stats.project = start.elapsed();
+
+    let start = Instant::now();
+    let normal_from_object: Vec<Mat3> = placements
+        .iter()
+        .map(|m| Mat3::from_mat4(m.as_mat4()).inverse().transpose())
+        .collect();
+    let radiance: Vec<Option<Vec3>> = keys
+        .par_iter()
+        .zip(&gbuffer)
+        .map(|(key, hit)| {
+            let key = key.load(Ordering::Relaxed);
+            let hit = hit.as_ref()?;
+            if key == u64::MAX {
+                return None;
+            }
+            let global = (key & 0xFFFF_FFFF) as u32;
+            let c = offsets.partition_point(|&o| o <= global) - 1;
+            let i = (global - offsets[c]) as usize;
+            let cloud = &clouds.clouds[c];
+            let q = placements[c].transform_point3(cloud.points.positions[i].as_dvec3());
+            let mut n = (normal_from_object[c] * cloud.points.normals[i]).normalize_or_zero();
+            // Lit on the side the reflector sees it from.
+            if n.dot(hit.position - q.as_vec3()) < 0.0 {
+                n = -n;
+            }
+            Some(lambert(cloud.points.albedo[i], n, &scene.lighting))
+        })
+        .collect();
+    stats.pixels_splatted = radiance.iter().flatten().count() as u64;
+
+    let answers = SplatAnswers {
+        camera,
+        width: w,
+        gbuffer: &gbuffer,
+        radiance: &radiance,
+        exact: Exact(&bvh),
+        epsilon: scene.render.ray_epsilon,
+    };
+    let tracer = Tracer {
+        view: &view,
+        primary: &bvh,
+        secondary: &answers,
+        lighting: &scene.lighting,
+        settings: &scene.render,
+    };
+    let mut frame = Frame::new(w, h)?;
+    frame
+        .par_rows_mut()
+        .for_each(|(y, (color, depth, normal, id))| {
+            for x in 0..w as usize {
+                let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                match &gbuffer[y * w as usize + x] {
+                    None => color[x] = scene.lighting.environment.radiance(ray.dir).extend(1.0),
+                    Some(hit) => {
+                        color[x] = tracer.shade_primary(&ray, hit).extend(1.0);
+                        depth[x] = hit.t;
+                        normal[x] = facing(ray.dir, hit.normal, hit.geometric_normal).0;
+                        id[x] = hit.object;
+                    }
+                }
+            }
+            progress.advance(1);
+        });
+    stats.shade = start.elapsed();
+    Ok((frame, stats))
+}
+
+fn is_reflector(s: &Surface) -> bool {
+    !matches!(s, Surface::Diffuse(_))
+}
+
+/// One camera for every reflector triangle some pixel sees, in (object, triangle) order.
+fn reflector_cameras(
+    view: &View,
+    gbuffer: &[Option<Hit>],
+    clouds: &HybridReflections,
+) -> Vec<Camera3> {
+    let mut seen: Vec<Vec<bool>> = view
+        .meshes
+        .iter()
+        .map(|m| vec![false; m.triangle_count()])
+        .collect();
+    for h in gbuffer.iter().flatten() {
+        if is_reflector(&view.surfaces[h.object as usize]) {
+            seen[h.object as usize][h.triangle as usize] = true;
+        }
+    }
+    // The farthest any diffuse point can be from a reflector point: from the clouds' boxes.
+    let corners: Vec<DVec3> = clouds
+        .clouds
+        .iter()
+        .flat_map(|c| {
+            let b = view.meshes[c.object as usize].bounds();
+            (0..8).map(move |k| {
+                DVec3::new(
+                    if k & 1 == 0 { b.min.x } else { b.max.x } as f64,
+                    if k & 2 == 0 { b.min.y } else { b.max.y } as f64,
+                    if k & 4 == 0 { b.min.z } else { b.max.z } as f64,
+                )
+            })
+        })
+        .collect();
+    let eye = view.camera.position();
+    let mut out = Vec::new();
+    for (o, flags) in seen.iter().enumerate() {
+        let mesh = &view.meshes[o];
+        for (tri, _) in flags.iter().enumerate().filter(|(_, s)| **s) {
+            let idx = mesh.triangles[tri];
+            let v = idx.map(|i| mesh.positions[i as usize].as_dvec3());
+            let n = idx.map(|i| mesh.normals[i as usize].as_dvec3());
+            let Some(world) = C3rc::reflector(v, n, eye) else {
+                continue;
+            };
+            // |Q − p| ≤ max over the box corners of the distance to a vertex, and λ = |Q − p| /
+            // |Σ bᵢ dᵢ|, whose smallest value is the distance from the origin to the triangle
+            // of the dᵢ.
+            let far = corners
+                .iter()
+                .map(|q| v.iter().map(|vi| (*q - *vi).length()).fold(0.0, f64::max))
+                .fold(0.0, f64::max);
+            let shortest = origin_to_triangle(world.d);
+            let lambda_max = if shortest > 1e-6 {
+                far / shortest * (1.0 + 1e-9)
+            } else {
+                f64::INFINITY
+            };
+            out.push(Camera3 {
+                object: o as u32,
+                world,
+                lambda_max,
+            });
+        }
+    }
+    out
+}
+
+/// The camera moved into an object's space (affine maps keep the sweep, its λ and barycentrics).
+fn into_object(c: &C3rc, inverse: &DMat4) -> C3rc {
+    C3rc {
+        v: c.v.map(|p| inverse.transform_point3(p)),
+        d: c.d.map(|d| inverse.transform_vector3(d)),
+    }
+}
+
+/// The leaves `(cloud, node)` whose boxes the camera may see, and the nodes tested.
+fn cull(cam: &Camera3, clouds: &HybridReflections, inverse: &[DMat4]) -> (Vec<(u32, u32)>, u64) {
+    let mut leaves = Vec::new();
+    let mut tested = 0u64;
+    for (c, cloud) in clouds.clouds.iter().enumerate() {
+        if cloud.tree.nodes.is_empty() {
+            continue;
+        }
+        let local = into_object(&cam.world, &inverse[c]);
+        let mut stack = vec![0u32];
+        while let Some(id) = stack.pop() {
+            let node = &cloud.tree.nodes[id as usize];
+            tested += 1;
+            if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3(), cam.lambda_max) {
+                continue;
+            }
+            if node.leaf {
+                leaves.push((c as u32, id));
+            } else {
+                stack.extend(node.first..node.first + node.count);
+            }
+        }
+    }
+    leaves.sort_unstable();
+    (leaves, tested)
+}
+
+/// Where splats go and what they are tested against.
+struct Splat<'a> {
+    camera: &'a Pinhole,
+    gbuffer: &'a [Option<Hit>],
+    keys: &'a [AtomicU64],
+    size: u32,
+}
+
+/// Projects the points of `leaves` through `cam` and splats them; returns points projected,
+/// valid projections and accepted splats.
+fn project(
+    cam: &Camera3,
+    leaves: &[(u32, u32)],
+    clouds: &HybridReflections,
+    placements: &[DMat4],
+    inverse: &[DMat4],
+    offsets: &[u32],
+    splat: &Splat,
+) -> [u64; 3] {
+    let (w, h) = splat.camera.resolution();
+    let eye = splat.camera.position();
+    let mut counts = [0u64; 3];
+    let mut local = None;
+    for &(c, node) in leaves {
+        let cloud = &clouds.clouds[c as usize];
+        if local.map(|(lc, _)| lc) != Some(c) {
+            local = Some((c, into_object(&cam.world, &inverse[c as usize])));
+        }
+        let Some((_, lcam)) = local else { continue };
+        let node = &cloud.tree.nodes[node as usize];
+        for i in node.first..node.first + node.count {
+            counts[0] += 1;
+            let q = cloud.points.positions[i as usize].as_dvec3();
+            lcam.project_each(q, cam.lambda_max, |pr| {
+                counts[1] += 1;
+                let p: DVec3 = (0..3).map(|k| cam.world.v[k] * pr.bary[k]).sum();
+                let qw = placements[c as usize].transform_point3(q);
+                let to_p = (p - eye).length();
+                let key_len = (to_p + (qw - p).length()) as f32;
+                let Some(ip) = splat.camera.project(p) else {
+                    return;
+                };
+                let (x0, y0) = if splat.size == 1 {
+                    (ip.uv.x.floor(), ip.uv.y.floor())
+                } else {
+                    ((ip.uv.x - 0.5).floor(), (ip.uv.y - 0.5).floor())
+                };
+                let key = (u64::from(key_len.to_bits()) << 32) | u64::from(offsets[c as usize] + i);
+                for dy in 0..splat.size {
+                    for dx in 0..splat.size {
+                        let (x, y) = (x0 + dx as f64, y0 + dy as f64);
+                        if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                            continue;
+                        }
+                        let pix = y as usize * w as usize + x as usize;
+                        let Some(seen) = &splat.gbuffer[pix] else {
+                            continue;
+                        };
+                        if seen.object != cam.object
+                            || (seen.t - to_p as f32).abs() > DEPTH_SLACK * to_p as f32
+                        {
+                            continue;
+                        }
+                        counts[2] += 1;
+                        splat.keys[pix].fetch_min(key, Ordering::Relaxed);
+                    }
+                }
+            });
+        }
+    }
+    counts
+}
+
+/// The distance from the origin to the triangle `t`.
+fn origin_to_triangle(t: [DVec3; 3]) -> f64 {
+    let (a, b, c) = (t[0], t[1], t[2]);
+    let n = (b - a).cross(c - a);
+    let mut best = a.length().min(b.length()).min(c.length());
+    for (p, q) in [(a, b), (b, c), (c, a)] {
+        let e = q - p;
+        let s = (-p.dot(e) / e.length_squared().max(1e-300)).clamp(0.0, 1.0);
+        best = best.min((p + e * s).length());
+    }
+    if n.length_squared() > 1e-300 {
+        // The origin's foot on the plane, if inside the triangle.
+        let foot = n * (a.dot(n) / n.length_squared());
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|(p, q)| (*q - *p).cross(foot - *p).dot(n) >= 0.0);
+        if inside {
+            best = best.min(foot.length());
+        }
+    }
+    best
+}
+
+/// Secondary rays answered by the splats where they are the eye's first reflection, exactly
+/// through the BVH otherwise.
+struct SplatAnswers<'a> {
+    camera: &'a Pinhole,
+    width: u32,
+    gbuffer: &'a [Option<Hit>],
+    radiance: &'a [Option<Vec3>],
+    exact: Exact<'a, Bvh>,
+    epsilon: f32,
+}
+
+impl SecondaryQuery for SplatAnswers<'_> {
+    fn secondary_hit(&self, reflector: u32, ray: &Ray) -> Option<Hit> {
+        let first = self.camera.project(ray.origin.as_dvec3()).and_then(|ip| {
+            let (w, h) = self.camera.resolution();
+            let (x, y) = (ip.uv.x.floor(), ip.uv.y.floor());
+            if x < 0.0 || y < 0.0 || x >= f64::from(w) || y >= f64::from(h) {
+                return None;
+            }
+            let pix = y as usize * self.width as usize + x as usize;
+            let hit = self.gbuffer[pix].as_ref()?;
+            let near = 2.0 * self.epsilon + 1e-6 * (1.0 + hit.position.length());
+            (hit.object == reflector && (hit.position - ray.origin).length() <= near).then_some(pix)
+        });
+        match first {
+            Some(pix) => self.radiance[pix].map(|l| Hit {
+                t: f32::INFINITY,
+                position: ray.dir,
+                normal: -ray.dir,
+                geometric_normal: -ray.dir,
+                uv: glam::Vec2::ZERO,
+                bary: glam::Vec2::ZERO,
+                object: crate::trace::ENVIRONMENT,
+                triangle: 0,
+                radiance: Some(l),
+            }),
+            None => self.exact.secondary_hit(reflector, ray),
+        }
+    }
+}
