@@ -381,6 +381,43 @@ impl Mesh {
         }
     }
 
+    /// Every triangle split into four at its edge midpoints (shared edges share their
+    /// midpoint): positions stay on the faces, normals and texture coordinates are interpolated.
+    pub fn subdivided(&self) -> Mesh {
+        let mut out = self.clone();
+        let mut midpoints = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, out: &mut Mesh| -> u32 {
+            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (i, j) = (a as usize, b as usize);
+                out.positions
+                    .push((self.positions[i] + self.positions[j]) * 0.5);
+                out.normals.push(
+                    (self.normals[i] + self.normals[j])
+                        .try_normalize()
+                        .unwrap_or(self.normals[i]),
+                );
+                if let (Some(uv), Some(src)) = (out.uvs.as_mut(), self.uvs.as_ref()) {
+                    uv.push((src[i] + src[j]) * 0.5);
+                }
+                (out.positions.len() - 1) as u32
+            })
+        };
+        out.triangles.clear();
+        out.face_material.clear();
+        for (t, &[a, b, c]) in self.triangles.iter().enumerate() {
+            let (ab, bc, ca) = (
+                mid(a, b, &mut out),
+                mid(b, c, &mut out),
+                mid(c, a, &mut out),
+            );
+            out.triangles
+                .extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+            let m = self.face_material.get(t).copied().unwrap_or(0);
+            out.face_material.extend([m; 4]);
+        }
+        out
+    }
+
     /// Appends `other`, re-indexing its vertices and materials.
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;

@@ -9,7 +9,7 @@
 
 use super::HybridReflections;
 use crate::camera::{C3rc, Pinhole, Projection};
-use crate::frame::Frame;
+use crate::frame::{Frame, Image, NO_OBJECT};
 use crate::geom::Ray;
 use crate::geom::optics::facing;
 use crate::progress::Progress;
@@ -42,6 +42,8 @@ pub struct FrameStats {
     pub points_projected: u64,
     /// Valid projections found.
     pub projections: u64,
+    /// Distinct points with at least one valid projection.
+    pub points_seen: u64,
     /// Projections that reached a pixel where the reflector is seen.
     pub splats: u64,
     /// Pixels whose reflection a point gave.
@@ -66,6 +68,11 @@ impl FrameStats {
         self.projections as f64 / self.points_projected.max(1) as f64
     }
 
+    /// Valid projections per point that has one (paper: about 4 on the teapot).
+    pub fn projections_per_point(&self) -> f64 {
+        self.projections as f64 / self.points_seen.max(1) as f64
+    }
+
     /// Culling plus projection: the reflection's own cost.
     pub fn reflection_time(&self) -> Duration {
         self.cull + self.project
@@ -87,10 +94,11 @@ impl std::fmt::Display for FrameStats {
         )?;
         writeln!(
             f,
-            "points projected {}, valid projections {} ({:.1} %), splats {}",
+            "points projected {}, valid projections {} ({:.1} %), {:.2} a point seen, splats {}",
             self.points_projected,
             self.projections,
             100.0 * self.valid_ratio(),
+            self.projections_per_point(),
             self.splats
         )?;
         writeln!(
@@ -112,6 +120,18 @@ impl std::fmt::Display for FrameStats {
     }
 }
 
+/// A rendered frame, what it cost, and what each pixel's reflection came from.
+#[derive(Clone, Debug)]
+pub struct HybridFrame {
+    /// The frame.
+    pub frame: Frame,
+    /// What it did.
+    pub stats: FrameStats,
+    /// Per pixel, the object whose point the splats put there ([`NO_OBJECT`] where none did:
+    /// not a reflector, or the environment shows).
+    pub reached: Image<u32>,
+}
+
 /// A reflector triangle's camera, with what splatting needs.
 struct Camera3 {
     /// The reflector object.
@@ -128,7 +148,7 @@ pub fn render_frame(
     scene: &Scene,
     t: f32,
     progress: &dyn Progress,
-) -> Result<(Frame, FrameStats), RenderError> {
+) -> Result<HybridFrame, RenderError> {
     if !t.is_finite() {
         return Err(RenderError::Time(t));
     }
@@ -208,10 +228,15 @@ pub fn render_frame(
             Some(o)
         })
         .collect();
+    let total_points = clouds.point_count();
+    let seen: Vec<AtomicU64> = (0..total_points.div_ceil(64))
+        .map(|_| AtomicU64::new(0))
+        .collect();
     let splat = Splat {
         camera,
         gbuffer: &gbuffer,
         keys: &keys,
+        seen: &seen,
         size: clouds.settings.splat.clamp(1, 2),
     };
     let counts = cameras
@@ -224,6 +249,10 @@ pub fn render_frame(
     stats.points_projected = counts[0];
     stats.projections = counts[1];
     stats.splats = counts[2];
+    stats.points_seen = seen
+        .iter()
+        .map(|b| u64::from(b.load(Ordering::Relaxed).count_ones()))
+        .sum();
     stats.project = start.elapsed();
 
     let start = Instant::now();
@@ -289,7 +318,25 @@ pub fn render_frame(
             progress.advance(1);
         });
     stats.shade = start.elapsed();
-    Ok((frame, stats))
+    let reached = Image::from_vec(
+        w,
+        h,
+        keys.iter()
+            .map(|k| {
+                let k = k.load(Ordering::Relaxed);
+                if k == u64::MAX {
+                    return NO_OBJECT;
+                }
+                let global = (k & 0xFFFF_FFFF) as u32;
+                clouds.clouds[offsets.partition_point(|&o| o <= global) - 1].object
+            })
+            .collect(),
+    )?;
+    Ok(HybridFrame {
+        frame,
+        stats,
+        reached,
+    })
 }
 
 fn is_reflector(s: &Surface) -> bool {
@@ -401,6 +448,8 @@ struct Splat<'a> {
     camera: &'a Pinhole,
     gbuffer: &'a [Option<Hit>],
     keys: &'a [AtomicU64],
+    /// One bit a point: has it a valid projection?
+    seen: &'a [AtomicU64],
     size: u32,
 }
 
@@ -429,8 +478,10 @@ fn project(
         for i in node.first..node.first + node.count {
             counts[0] += 1;
             let q = cloud.points.positions[i as usize].as_dvec3();
+            let global = offsets[c as usize] + i;
             lcam.project_each(q, cam.lambda_max, |pr| {
                 counts[1] += 1;
+                splat.seen[global as usize / 64].fetch_or(1 << (global % 64), Ordering::Relaxed);
                 let p: DVec3 = (0..3).map(|k| cam.world.v[k] * pr.bary[k]).sum();
                 let qw = placements[c as usize].transform_point3(q);
                 let to_p = (p - eye).length();
@@ -443,7 +494,7 @@ fn project(
                 } else {
                     ((ip.uv.x - 0.5).floor(), (ip.uv.y - 0.5).floor())
                 };
-                let key = (u64::from(key_len.to_bits()) << 32) | u64::from(offsets[c as usize] + i);
+                let key = (u64::from(key_len.to_bits()) << 32) | u64::from(global);
                 for dy in 0..splat.size {
                     for dx in 0..splat.size {
                         let (x, y) = (x0 + dx as f64, y0 + dy as f64);
@@ -530,5 +581,63 @@ impl SecondaryQuery for SplatAnswers<'_> {
             }),
             None => self.exact.secondary_hit(reflector, ray),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hybrid::HybridSettings;
+
+    #[test]
+    fn culling_real_trees_drops_no_leaf_with_a_seen_point() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/c3rc-bunny.toml");
+        let mut scene = Scene::load(&path).unwrap();
+        (scene.camera.width, scene.camera.height) = (120, 80);
+        let clouds = HybridReflections::prepare(&scene, HybridSettings::default()).unwrap();
+        let view = scene.view(0.0).unwrap();
+        let bvh = Bvh::build(view.meshes.clone());
+        let gbuffer: Vec<Option<Hit>> = (0..80)
+            .flat_map(|y| (0..120).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                bvh.closest_hit(&ray, f32::INFINITY)
+            })
+            .collect();
+        let cameras = reflector_cameras(&view, &gbuffer, &clouds);
+        assert!(cameras.len() > 100);
+        let inverse: Vec<DMat4> = clouds
+            .clouds
+            .iter()
+            .map(|c| {
+                scene.objects[c.object as usize]
+                    .world_from_object_at(0.0)
+                    .as_dmat4()
+                    .inverse()
+            })
+            .collect();
+        let (mut kept, mut dropped_leaves) = (0, 0);
+        for cam in cameras.iter().step_by(7) {
+            let (leaves, _) = cull(cam, &clouds, &inverse);
+            kept += leaves.len();
+            for (c, cloud) in clouds.clouds.iter().enumerate() {
+                let local = into_object(&cam.world, &inverse[c]);
+                for (id, node) in cloud.tree.nodes.iter().enumerate() {
+                    if !node.leaf || leaves.contains(&(c as u32, id as u32)) {
+                        continue;
+                    }
+                    dropped_leaves += 1;
+                    for i in node.first..node.first + node.count {
+                        let q = cloud.points.positions[i as usize].as_dvec3();
+                        assert!(
+                            !local.sees(q, cam.lambda_max),
+                            "a dropped leaf holds point {i}, which the camera sees"
+                        );
+                    }
+                }
+            }
+        }
+        println!("kept {kept} leaves, dropped {dropped_leaves}");
+        assert!(kept > 0 && dropped_leaves > kept);
     }
 }

@@ -21,7 +21,7 @@ pub mod frame;
 pub mod kdtree;
 pub mod points;
 
-pub use frame::{FrameStats, render_frame};
+pub use frame::{FrameStats, HybridFrame, render_frame};
 pub use kdtree::{KdTree, TreeSettings, TreeStats};
 pub use points::PointSet;
 
@@ -133,13 +133,15 @@ impl HybridReflections {
                 })
                 .sum()
         };
+        // Points are indexed in 32 bits.
+        let budget = settings.max_points.clamp(1, u64::from(u32::MAX) / 2);
         let mut thinned = false;
         for _ in 0..8 {
             let n = estimate(&spacings);
-            if n <= settings.max_points {
+            if n <= budget {
                 break;
             }
-            let widen = (n as f32 / settings.max_points as f32).sqrt() * 1.05;
+            let widen = (n as f32 / budget as f32).sqrt() * 1.05;
             spacings.iter_mut().for_each(|s| *s *= widen);
             thinned = true;
         }
@@ -187,7 +189,7 @@ impl HybridReflections {
         scene: &Scene,
         t: f32,
         progress: &dyn Progress,
-    ) -> Result<(crate::frame::Frame, FrameStats), RenderError> {
+    ) -> Result<HybridFrame, RenderError> {
         render_frame(self, scene, t, progress)
     }
 }
@@ -201,7 +203,7 @@ pub fn render(
     progress: &dyn Progress,
 ) -> Result<(crate::frame::Frame, HybridReport), RenderError> {
     let clouds = HybridReflections::prepare(scene, settings)?;
-    let (frame, stats) = clouds.render_at(scene, t, progress)?;
+    let HybridFrame { frame, stats, .. } = clouds.render_at(scene, t, progress)?;
     let objects = clouds
         .clouds
         .iter()

@@ -4,6 +4,9 @@
 //! is left without a point. Each point carries its object-space position, its interpolated
 //! normal and its albedo (texture included) — what shading it needs once it is seen in a mirror.
 //!
+//! A triangle smaller than one piece keeps its one point with a probability of twice its share
+//! of a piece's area, so meshes of many tiny triangles are not sampled once per triangle.
+//!
 //! Invariants: object space; deterministic for a mesh, a spacing and a seed, whatever the thread
 //! count; the point count is bounded before anything is allocated ([`estimate`]).
 
@@ -89,6 +92,19 @@ fn sample_triangle(mesh: &Mesh, surface: &Surface, t: usize, spacing: f32, seed:
     let mut out = PointSet::default();
     let max_area = spacing * spacing;
     let max_edge = 2.0 * spacing;
+    // A triangle smaller than a piece gets its one point with a probability in proportion to
+    // its area (twice the piece density, so meshes of tiny triangles keep no large gaps).
+    let whole = 0.5
+        * (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .length();
+    let longest_edge = (corners[1] - corners[0])
+        .length()
+        .max((corners[2] - corners[1]).length())
+        .max((corners[0] - corners[2]).length());
+    if whole < max_area && longest_edge <= max_edge && rng.next_f32() >= 2.0 * whole / max_area {
+        return out;
+    }
     let mut stack = vec![[Vec3::X, Vec3::Y, Vec3::Z]];
     while let Some(piece) = stack.pop() {
         let p = piece.map(at);

@@ -139,6 +139,9 @@ pub struct ObjectFile {
     pub shape: Option<String>,
     /// Rescale the mesh so its largest extent is this, centred on `x = z = 0`, resting on `y = 0`.
     pub fit: Option<f32>,
+    /// Split every triangle into four at its edge midpoints this many times (0–4): positions stay
+    /// on the original faces, normals and texture coordinates are interpolated.
+    pub subdivide: Option<u32>,
     /// Translation.
     #[serde(default)]
     pub translate: [f32; 3],

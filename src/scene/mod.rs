@@ -455,6 +455,9 @@ impl SceneObject {
     }
 }
 
+/// Most subdivision levels a scene object may ask for.
+pub const MAX_SUBDIVIDE: u32 = 4;
+
 fn load_object(
     scene: &Path,
     dir: &Path,
@@ -502,6 +505,27 @@ fn load_object(
         }
         _ => return Err(invalid("", "needs exactly one of `mesh` or `shape`".into())),
     };
+    if let Some(levels) = o.subdivide {
+        if levels > MAX_SUBDIVIDE {
+            return Err(invalid(
+                ".subdivide",
+                format!(
+                    "{levels} is more than {MAX_SUBDIVIDE} (each level makes four times the triangles)"
+                ),
+            ));
+        }
+        crate::memory::check(
+            || format!("object[{index}] subdivided {levels} times"),
+            crate::memory::times(
+                mesh.triangle_count() as u64,
+                64u64.saturating_mul(4u64.pow(levels)),
+            ),
+        )
+        .map_err(|e| invalid(".subdivide", e.to_string()))?;
+        for _ in 0..levels {
+            mesh = mesh.subdivided();
+        }
+    }
     if let Some(fit) = o.fit {
         if !(fit > 0.0 && fit.is_finite()) {
             return Err(invalid(".fit", format!("{fit} must be positive")));

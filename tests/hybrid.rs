@@ -1,0 +1,183 @@
+//! Hybrid reflections (paper 2) against the exact tracer: a flat mirror, where the continuous
+//! 3-ray cameras are exact up to point sampling, the paper's curved teapot, and determinism.
+
+use std::path::Path;
+use trompe::frame::metrics;
+use trompe::hybrid::{HybridReflections, HybridSettings};
+use trompe::render::{Method, render_at};
+use trompe::scene::Scene;
+
+fn scene(text: &str) -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/test.toml");
+    Scene::from_toml(text, &dir).unwrap()
+}
+
+const FLAT_MIRROR: &str = r#"
+[camera]
+position = [0.8, 0.7, 2.0]
+look_at = [-0.2, 0.5, -0.3]
+fov_y = 40.0
+resolution = [160, 120]
+
+[environment]
+path = "../assets/envmaps/studio.hdr"
+intensity = 0.6
+
+[light]
+direction = [0.3, 1.0, 0.6]
+intensity = 0.8
+
+[[object]]
+name = "mirror"
+shape = "plane"
+subdivide = 3
+scale = 1.6
+rotate = [90.0, 0.0, 0.0]
+translate = [0.0, 0.6, -0.3]
+material = { type = "mirror", tint = [0.9, 0.9, 0.9] }
+
+[[object]]
+name = "bunny"
+mesh = "../assets/meshes/bunny.obj"
+fit = 0.5
+translate = [-0.45, 0.3, 0.45]
+rotate = [0.0, 200.0, 0.0]
+material = { type = "diffuse", color = [0.8, 0.3, 0.2] }
+"#;
+
+#[test]
+fn a_flat_mirror_splatted_agrees_with_exact_reflections() {
+    let s = scene(FLAT_MIRROR);
+    let (exact, _) = render_at(&s, 0.0, Method::Trace, &()).unwrap();
+    // One-pixel splats, at the spacing that leaves no hole for them.
+    let one = HybridSettings {
+        splat: 1,
+        ..HybridSettings::default()
+    };
+    let clouds = HybridReflections::prepare(&s, one).unwrap();
+    let hybrid = clouds.render_at(&s, 0.0, &()).unwrap();
+    let (frame, st) = (&hybrid.frame, hybrid.stats);
+    println!("{st}");
+    // The pixels the splats reach are the ones whose exact reflected ray meets the bunny: no
+    // holes inside, and past the silhouette only the pixels a point covers without their
+    // centre's ray meeting the bunny (a one-pixel rim).
+    let exact_hits = exact_reflection_hits(&s);
+    let reached: Vec<bool> = hybrid.reached.pixels().iter().map(|&o| o == 1).collect();
+    let both = exact_hits
+        .iter()
+        .zip(&reached)
+        .filter(|(a, b)| **a && **b)
+        .count();
+    let (exact_n, reached_n) = (
+        exact_hits.iter().filter(|a| **a).count(),
+        reached.iter().filter(|a| **a).count(),
+    );
+    println!(
+        "exact reflections meet the bunny in {exact_n} pixels, splats reach {reached_n}, both {both}"
+    );
+    assert!(exact_n > 300, "{exact_n}");
+    assert!(
+        both as f64 >= 0.97 * exact_n as f64,
+        "holes: {both} of {exact_n}"
+    );
+    let rim = reached_n - both;
+    assert!(
+        (rim as f64) < 0.25 * exact_n as f64,
+        "{rim} pixels past the silhouette"
+    );
+    // A flat mirror's C3RCs reflect each point once.
+    assert!((st.projections_per_point() - 1.0).abs() < 0.05, "{st:?}");
+    let flip = metrics::flip(&exact.color, &frame.color, None).unwrap();
+    let psnr = metrics::psnr(&exact.color, &frame.color, None).unwrap();
+    println!("flat mirror: FLIP {flip:.4}, PSNR {psnr:.1} dB");
+    // What remains is point sampling: each pixel of the reflection is shaded with the normal of
+    // the nearest point, not of the surface under the pixel's own ray.
+    assert!(flip < 0.03, "FLIP {flip}");
+}
+
+/// Per pixel: does its primary ray meet the mirror (object 0) and its exact reflected ray then
+/// the bunny (object 1)?
+fn exact_reflection_hits(s: &Scene) -> Vec<bool> {
+    use trompe::geom::optics::{facing, reflect};
+    use trompe::glam::DVec2;
+    use trompe::{Bvh, Ray, RayQuery};
+    let view = s.view(0.0).unwrap();
+    let bvh = Bvh::build(view.meshes.clone());
+    let (w, h) = (s.camera.width, s.camera.height);
+    let mut out = vec![false; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            let Some(hit) = bvh.closest_hit(&ray, f32::INFINITY) else {
+                continue;
+            };
+            if hit.object != 0 {
+                continue;
+            }
+            let (n, ng, _) = facing(ray.dir, hit.normal, hit.geometric_normal);
+            let reflected = Ray::new(
+                hit.position + ng * s.render.ray_epsilon,
+                reflect(ray.dir, n),
+            );
+            out[(y * w + x) as usize] = bvh
+                .closest_hit(&reflected, f32::INFINITY)
+                .is_some_and(|h| h.object == 1);
+        }
+    }
+    out
+}
+
+#[test]
+fn the_teapot_reflects_the_bunny_close_to_exact() {
+    let mut s =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/c3rc-bunny.toml")).unwrap();
+    (s.camera.width, s.camera.height) = (240, 160);
+    let (exact, _) = render_at(&s, 0.0, Method::Trace, &()).unwrap();
+    let (frame, report) = trompe::hybrid::render(&s, 0.0, HybridSettings::default(), &()).unwrap();
+    println!("{report}");
+    let flip = metrics::flip(&exact.color, &frame.color, None).unwrap();
+    println!("teapot: FLIP {flip:.4}");
+    // Paper 2's goal for the method: mean FLIP against exact reflections ≤ 0.05.
+    assert!(flip <= 0.05, "FLIP {flip}");
+    assert!(report.frame.pixels_splatted > 0);
+}
+
+#[test]
+fn frames_are_the_same_for_one_and_two_threads() {
+    let s = scene(FLAT_MIRROR);
+    let clouds = HybridReflections::prepare(&s, HybridSettings::default()).unwrap();
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| clouds.render_at(&s, 0.0, &()).unwrap())
+    };
+    let (a, b) = (run(1), run(2));
+    let (sa, sb) = (a.stats, b.stats);
+    assert_eq!(a.frame.color.pixels(), b.frame.color.pixels());
+    assert_eq!(a.reached.pixels(), b.reached.pixels());
+    assert_eq!(
+        (sa.projections, sa.splats, sa.pixels_splatted),
+        (sb.projections, sb.splats, sb.pixels_splatted)
+    );
+    // The sampling too.
+    let again = HybridReflections::prepare(&s, HybridSettings::default()).unwrap();
+    assert_eq!(
+        again.clouds[0].points.positions,
+        clouds.clouds[0].points.positions
+    );
+}
+
+#[test]
+fn a_spacing_past_the_budget_is_widened_and_said() {
+    let s = scene(FLAT_MIRROR);
+    let settings = HybridSettings {
+        spacing: Some(1e-5),
+        max_points: 20_000,
+        ..HybridSettings::default()
+    };
+    let clouds = HybridReflections::prepare(&s, settings).unwrap();
+    assert!(clouds.thinned);
+    assert!(clouds.point_count() <= 20_000, "{}", clouds.point_count());
+}
