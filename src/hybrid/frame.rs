@@ -140,6 +140,8 @@ struct Camera3 {
     world: C3rc,
     /// Largest sweep parameter any diffuse point can have.
     lambda_max: f64,
+    /// The reflector triangle's area on screen, pixels (0 when it cannot be projected).
+    pixels: f64,
 }
 
 /// Renders `scene` at time `t` with the hybrid method over `clouds`.
@@ -203,11 +205,14 @@ pub fn render_frame(
         })
         .collect();
     let inverse: Vec<DMat4> = placements.iter().map(|m| m.inverse()).collect();
+    // World units per object unit (the mean scale), for distances measured in object space.
+    let scales: Vec<f64> = placements.iter().map(mean_scale).collect();
 
+    let splat_size = clouds.settings.splat.clamp(1, 2);
     let start = Instant::now();
     let culled: Vec<(Vec<(u32, u32)>, u64)> = cameras
         .par_iter()
-        .map(|cam| cull(cam, clouds, &inverse))
+        .map(|cam| cull(cam, clouds, &inverse, &scales, splat_size))
         .collect();
     stats.cull = start.elapsed();
     for (leaves, tested) in &culled {
@@ -237,13 +242,22 @@ pub fn render_frame(
         gbuffer: &gbuffer,
         keys: &keys,
         seen: &seen,
-        size: clouds.settings.splat.clamp(1, 2),
+        size: splat_size,
     };
     let counts = cameras
         .par_iter()
         .zip(&culled)
         .map(|(cam, (leaves, _))| {
-            project(cam, leaves, clouds, &placements, &inverse, &offsets, &splat)
+            project(
+                cam,
+                leaves,
+                clouds,
+                &placements,
+                &inverse,
+                &scales,
+                &offsets,
+                &splat,
+            )
         })
         .reduce(|| [0u64; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
     stats.points_projected = counts[0];
@@ -398,10 +412,16 @@ fn reflector_cameras(
             } else {
                 f64::INFINITY
             };
+            let screen = v.map(|p| view.camera.project(p).map(|ip| ip.uv));
+            let pixels = match screen {
+                [Some(a), Some(b), Some(c)] => 0.5 * (b - a).perp_dot(c - a).abs(),
+                _ => 0.0,
+            };
             out.push(Camera3 {
                 object: o as u32,
                 world,
                 lambda_max,
+                pixels,
             });
         }
     }
@@ -416,10 +436,19 @@ fn into_object(c: &C3rc, inverse: &DMat4) -> C3rc {
     }
 }
 
-/// The leaves `(cloud, node)` whose boxes the camera may see, and the nodes tested.
-fn cull(cam: &Camera3, clouds: &HybridReflections, inverse: &[DMat4]) -> (Vec<(u32, u32)>, u64) {
-    let mut leaves = Vec::new();
+/// The nodes `(cloud, node)` whose boxes the camera may see and whose points it reads: leaves,
+/// or inner nodes whose points it needs so few of (a stride of a leaf's worth or more, see
+/// [`stride`]) that reading them thinned beats descending; and the nodes tested.
+fn cull(
+    cam: &Camera3,
+    clouds: &HybridReflections,
+    inverse: &[DMat4],
+    scales: &[f64],
+    splat: u32,
+) -> (Vec<(u32, u32)>, u64) {
+    let mut kept = Vec::new();
     let mut tested = 0u64;
+    let leaf_points = clouds.settings.tree.leaf_points.max(1);
     for (c, cloud) in clouds.clouds.iter().enumerate() {
         if cloud.tree.nodes.is_empty() {
             continue;
@@ -432,15 +461,19 @@ fn cull(cam: &Camera3, clouds: &HybridReflections, inverse: &[DMat4]) -> (Vec<(u
             if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3(), cam.lambda_max) {
                 continue;
             }
-            if node.leaf {
-                leaves.push((c as u32, id));
+            let coarse = || {
+                let step = stride(cam, &local, node, cloud.spacing, scales[c], splat);
+                (node.points.1 as usize).div_ceil(step) <= leaf_points
+            };
+            if node.leaf || coarse() {
+                kept.push((c as u32, id));
             } else {
                 stack.extend(node.first..node.first + node.count);
             }
         }
     }
-    leaves.sort_unstable();
-    (leaves, tested)
+    kept.sort_unstable();
+    (kept, tested)
 }
 
 /// Where splats go and what they are tested against.
@@ -461,6 +494,7 @@ fn project(
     clouds: &HybridReflections,
     placements: &[DMat4],
     inverse: &[DMat4],
+    scales: &[f64],
     offsets: &[u32],
     splat: &Splat,
 ) -> [u64; 3] {
@@ -475,7 +509,15 @@ fn project(
         }
         let Some((_, lcam)) = local else { continue };
         let node = &cloud.tree.nodes[node as usize];
-        for i in node.first..node.first + node.count {
+        let step = stride(
+            cam,
+            &lcam,
+            node,
+            cloud.spacing,
+            scales[c as usize],
+            splat.size,
+        );
+        for i in (node.points.0..node.points.0 + node.points.1).step_by(step) {
             counts[0] += 1;
             let q = cloud.points.positions[i as usize].as_dvec3();
             let global = offsets[c as usize] + i;
@@ -518,6 +560,51 @@ fn project(
         }
     }
     counts
+}
+
+/// World units per object unit of a placement: its mean scale.
+fn mean_scale(m: &DMat4) -> f64 {
+    let (s, _, _) = m.to_scale_rotation_translation();
+    (s.x.abs() * s.y.abs() * s.z.abs()).cbrt()
+}
+
+/// Points a splat's area should receive for the reflection to show no holes.
+pub const POINTS_PER_SPLAT: f64 = 4.0;
+
+/// Every how many points of `node` the camera needs (level of detail, beyond paper 2): a
+/// surface of `spacing`-apart points facing the reflector at sweep `λ` puts about
+/// `A(λ) / spacing²` points into the reflector triangle's `pixels`, where `A(λ) = |n(λ)|/2` is
+/// the area of the sweeping triangle. Where that is more than [`POINTS_PER_SPLAT`] a splat, the
+/// leaf is read with a stride. `A` is taken at its least over the node's sweep range,
+/// `λ ≥` the distance from the triangle to the node's box (construction rays are unit, so
+/// `|Σ bᵢ dᵢ| ≤ 1`); surfaces seen obliquely only hold more points. A sweep that folds
+/// (`A` reaches 0) gets every point.
+fn stride(
+    cam: &Camera3,
+    local: &C3rc,
+    node: &super::kdtree::Node,
+    spacing: f32,
+    scale: f64,
+    splat: u32,
+) -> usize {
+    if cam.pixels <= 0.0 || !(spacing > 0.0) {
+        return 1;
+    }
+    // Distance from the triangle's box to the node's box, in object space, then world.
+    let (tlo, thi) = local.hull_box(0.0, 0.0);
+    let gap = (node.lo.as_dvec3() - thi)
+        .max(tlo - node.hi.as_dvec3())
+        .max(DVec3::ZERO)
+        .length();
+    let lambda_lo = gap * scale;
+    let area = cam.world.least_sweep_area(lambda_lo, cam.lambda_max);
+    let per_pixel = area / (f64::from(spacing) * f64::from(spacing) * cam.pixels);
+    let k = per_pixel * f64::from(splat * splat) / POINTS_PER_SPLAT;
+    if k.is_finite() && k >= 2.0 {
+        (k.floor() as usize).min(node.points.1 as usize).max(1)
+    } else {
+        1
+    }
 }
 
 /// The distance from the origin to the triangle `t`.
@@ -606,24 +693,31 @@ mod tests {
             .collect();
         let cameras = reflector_cameras(&view, &gbuffer, &clouds);
         assert!(cameras.len() > 100);
-        let inverse: Vec<DMat4> = clouds
+        let placements: Vec<DMat4> = clouds
             .clouds
             .iter()
             .map(|c| {
                 scene.objects[c.object as usize]
                     .world_from_object_at(0.0)
                     .as_dmat4()
-                    .inverse()
             })
             .collect();
+        let inverse: Vec<DMat4> = placements.iter().map(|m| m.inverse()).collect();
+        let scales: Vec<f64> = placements.iter().map(mean_scale).collect();
         let (mut kept, mut dropped_leaves) = (0, 0);
         for cam in cameras.iter().step_by(7) {
-            let (leaves, _) = cull(cam, &clouds, &inverse);
-            kept += leaves.len();
+            let (nodes, _) = cull(cam, &clouds, &inverse, &scales, 2);
+            kept += nodes.len();
             for (c, cloud) in clouds.clouds.iter().enumerate() {
+                // The points the kept nodes read (thinned or not).
+                let mut read = vec![false; cloud.points.len()];
+                for &(_, id) in nodes.iter().filter(|(nc, _)| *nc == c as u32) {
+                    let (first, count) = cloud.tree.nodes[id as usize].points;
+                    read[first as usize..(first + count) as usize].fill(true);
+                }
                 let local = into_object(&cam.world, &inverse[c]);
-                for (id, node) in cloud.tree.nodes.iter().enumerate() {
-                    if !node.leaf || leaves.contains(&(c as u32, id as u32)) {
+                for node in cloud.tree.nodes.iter().filter(|n| n.leaf) {
+                    if read[node.first as usize] {
                         continue;
                     }
                     dropped_leaves += 1;

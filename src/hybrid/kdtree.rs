@@ -4,8 +4,9 @@
 //! keeps is projected as one slice. Built in object space, the tree stays valid under the
 //! object's rigid (indeed any affine) motion: the cameras are moved into object space instead.
 //!
-//! Invariants: every point lies in exactly one leaf; a node's box is the tight box of its
-//! points; a node's children are contiguous in `nodes`; construction is deterministic.
+//! Invariants: every point lies in exactly one leaf; a node's points (its leaves' together) are
+//! one contiguous run; a node's box is the tight box of its points; a node's children are
+//! contiguous in `nodes`; construction is deterministic.
 
 use super::points::PointSet;
 use glam::Vec3;
@@ -44,6 +45,8 @@ pub struct Node {
     pub count: u32,
     /// Whether `first..first + count` are points.
     pub leaf: bool,
+    /// The node's points, leaves under it included: `points.0..points.0 + points.1`.
+    pub points: (u32, u32),
 }
 
 /// The tree; node 0 is the root (absent for no points).
@@ -82,6 +85,7 @@ impl KdTree {
             first: 0,
             count: order.len() as u32,
             leaf: true,
+            points: (0, order.len() as u32),
         });
         let mut scratch = vec![0u32; order.len()];
         tree.split(0, 0, p, &mut order, &mut scratch, settings);
@@ -145,6 +149,7 @@ impl KdTree {
                 first: s as u32,
                 count: counts[k] as u32,
                 leaf: true,
+                points: (s as u32, counts[k] as u32),
             });
             children += 1;
         }
@@ -218,11 +223,16 @@ mod tests {
             }
         }
         assert!(owner.iter().all(|&c| c == 1));
-        // Inner nodes' boxes hold their children's.
+        // Inner nodes' boxes hold their children's, and their point runs are their children's
+        // runs end to end.
         for n in tree.nodes.iter().filter(|n| !n.leaf) {
+            let mut at = n.points.0;
             for c in &tree.nodes[n.first as usize..(n.first + n.count) as usize] {
                 assert!(c.lo.cmpge(n.lo).all() && c.hi.cmple(n.hi).all());
+                assert_eq!(c.points.0, at);
+                at += c.points.1;
             }
+            assert_eq!(at, n.points.0 + n.points.1);
         }
         let s = tree.stats();
         println!("{} points: {s:?}", points.len());

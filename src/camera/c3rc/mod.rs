@@ -118,6 +118,33 @@ impl C3rc {
         }
     }
 
+    /// The least area of the sweeping triangle `T(λ)` for `λ` in `[a, b]`: `|n(λ)|/2`, whose
+    /// square is a quartic; its least value is at an end or where its derivative, the cubic
+    /// `n(λ)·n′(λ)`, vanishes.
+    pub fn least_sweep_area(&self, a: f64, b: f64) -> f64 {
+        let (e2, e3) = (self.v[1] - self.v[0], self.v[2] - self.v[0]);
+        let (g2, g3) = (self.d[1] - self.d[0], self.d[2] - self.d[0]);
+        let (n0, n1, n2) = (e2.cross(e3), e2.cross(g3) + g2.cross(e3), g2.cross(g3));
+        let area = |l: f64| 0.5 * (n0 + n1 * l + n2 * l * l).length();
+        // n·n′ = (n0 + λn1 + λ²n2)·(n1 + 2λn2).
+        let cubic = [
+            n0.dot(n1),
+            n1.dot(n1) + 2.0 * n0.dot(n2),
+            3.0 * n1.dot(n2),
+            2.0 * n2.dot(n2),
+        ];
+        let mut least = area(a);
+        if b.is_finite() {
+            least = least.min(area(b));
+        }
+        for &l in roots_of(cubic).as_slice() {
+            if l > a && l < b {
+                least = least.min(area(l));
+            }
+        }
+        least
+    }
+
     /// Whether `q` has at least one projection with `0 ≤ λ ≤ lambda_max`.
     pub fn sees(&self, q: DVec3, lambda_max: f64) -> bool {
         let mut any = false;
