@@ -194,25 +194,13 @@ pub fn render_frame(
         .flatten()
         .filter(|h| is_reflector(&view.surfaces[h.object as usize]))
         .count() as u64;
-    // Each cloud's object → world, and the cameras moved into object space.
-    let placements: Vec<DMat4> = clouds
-        .clouds
-        .iter()
-        .map(|c| {
-            scene.objects[c.object as usize]
-                .world_from_object_at(t)
-                .as_dmat4()
-        })
-        .collect();
-    let inverse: Vec<DMat4> = placements.iter().map(|m| m.inverse()).collect();
-    // World units per object unit (the mean scale), for distances measured in object space.
-    let scales: Vec<f64> = placements.iter().map(mean_scale).collect();
+    let placed = Placed::at(clouds, scene, t);
 
     let splat_size = clouds.settings.splat.clamp(1, 2);
     let start = Instant::now();
     let culled: Vec<(Vec<(u32, u32)>, u64)> = cameras
         .par_iter()
-        .map(|cam| cull(cam, clouds, &inverse, &scales, splat_size))
+        .map(|cam| cull(cam, clouds, &placed, splat_size))
         .collect();
     stats.cull = start.elapsed();
     for (leaves, tested) in &culled {
@@ -223,15 +211,6 @@ pub fn render_frame(
     let start = Instant::now();
     let keys: Vec<AtomicU64> = (0..gbuffer.len())
         .map(|_| AtomicU64::new(u64::MAX))
-        .collect();
-    let offsets: Vec<u32> = clouds
-        .clouds
-        .iter()
-        .scan(0u32, |acc, c| {
-            let o = *acc;
-            *acc += c.points.len() as u32;
-            Some(o)
-        })
         .collect();
     let total_points = clouds.point_count();
     let seen: Vec<AtomicU64> = (0..total_points.div_ceil(64))
@@ -247,18 +226,7 @@ pub fn render_frame(
     let counts = cameras
         .par_iter()
         .zip(&culled)
-        .map(|(cam, (leaves, _))| {
-            project(
-                cam,
-                leaves,
-                clouds,
-                &placements,
-                &inverse,
-                &scales,
-                &offsets,
-                &splat,
-            )
-        })
+        .map(|(cam, (leaves, _))| project(cam, leaves, clouds, &placed, &splat))
         .reduce(|| [0u64; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
     stats.points_projected = counts[0];
     stats.projections = counts[1];
@@ -270,6 +238,7 @@ pub fn render_frame(
     stats.project = start.elapsed();
 
     let start = Instant::now();
+    let (placements, offsets) = (&placed.world, &placed.offsets);
     let normal_from_object: Vec<Mat3> = placements
         .iter()
         .map(|m| Mat3::from_mat4(m.as_mat4()).inverse().transpose())
@@ -442,10 +411,10 @@ fn into_object(c: &C3rc, inverse: &DMat4) -> C3rc {
 fn cull(
     cam: &Camera3,
     clouds: &HybridReflections,
-    inverse: &[DMat4],
-    scales: &[f64],
+    placed: &Placed,
     splat: u32,
 ) -> (Vec<(u32, u32)>, u64) {
+    let (inverse, scales) = (&placed.inverse, &placed.scales);
     let mut kept = Vec::new();
     let mut tested = 0u64;
     let leaf_points = clouds.settings.tree.leaf_points.max(1);
@@ -476,6 +445,48 @@ fn cull(
     (kept, tested)
 }
 
+/// Where each cloud is this frame.
+struct Placed {
+    /// Object → world.
+    world: Vec<DMat4>,
+    /// World → object.
+    inverse: Vec<DMat4>,
+    /// World units per object unit.
+    scales: Vec<f64>,
+    /// Each cloud's first point in the frame's point numbering.
+    offsets: Vec<u32>,
+}
+
+impl Placed {
+    /// The clouds of `clouds` as `scene` places them at time `t`.
+    fn at(clouds: &HybridReflections, scene: &Scene, t: f32) -> Placed {
+        let world: Vec<DMat4> = clouds
+            .clouds
+            .iter()
+            .map(|c| {
+                scene.objects[c.object as usize]
+                    .world_from_object_at(t)
+                    .as_dmat4()
+            })
+            .collect();
+        let offsets = clouds
+            .clouds
+            .iter()
+            .scan(0u32, |acc, c| {
+                let o = *acc;
+                *acc += c.points.len() as u32;
+                Some(o)
+            })
+            .collect();
+        Placed {
+            inverse: world.iter().map(|m| m.inverse()).collect(),
+            scales: world.iter().map(mean_scale).collect(),
+            world,
+            offsets,
+        }
+    }
+}
+
 /// Where splats go and what they are tested against.
 struct Splat<'a> {
     camera: &'a Pinhole,
@@ -492,12 +503,15 @@ fn project(
     cam: &Camera3,
     leaves: &[(u32, u32)],
     clouds: &HybridReflections,
-    placements: &[DMat4],
-    inverse: &[DMat4],
-    scales: &[f64],
-    offsets: &[u32],
+    placed: &Placed,
     splat: &Splat,
 ) -> [u64; 3] {
+    let Placed {
+        world: placements,
+        inverse,
+        scales,
+        offsets,
+    } = placed;
     let (w, h) = splat.camera.resolution();
     let eye = splat.camera.position();
     let mut counts = [0u64; 3];
@@ -587,7 +601,7 @@ fn stride(
     scale: f64,
     splat: u32,
 ) -> usize {
-    if cam.pixels <= 0.0 || !(spacing > 0.0) {
+    if cam.pixels <= 0.0 || spacing.is_nan() || spacing <= 0.0 {
         return 1;
     }
     // Distance from the triangle's box to the node's box, in object space, then world.
@@ -693,20 +707,11 @@ mod tests {
             .collect();
         let cameras = reflector_cameras(&view, &gbuffer, &clouds);
         assert!(cameras.len() > 100);
-        let placements: Vec<DMat4> = clouds
-            .clouds
-            .iter()
-            .map(|c| {
-                scene.objects[c.object as usize]
-                    .world_from_object_at(0.0)
-                    .as_dmat4()
-            })
-            .collect();
-        let inverse: Vec<DMat4> = placements.iter().map(|m| m.inverse()).collect();
-        let scales: Vec<f64> = placements.iter().map(mean_scale).collect();
+        let placed = Placed::at(&clouds, &scene, 0.0);
+        let inverse = &placed.inverse;
         let (mut kept, mut dropped_leaves) = (0, 0);
         for cam in cameras.iter().step_by(7) {
-            let (nodes, _) = cull(cam, &clouds, &inverse, &scales, 2);
+            let (nodes, _) = cull(cam, &clouds, &placed, 2);
             kept += nodes.len();
             for (c, cloud) in clouds.clouds.iter().enumerate() {
                 // The points the kept nodes read (thinned or not).
