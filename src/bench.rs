@@ -18,6 +18,7 @@
 //! (a fresh SPOC impostor's maps are 6.3 MB at 512², and returning them to the system is not
 //! building them).
 
+pub mod hybrid;
 pub mod master;
 pub mod relief;
 
@@ -753,6 +754,9 @@ pub enum BenchError {
     /// A Master Texture workload failed.
     #[error(transparent)]
     Master(#[from] crate::master::MasterError),
+    /// A render failed.
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
     /// An image could not be made.
     #[error(transparent)]
     Frame(#[from] crate::frame::FrameError),

@@ -118,6 +118,9 @@ pub enum BenchSuite {
     Relief,
     /// Master Texture encoding (paper 5): 360 views of 720 × 576.
     Master,
+    /// Hybrid reflections (paper 2): kd-tree construction and reflection rendering, beside exact
+    /// and impostor reflections of the same frames.
+    C3rc,
 }
 
 /// `trompe impostor …`.
@@ -906,6 +909,15 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Views(ViewsCommand::Capture(args)) => args.capture()?,
         Command::Views(ViewsCommand::Score(args)) => args.score()?,
         Command::Views(ViewsCommand::Render(args)) => args.render()?,
+        Command::Bench {
+            suite: BenchSuite::C3rc,
+            quick,
+            ..
+        } => {
+            let inputs = trompe::eval::fixtures::Shipped::locate();
+            let tables = with_spinner("timing", || trompe::bench::hybrid::tables(&inputs, quick))?;
+            println!("{tables}");
+        }
         Command::Bench {
             suite: suite @ (BenchSuite::Relief | BenchSuite::Master),
             quick,

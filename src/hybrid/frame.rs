@@ -418,6 +418,7 @@ fn cull(
     let mut kept = Vec::new();
     let mut tested = 0u64;
     let leaf_points = clouds.settings.tree.leaf_points.max(1);
+    let lod = clouds.settings.level_of_detail;
     for (c, cloud) in clouds.clouds.iter().enumerate() {
         if cloud.tree.nodes.is_empty() {
             continue;
@@ -431,7 +432,7 @@ fn cull(
                 continue;
             }
             let coarse = || {
-                let step = stride(cam, &local, node, cloud.spacing, scales[c], splat);
+                let step = stride(cam, &local, node, cloud.spacing, scales[c], splat, lod);
                 (node.points.1 as usize).div_ceil(step) <= leaf_points
             };
             if node.leaf || coarse() {
@@ -530,6 +531,7 @@ fn project(
             cloud.spacing,
             scales[c as usize],
             splat.size,
+            clouds.settings.level_of_detail,
         );
         for i in (node.points.0..node.points.0 + node.points.1).step_by(step) {
             counts[0] += 1;
@@ -600,8 +602,9 @@ fn stride(
     spacing: f32,
     scale: f64,
     splat: u32,
+    lod: bool,
 ) -> usize {
-    if cam.pixels <= 0.0 || spacing.is_nan() || spacing <= 0.0 {
+    if !lod || cam.pixels <= 0.0 || spacing.is_nan() || spacing <= 0.0 {
         return 1;
     }
     // Distance from the triangle's box to the node's box, in object space, then world.

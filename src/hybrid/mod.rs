@@ -46,6 +46,9 @@ pub struct HybridSettings {
     pub tree: TreeSettings,
     /// Seed of the sampling.
     pub seed: u64,
+    /// Read each C3RC's points thinned to what its magnification needs (beyond paper 2, whose
+    /// algorithm projects every point of every leaf kept: `false`).
+    pub level_of_detail: bool,
 }
 
 impl Default for HybridSettings {
@@ -56,6 +59,7 @@ impl Default for HybridSettings {
             max_points: 4_000_000,
             tree: TreeSettings::default(),
             seed: 1,
+            level_of_detail: true,
         }
     }
 }
