@@ -15,6 +15,7 @@ fn hybrid(c: &mut Criterion) {
         &scene,
         HybridSettings {
             level_of_detail: false,
+            mirrors_occlude: false,
             ..HybridSettings::default()
         },
     )

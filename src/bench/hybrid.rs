@@ -34,7 +34,8 @@ pub struct Row {
     pub stats: crate::hybrid::FrameStats,
     /// The hybrid frame's wall time, everything included.
     pub frame: Duration,
-    /// The same frame with the paper's algorithm (no level of detail): culling and projection.
+    /// The same frame with the paper's algorithm (no level of detail, no occlusion by mirrors):
+    /// culling and projection.
     pub paper_reflection: Duration,
     /// Its valid-projection ratio.
     pub paper_valid: f64,
@@ -86,6 +87,7 @@ pub fn tables(inputs: &Shipped, quick: bool) -> Result<Tables, BenchError> {
             let paper = HybridReflections {
                 settings: HybridSettings {
                     level_of_detail: false,
+                    mirrors_occlude: false,
                     ..settings
                 },
                 ..clouds.clone()

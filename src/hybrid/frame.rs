@@ -46,8 +46,11 @@ pub struct FrameStats {
     pub points_seen: u64,
     /// Projections that reached a pixel where the reflector is seen.
     pub splats: u64,
-    /// Pixels whose reflection a point gave.
+    /// Pixels whose reflection a point of a diffuse object gave.
     pub pixels_splatted: u64,
+    /// Splatted pixels whose reflected ray meets a mirror or glass before the point, traced
+    /// exactly.
+    pub pixels_traced: u64,
     /// Pixels where the eye sees a reflector.
     pub reflector_pixels: u64,
     /// Wall time of the G-buffer (primary rays).
@@ -103,10 +106,11 @@ impl std::fmt::Display for FrameStats {
         )?;
         writeln!(
             f,
-            "reflector pixels {}, reached by a point {} ({:.1} %)",
+            "reflector pixels {}, reached by a point {} ({:.1} %), of which a mirror hides {}",
             self.reflector_pixels,
             self.pixels_splatted,
-            100.0 * self.pixels_splatted as f64 / self.reflector_pixels.max(1) as f64
+            100.0 * self.pixels_splatted as f64 / self.reflector_pixels.max(1) as f64,
+            self.pixels_traced
         )?;
         write!(
             f,
@@ -243,14 +247,16 @@ pub fn render_frame(
         .iter()
         .map(|m| Mat3::from_mat4(m.as_mat4()).inverse().transpose())
         .collect();
-    let radiance: Vec<Option<Vec3>> = keys
+    let radiance: Vec<Reflected> = keys
         .par_iter()
         .zip(&gbuffer)
         .map(|(key, hit)| {
             let key = key.load(Ordering::Relaxed);
-            let hit = hit.as_ref()?;
+            let Some(hit) = hit.as_ref() else {
+                return Reflected::Nothing;
+            };
             if key == u64::MAX {
-                return None;
+                return Reflected::Nothing;
             }
             let global = (key & 0xFFFF_FFFF) as u32;
             let c = offsets.partition_point(|&o| o <= global) - 1;
@@ -262,16 +268,33 @@ pub fn render_frame(
             if n.dot(hit.position - q.as_vec3()) < 0.0 {
                 n = -n;
             }
-            Some(lambert(cloud.points.albedo[i], n, &scene.lighting))
+            Reflected::Point(
+                lambert(cloud.points.albedo[i], n, &scene.lighting),
+                (q.as_vec3() - hit.position).length(),
+            )
         })
         .collect();
-    stats.pixels_splatted = radiance.iter().flatten().count() as u64;
+    stats.pixels_splatted = radiance
+        .iter()
+        .filter(|r| matches!(r, Reflected::Point(..)))
+        .count() as u64;
 
     let answers = SplatAnswers {
         camera,
         width: w,
         gbuffer: &gbuffer,
         radiance: &radiance,
+        mirrors: clouds.settings.mirrors_occlude.then(|| {
+            Bvh::build(
+                view.meshes
+                    .iter()
+                    .zip(&view.surfaces)
+                    .filter(|(_, s)| is_reflector(s))
+                    .map(|(m, _)| m.clone())
+                    .collect(),
+            )
+        }),
+        hidden: AtomicU64::new(0),
         exact: Exact(&bvh),
         epsilon: scene.render.ray_epsilon,
     };
@@ -301,6 +324,7 @@ pub fn render_frame(
             progress.advance(1);
         });
     stats.shade = start.elapsed();
+    stats.pixels_traced = answers.hidden.load(Ordering::Relaxed);
     let reached = Image::from_vec(
         w,
         h,
@@ -428,7 +452,8 @@ fn cull(
         while let Some(id) = stack.pop() {
             let node = &cloud.tree.nodes[id as usize];
             tested += 1;
-            if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3(), cam.lambda_max) {
+            let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
+            if !local.may_see_box(lo, hi, cam.lambda_max) {
                 continue;
             }
             let coarse = || {
@@ -647,13 +672,26 @@ fn origin_to_triangle(t: [DVec3; 3]) -> f64 {
     best
 }
 
+/// What a reflector pixel's splats resolved to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Reflected {
+    /// No point: the environment shows.
+    Nothing,
+    /// A diffuse point's radiance, and its distance from the pixel's surface point.
+    Point(Vec3, f32),
+}
+
 /// Secondary rays answered by the splats where they are the eye's first reflection, exactly
 /// through the BVH otherwise.
 struct SplatAnswers<'a> {
     camera: &'a Pinhole,
     width: u32,
     gbuffer: &'a [Option<Hit>],
-    radiance: &'a [Option<Vec3>],
+    radiance: &'a [Reflected],
+    /// The mirrors and glass alone, when they hide points.
+    mirrors: Option<Bvh>,
+    /// Splatted pixels a mirror hid.
+    hidden: AtomicU64,
     exact: Exact<'a, Bvh>,
     epsilon: f32,
 }
@@ -672,17 +710,29 @@ impl SecondaryQuery for SplatAnswers<'_> {
             (hit.object == reflector && (hit.position - ray.origin).length() <= near).then_some(pix)
         });
         match first {
-            Some(pix) => self.radiance[pix].map(|l| Hit {
-                t: f32::INFINITY,
-                position: ray.dir,
-                normal: -ray.dir,
-                geometric_normal: -ray.dir,
-                uv: glam::Vec2::ZERO,
-                bary: glam::Vec2::ZERO,
-                object: crate::trace::ENVIRONMENT,
-                triangle: 0,
-                radiance: Some(l),
-            }),
+            Some(pix) => match self.radiance[pix] {
+                Reflected::Nothing => None,
+                Reflected::Point(_, distance)
+                    if self
+                        .mirrors
+                        .as_ref()
+                        .is_some_and(|m| m.closest_hit(ray, distance).is_some()) =>
+                {
+                    self.hidden.fetch_add(1, Ordering::Relaxed);
+                    self.exact.secondary_hit(reflector, ray)
+                }
+                Reflected::Point(l, _) => Some(Hit {
+                    t: f32::INFINITY,
+                    position: ray.dir,
+                    normal: -ray.dir,
+                    geometric_normal: -ray.dir,
+                    uv: glam::Vec2::ZERO,
+                    bary: glam::Vec2::ZERO,
+                    object: crate::trace::ENVIRONMENT,
+                    triangle: 0,
+                    radiance: Some(l),
+                }),
+            },
             None => self.exact.secondary_hit(reflector, ray),
         }
     }

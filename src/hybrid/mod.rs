@@ -46,6 +46,10 @@ pub struct HybridSettings {
     pub tree: TreeSettings,
     /// Seed of the sampling.
     pub seed: u64,
+    /// Test each splatted pixel's reflected ray against the mirrors and glass, and trace it
+    /// exactly where one of them is nearer than the point: mirrors then hide what is behind
+    /// them (beyond paper 2, whose points are seen through every reflector: `false`).
+    pub mirrors_occlude: bool,
     /// Read each C3RC's points thinned to what its magnification needs (beyond paper 2, whose
     /// algorithm projects every point of every leaf kept: `false`).
     pub level_of_detail: bool,
@@ -59,6 +63,7 @@ impl Default for HybridSettings {
             max_points: 4_000_000,
             tree: TreeSettings::default(),
             seed: 1,
+            mirrors_occlude: true,
             level_of_detail: true,
         }
     }

@@ -2,27 +2,10 @@
 //! view with the frusta drawn, and the impostor's fidelity on a mirror bunny's reflected rays.
 
 use super::html::{Figure, Section, Table};
-use super::{DemoInputs, ReportError};
+use super::{DemoInputs, ReportError, draw_line};
 use crate::frame::{FrameError, io};
 use glam::Vec3;
 use std::path::Path;
-
-/// Draws a line segment into an image (image coordinates), clipped to it.
-fn draw_line(
-    img: &mut crate::frame::Image<crate::frame::Rgba>,
-    a: glam::DVec2,
-    b: glam::DVec2,
-    color: crate::frame::Rgba,
-) {
-    let steps = (b - a).abs().max_element().ceil().clamp(1.0, 1e5) as usize;
-    let (w, h) = img.size();
-    for i in 0..=steps {
-        let p = a.lerp(b, i as f64 / steps as f64);
-        if p.x >= 0.0 && p.y >= 0.0 && p.x < w as f64 && p.y < h as f64 {
-            img.set(p.x as u32, p.y as u32, color);
-        }
-    }
-}
 
 /// The closed outline, seen from above (`x`, `z`), of the convex hull of `points`.
 fn floor_hull(points: &[glam::DVec3]) -> Vec<glam::DVec3> {

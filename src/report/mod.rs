@@ -6,6 +6,7 @@
 
 mod foundation;
 pub mod html;
+mod hybrid;
 mod impostors;
 mod master;
 mod maze;
@@ -141,6 +142,9 @@ pub fn demo(
     report.sections.push(maze::section(inputs, out)?);
     timed("graph camera", t);
     let t = std::time::Instant::now();
+    report.sections.push(hybrid::section(inputs, out)?);
+    timed("hybrid reflections", t);
+    let t = std::time::Instant::now();
     report.sections.push(views::section(inputs, out)?);
     timed("calibrated views", t);
     let t = std::time::Instant::now();
@@ -199,6 +203,23 @@ fn over(
 }
 
 /// The FLIP colour scale, 0 on the left to 1 on the right.
+/// Draws a line segment into an image (image coordinates), clipped to it.
+pub(super) fn draw_line(
+    img: &mut crate::frame::Image<crate::frame::Rgba>,
+    a: glam::DVec2,
+    b: glam::DVec2,
+    color: crate::frame::Rgba,
+) {
+    let steps = (b - a).abs().max_element().ceil().clamp(1.0, 1e5) as usize;
+    let (w, h) = img.size();
+    for i in 0..=steps {
+        let p = a.lerp(b, i as f64 / steps as f64);
+        if p.x >= 0.0 && p.y >= 0.0 && p.x < w as f64 && p.y < h as f64 {
+            img.set(p.x as u32, p.y as u32, color);
+        }
+    }
+}
+
 fn flip_scale() -> Result<crate::frame::Image<crate::frame::Rgba>, FrameError> {
     let mut ramp = crate::frame::Image::new(256, 1, 0.0f32)?;
     for x in 0..256 {

@@ -83,7 +83,19 @@ impl C3rc {
 
     /// Calls `f` with every projection of `q` with `0 ≤ λ ≤ lambda_max`, nearest sweep first,
     /// without allocating (the splatting loop's form of [`C3rc::project`]).
-    pub fn project_each(&self, q: DVec3, lambda_max: f64, mut f: impl FnMut(C3rcProjection)) {
+    pub fn project_each(&self, q: DVec3, lambda_max: f64, f: impl FnMut(C3rcProjection)) {
+        self.project_between(q, 0.0, lambda_max, f)
+    }
+
+    /// Calls `f` with every projection of `q` with `lambda_min ≤ λ ≤ lambda_max` (`lambda_min ≥
+    /// 0`), nearest sweep first.
+    pub fn project_between(
+        &self,
+        q: DVec3,
+        lambda_min: f64,
+        lambda_max: f64,
+        mut f: impl FnMut(C3rcProjection),
+    ) {
         let roots = roots_of(self.cubic(q));
         for &lambda in roots.as_slice() {
             // A root a rounding error below 0 is the base itself.
@@ -92,7 +104,7 @@ impl C3rc {
             } else {
                 lambda
             };
-            if !(0.0..=lambda_max).contains(&lambda) {
+            if !(lambda_min..=lambda_max).contains(&lambda) {
                 continue;
             }
             let t = [0, 1, 2].map(|k| self.v[k] + self.d[k] * lambda);
@@ -147,8 +159,13 @@ impl C3rc {
 
     /// Whether `q` has at least one projection with `0 ≤ λ ≤ lambda_max`.
     pub fn sees(&self, q: DVec3, lambda_max: f64) -> bool {
+        self.sees_between(q, 0.0, lambda_max)
+    }
+
+    /// Whether `q` has at least one projection with `lambda_min ≤ λ ≤ lambda_max`.
+    pub fn sees_between(&self, q: DVec3, lambda_min: f64, lambda_max: f64) -> bool {
         let mut any = false;
-        self.project_each(q, lambda_max, |_| any = true);
+        self.project_between(q, lambda_min, lambda_max, |_| any = true);
         any
     }
 
@@ -502,6 +519,7 @@ mod tests {
                 concave(&mut seed)
             };
             let lambda_max = if case % 3 == 0 { f64::INFINITY } else { 4.0 };
+            let lambda_min = if case % 4 == 1 { 0.3 } else { 0.0 };
             // Boxes of every size around the volume's first few units.
             let centre = DVec3::new(
                 3.0 * rng(&mut seed) - 1.0,
@@ -511,7 +529,7 @@ mod tests {
             let half = DVec3::new(rng(&mut seed), rng(&mut seed), rng(&mut seed))
                 * (0.05 + 0.6 * rng(&mut seed));
             let (lo, hi) = (centre - half, centre + half);
-            let keep = c.may_see_box(lo, hi, lambda_max);
+            let keep = c.may_see_box_between(lo, hi, lambda_min, lambda_max);
             // Brute force: a fine grid of points in the box.
             let steps = 9;
             let mut seen = false;
@@ -519,7 +537,7 @@ mod tests {
                 for y in 0..steps {
                     for z in 0..steps {
                         let f = DVec3::new(x as f64, y as f64, z as f64) / (steps - 1) as f64;
-                        if c.sees(lo + (hi - lo) * f, lambda_max) {
+                        if c.sees_between(lo + (hi - lo) * f, lambda_min, lambda_max) {
                             seen = true;
                             break 'grid;
                         }

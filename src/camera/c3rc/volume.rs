@@ -18,12 +18,24 @@ impl C3rc {
     /// Whether the box `[lo, hi]` may hold a point with a projection with `0 ≤ λ ≤ lambda_max`.
     /// Conservative: it may say yes for a box that holds none, never no for one that holds one.
     pub fn may_see_box(&self, lo: DVec3, hi: DVec3, lambda_max: f64) -> bool {
+        self.may_see_box_between(lo, hi, 0.0, lambda_max)
+    }
+
+    /// [`C3rc::may_see_box`] for the volume cut to `lambda_min ≤ λ ≤ lambda_max`: the near cap
+    /// `T(lambda_min)` takes the base's place.
+    pub fn may_see_box_between(
+        &self,
+        lo: DVec3,
+        hi: DVec3,
+        lambda_min: f64,
+        lambda_max: f64,
+    ) -> bool {
         let tol = 1e-9 * (1.0 + (hi - lo).max_element() + lo.abs().max(hi.abs()).max_element());
         let (lo, hi) = (lo - DVec3::splat(tol), hi + DVec3::splat(tol));
         // Cheap rejection: the volume lies inside the hull of its base and its far cap (a point
         // of the sweep is bilinear in the barycentrics and λ).
         if lambda_max.is_finite() {
-            let (hlo, hhi) = self.hull_box(0.0, lambda_max);
+            let (hlo, hhi) = self.hull_box(lambda_min, lambda_max);
             if (hlo.cmpgt(hi) | hhi.cmplt(lo)).any() {
                 return false;
             }
@@ -35,7 +47,7 @@ impl C3rc {
                 if k & 2 == 0 { lo.y } else { hi.y },
                 if k & 4 == 0 { lo.z } else { hi.z },
             );
-            if self.sees(corner, lambda_max) {
+            if self.sees_between(corner, lambda_min, lambda_max) {
                 return true;
             }
         }
@@ -43,14 +55,16 @@ impl C3rc {
         for (i, j) in [(0, 1), (1, 2), (2, 0)] {
             for axis in 0..3 {
                 for c in [lo[axis], hi[axis]] {
-                    if self.wall_meets_face(i, j, axis, c, lo, hi, lambda_max, tol) {
+                    let range = (lambda_min, lambda_max);
+                    if self.wall_meets_face(i, j, axis, c, lo, hi, range, tol) {
                         return true;
                     }
                 }
             }
         }
-        // The base or the far cap overlaps the box.
-        if triangle_overlaps_box(self.v, lo, hi) {
+        // The base (the near cap) or the far cap overlaps the box.
+        let near = [0, 1, 2].map(|k| self.v[k] + self.d[k] * lambda_min);
+        if triangle_overlaps_box(near, lo, hi) {
             return true;
         }
         if lambda_max.is_finite() {
@@ -61,10 +75,13 @@ impl C3rc {
         }
         // Where the sweep folds, its fold may bound the volume: keep what overlaps the sweep there.
         for (a, b) in self.multiple_projection_ranges(lambda_max) {
+            if b < lambda_min {
+                continue;
+            }
             if !b.is_finite() {
                 return true;
             }
-            let (hlo, hhi) = self.hull_box(a, b);
+            let (hlo, hhi) = self.hull_box(a.max(lambda_min), b);
             if !(hlo.cmpgt(hi) | hhi.cmplt(lo)).any() {
                 return true;
             }
@@ -87,8 +104,8 @@ impl C3rc {
     }
 
     /// Whether the wall over base edge `(i, j)` meets the face `x[axis] = c` of the box, with
-    /// `0 ≤ λ ≤ lambda_max`. The set of wall parameters `α ∈ [0, 1]` that land on the face is a
-    /// union of intervals bounded by `α = 0, 1`, by `λ(α) = 0` or `λmax` (linear), and by the
+    /// `λ` in `range`. The set of wall parameters `α ∈ [0, 1]` that land on the face is a union
+    /// of intervals bounded by `α = 0, 1`, by `λ(α) = λmin` or `λmax` (linear), and by the
     /// face's edges (quadratic): it is non-empty exactly when one of those candidates is on it.
     #[allow(clippy::too_many_arguments)]
     fn wall_meets_face(
@@ -99,7 +116,7 @@ impl C3rc {
         c: f64,
         lo: DVec3,
         hi: DVec3,
-        lambda_max: f64,
+        (lambda_min, lambda_max): (f64, f64),
         tol: f64,
     ) -> bool {
         let (p0, p1) = (self.v[i], self.v[j] - self.v[i]);
@@ -124,15 +141,13 @@ impl C3rc {
         };
         add(0.0);
         add(1.0);
-        // λ(α) = 0: P_k(α) = c.
-        if p1[k] != 0.0 {
-            add((c - p0[k]) / p1[k]);
-        }
-        // λ(α) = λmax: c − P_k(α) = λmax·D_k(α).
-        if lambda_max.is_finite() {
-            let slope = -p1[k] - lambda_max * d1[k];
-            if slope != 0.0 {
-                add((lambda_max * d0[k] - (c - p0[k])) / slope);
+        // λ(α) = λmin or λmax: c − P_k(α) = λ·D_k(α).
+        for l in [lambda_min, lambda_max] {
+            if l.is_finite() {
+                let slope = -p1[k] - l * d1[k];
+                if slope != 0.0 {
+                    add((l * d0[k] - (c - p0[k])) / slope);
+                }
             }
         }
         // p_m(α) = bound: N_m(α) − bound·D_k(α) = 0, with
@@ -157,7 +172,7 @@ impl C3rc {
             }
             let p = p0 + p1 * a;
             let lambda = (c - p[k]) / dk;
-            if !(lambda >= -tol && lambda <= lambda_max + tol) {
+            if !(lambda >= lambda_min - tol && lambda <= lambda_max + tol) {
                 return false;
             }
             let q = p + (d0 + d1 * a) * lambda;
