@@ -33,6 +33,8 @@
 //!   walk, bake, save and load.
 //! * [`render`](mod@render) — one Whitted tracer generic over what answers primary and secondary rays, and
 //!   the raster, trace and impostor methods built on it.
+//! * [`hybrid`] — hybrid reflections: diffuse objects as points, splatted through one continuous
+//!   3-ray camera per mirror triangle.
 //! * [`relief`] — relief impostors: a software shader, 3-D image warping, validity, the
 //!   two-thread pipeline.
 //! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility,

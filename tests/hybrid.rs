@@ -54,7 +54,7 @@ fn a_flat_mirror_splatted_agrees_with_exact_reflections() {
         splat: 1,
         ..HybridSettings::default()
     };
-    let exact_hits = exact_reflection_hits(&s);
+    let exact_hits = exact_reflection_hits(&s, 0.0);
     let exact_n = exact_hits.iter().filter(|a| **a).count();
     assert!(exact_n > 300, "{exact_n}");
     // The pixels the splats reach are the ones whose exact reflected ray meets the bunny: no
@@ -106,11 +106,11 @@ fn a_flat_mirror_splatted_agrees_with_exact_reflections() {
 
 /// Per pixel: does its primary ray meet the mirror (object 0) and its exact reflected ray then
 /// the bunny (object 1)?
-fn exact_reflection_hits(s: &Scene) -> Vec<bool> {
+fn exact_reflection_hits(s: &Scene, t: f32) -> Vec<bool> {
     use trompe::geom::optics::{facing, reflect};
     use trompe::glam::DVec2;
     use trompe::{Bvh, Ray, RayQuery};
-    let view = s.view(0.0).unwrap();
+    let view = s.view(t).unwrap();
     let bvh = Bvh::build(view.meshes.clone());
     let (w, h) = (s.camera.width, s.camera.height);
     let mut out = vec![false; (w * h) as usize];
@@ -134,6 +134,39 @@ fn exact_reflection_hits(s: &Scene) -> Vec<bool> {
         }
     }
     out
+}
+
+#[test]
+fn points_sampled_once_follow_their_object_in_rigid_motion() {
+    let mut s = scene(FLAT_MIRROR);
+    s.objects[1].animation = Some(trompe::scene::Animation {
+        axis: trompe::glam::Vec3::Y,
+        angular_speed: 1.3,
+        velocity: trompe::glam::Vec3::new(0.1, 0.0, 0.0),
+    });
+    let one = HybridSettings {
+        splat: 1,
+        ..HybridSettings::default()
+    };
+    let clouds = HybridReflections::prepare(&s, one).unwrap();
+    let t = 0.7;
+    let moved = clouds.render_at(&s, t, &()).unwrap();
+    let exact_hits = exact_reflection_hits(&s, t);
+    let still = exact_reflection_hits(&s, 0.0);
+    let reached: Vec<bool> = moved.reached.pixels().iter().map(|&o| o == 1).collect();
+    let both = exact_hits
+        .iter()
+        .zip(&reached)
+        .filter(|(a, b)| **a && **b)
+        .count();
+    let exact_n = exact_hits.iter().filter(|a| **a).count();
+    // The motion changes what the mirror shows, and the splats follow it.
+    assert_ne!(exact_hits, still);
+    println!("moved: exact {exact_n}, both {both}");
+    assert!(
+        both as f64 >= 0.97 * exact_n as f64,
+        "holes: {both} of {exact_n}"
+    );
 }
 
 #[test]
