@@ -11,10 +11,9 @@ use super::HybridReflections;
 use crate::camera::{C3rc, Pinhole, Projection};
 use crate::frame::{Frame, Image, NO_OBJECT};
 use crate::geom::Ray;
-use crate::geom::optics::facing;
 use crate::progress::Progress;
 use crate::render::shading::lambert;
-use crate::render::{RenderError, Tracer};
+use crate::render::{RenderError, Tracer, shade_pixels};
 use crate::scene::{Scene, Surface, View};
 use crate::trace::{Bvh, Exact, Hit, RayQuery, SecondaryQuery};
 use glam::{DMat4, DVec2, DVec3, Mat3, Vec3};
@@ -305,24 +304,7 @@ pub fn render_frame(
         lighting: &scene.lighting,
         settings: &scene.render,
     };
-    let mut frame = Frame::new(w, h)?;
-    frame
-        .par_rows_mut()
-        .for_each(|(y, (color, depth, normal, id))| {
-            for x in 0..w as usize {
-                let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                match &gbuffer[y * w as usize + x] {
-                    None => color[x] = scene.lighting.environment.radiance(ray.dir).extend(1.0),
-                    Some(hit) => {
-                        color[x] = tracer.shade_primary(&ray, hit).extend(1.0);
-                        depth[x] = hit.t;
-                        normal[x] = facing(ray.dir, hit.normal, hit.geometric_normal).0;
-                        id[x] = hit.object;
-                    }
-                }
-            }
-            progress.advance(1);
-        });
+    let frame = shade_pixels(&tracer, progress, |pixel, _| gbuffer[pixel])?;
     stats.shade = start.elapsed();
     stats.pixels_traced = answers.hidden.load(Ordering::Relaxed);
     let reached = Image::from_vec(

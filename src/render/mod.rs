@@ -20,7 +20,7 @@ mod trace;
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use impostor::{ImpostorInputs, ReflectorImpostors, placed_cameras};
 pub use raster::render_raster;
-pub use trace::{Tracer, render_trace};
+pub use trace::{Tracer, render_trace, shade_pixels};
 
 use crate::frame::{Frame, FrameError};
 pub use crate::progress::{Progress, Timings};

@@ -44,11 +44,6 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
         }
     }
 
-    /// Radiance leaving `hit` back along `ray`, a primary hit found elsewhere (a G-buffer).
-    pub fn shade_primary(&self, ray: &Ray, hit: &Hit) -> Vec3 {
-        self.shade(ray, hit, 0)
-    }
-
     fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
         if let Some(l) = hit.radiance {
             return l;
@@ -105,6 +100,18 @@ pub fn render_trace<P: RayQuery, S: SecondaryQuery + ?Sized>(
     tracer: &Tracer<'_, P, S>,
     progress: &dyn Progress,
 ) -> Result<Frame, RenderError> {
+    shade_pixels(tracer, progress, |_, ray| {
+        tracer.primary.closest_hit(ray, f32::INFINITY)
+    })
+}
+
+/// Shades every pixel centre's primary hit, which `primary_hit(pixel index, ray)` gives — traced
+/// ([`render_trace`]) or read from a G-buffer made beforehand.
+pub fn shade_pixels<P: RayQuery, S: SecondaryQuery + ?Sized>(
+    tracer: &Tracer<'_, P, S>,
+    progress: &dyn Progress,
+    primary_hit: impl Fn(usize, &Ray) -> Option<Hit> + Sync,
+) -> Result<Frame, RenderError> {
     let camera = &tracer.view.camera;
     let (w, h) = crate::camera::Projection::resolution(camera);
     let mut frame = Frame::new(w, h)?;
@@ -113,7 +120,7 @@ pub fn render_trace<P: RayQuery, S: SecondaryQuery + ?Sized>(
         .for_each(|(y, (color, depth, normal, id))| {
             for x in 0..w as usize {
                 let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                match tracer.primary.closest_hit(&ray, f32::INFINITY) {
+                match primary_hit(y * w as usize + x, &ray) {
                     None => color[x] = tracer.lighting.environment.radiance(ray.dir).extend(1.0),
                     Some(hit) => {
                         color[x] = tracer.shade(&ray, &hit, 0).extend(1.0);
