@@ -71,6 +71,7 @@ pub mod hybrid;
 pub mod impostor;
 pub mod master;
 pub mod memory;
+pub mod octahedral;
 pub mod progress;
 pub mod raster;
 pub mod relief;

@@ -1,0 +1,232 @@
+//! Baking an octahedral atlas: one orthographic frame per grid direction, framed on the object's
+//! bounding sphere and rasterized by trompe's rasterizer, holding base colour with coverage, the
+//! object-space normal and the depth behind the frame's front plane; then every channel dilated
+//! into the empty texels around the object, frame by frame, so bilinear filtering and mip-maps
+//! never pull background into the silhouette.
+//!
+//! Invariants: frame `(i, j)` is the atlas's texels `[i·s, (i+1)·s) × [j·s, (j+1)·s)`; a frame's
+//! camera looks at the sphere's centre from [`Grid::direction`] with image axes
+//! [`frame_basis`]; depth is `(front − P)·d / 2r ∈ [0, 1]` (0 on the front plane `c + r·d`);
+//! dilation never changes a covered texel and never crosses a frame's border.
+
+use super::mapping::{Grid, frame_basis};
+use crate::camera::Orthographic;
+use crate::frame::{Image, Rgba};
+use crate::geom::Mesh;
+use crate::raster::{StoreFragment, rasterize};
+use crate::render::shading::albedo;
+use crate::scene::Surface;
+use glam::{DVec3, Vec3, Vec4};
+use rayon::prelude::*;
+
+/// How to bake.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeSettings {
+    /// The frame grid.
+    pub grid: Grid,
+    /// Texels a frame side.
+    pub frame_size: u32,
+    /// Texels of dilation around the object in every frame.
+    pub dilation: u32,
+}
+
+/// A baked atlas, in the object's own space.
+#[derive(Clone, Debug)]
+pub struct OctahedralAtlas {
+    /// How it was baked.
+    pub settings: BakeSettings,
+    /// The bounding sphere every frame is framed on: centre.
+    pub centre: Vec3,
+    /// The bounding sphere's radius.
+    pub radius: f32,
+    /// Linear base colour; alpha is coverage (0 or 1 as baked, dilated colour under alpha 0).
+    pub color: Image<Rgba>,
+    /// Unit object-space normal, facing the frame's camera (zero where nothing was ever drawn).
+    pub normal: Image<Vec3>,
+    /// Depth behind the front plane over the sphere's diameter, `[0, 1]`.
+    pub depth: Image<f32>,
+}
+
+impl OctahedralAtlas {
+    /// Atlas side in texels.
+    pub fn side(&self) -> u32 {
+        self.settings.grid.n * self.settings.frame_size
+    }
+
+    /// The camera of frame `(i, j)`.
+    pub fn frame_camera(&self, i: u32, j: u32) -> Orthographic {
+        frame_camera(
+            &self.settings,
+            self.centre.as_dvec3(),
+            f64::from(self.radius),
+            i,
+            j,
+        )
+    }
+}
+
+fn frame_camera(s: &BakeSettings, centre: DVec3, radius: f64, i: u32, j: u32) -> Orthographic {
+    let d = s.grid.direction(i, j);
+    let (_, up) = frame_basis(d);
+    let eye = centre + d * radius;
+    // Valid by construction: a positive radius and a unit direction.
+    match Orthographic::look_at(
+        eye.as_vec3(),
+        centre.as_vec3(),
+        up.as_vec3(),
+        radius,
+        2.0 * radius,
+        s.frame_size,
+        s.frame_size,
+    ) {
+        Ok(c) => c,
+        Err(_) => unreachable!("a frame camera has a positive radius and a unit direction"),
+    }
+}
+
+/// Bakes `mesh`, coloured as `surface` colours it, into an atlas.
+pub fn bake(
+    mesh: &Mesh,
+    surface: &Surface,
+    settings: BakeSettings,
+) -> Result<OctahedralAtlas, crate::frame::FrameError> {
+    let b = mesh.bounds();
+    let centre = b.center();
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| (*p - centre).length())
+        .fold(0.0f32, f32::max)
+        .max(1e-6)
+        * 1.001;
+    let n = settings.grid.n;
+    let s = settings.frame_size;
+    let side = n * s;
+    crate::frame::check_size(u64::from(side), u64::from(side))?;
+    let frames: Vec<(Vec<Rgba>, Vec<Vec3>, Vec<f32>)> = (0..n * n)
+        .into_par_iter()
+        .map(|k| {
+            let (i, j) = (k % n, k / n);
+            bake_frame(
+                mesh,
+                surface,
+                &settings,
+                centre.as_dvec3(),
+                f64::from(radius),
+                i,
+                j,
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    let mut color = Image::new(side, side, Vec4::ZERO)?;
+    let mut normal = Image::new(side, side, Vec3::ZERO)?;
+    let mut depth = Image::new(side, side, 1.0f32)?;
+    for (k, (c, nm, d)) in frames.into_iter().enumerate() {
+        let (i, j) = (k as u32 % n, k as u32 / n);
+        for y in 0..s {
+            for x in 0..s {
+                let t = (y * s + x) as usize;
+                let (ax, ay) = (i * s + x, j * s + y);
+                color.set(ax, ay, c[t]);
+                normal.set(ax, ay, nm[t]);
+                depth.set(ax, ay, d[t]);
+            }
+        }
+    }
+    Ok(OctahedralAtlas {
+        settings,
+        centre,
+        radius,
+        color,
+        normal,
+        depth,
+    })
+}
+
+type FrameTexels = (Vec<Rgba>, Vec<Vec3>, Vec<f32>);
+
+fn bake_frame(
+    mesh: &Mesh,
+    surface: &Surface,
+    settings: &BakeSettings,
+    centre: DVec3,
+    radius: f64,
+    i: u32,
+    j: u32,
+) -> Result<FrameTexels, crate::frame::FrameError> {
+    let camera = frame_camera(settings, centre, radius, i, j);
+    let d = settings.grid.direction(i, j);
+    let front = centre + d * radius;
+    let (target, _) = rasterize(&camera, &[mesh], &StoreFragment, None)?;
+    let s = settings.frame_size as usize;
+    let mut color = vec![Vec4::ZERO; s * s];
+    let mut normal = vec![Vec3::ZERO; s * s];
+    let mut depth = vec![1.0f32; s * s];
+    for (t, f) in target.attributes.pixels().iter().enumerate() {
+        let Some(f) = f else { continue };
+        let tri = f.item.triangle as usize;
+        let idx = mesh.triangles[tri];
+        let b = f.bary;
+        let p: Vec3 = (0..3).map(|k| mesh.positions[idx[k] as usize] * b[k]).sum();
+        let mut nm: Vec3 = (0..3).map(|k| mesh.normals[idx[k] as usize] * b[k]).sum();
+        nm = nm.try_normalize().unwrap_or_else(|| mesh.face_normal(tri));
+        if nm.dot(d.as_vec3()) < 0.0 {
+            nm = -nm;
+        }
+        let uv = match &mesh.uvs {
+            Some(uvs) => (0..3).map(|k| uvs[idx[k] as usize] * b[k]).sum(),
+            None => glam::Vec2::ZERO,
+        };
+        color[t] = albedo(mesh, surface, tri as u32, uv).extend(1.0);
+        normal[t] = nm;
+        depth[t] = (((front - p.as_dvec3()).dot(d)) / (2.0 * radius)).clamp(0.0, 1.0) as f32;
+    }
+    dilate(&mut color, &mut normal, &mut depth, s, settings.dilation);
+    Ok((color, normal, depth))
+}
+
+/// Grows every channel `radius` texels into the uncovered texels of one `s × s` frame: each
+/// round, an uncovered texel with covered (or already grown) 8-neighbours takes their mean.
+pub fn dilate(color: &mut [Rgba], normal: &mut [Vec3], depth: &mut [f32], s: usize, radius: u32) {
+    let mut filled: Vec<bool> = color.iter().map(|c| c.w > 0.0).collect();
+    for _ in 0..radius {
+        let mut grown = Vec::new();
+        for y in 0..s {
+            for x in 0..s {
+                let t = y * s + x;
+                if filled[t] {
+                    continue;
+                }
+                let (mut c, mut nm, mut dp, mut count) = (Vec3::ZERO, Vec3::ZERO, 0.0f32, 0);
+                for dy in -1i64..=1 {
+                    for dx in -1i64..=1 {
+                        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                        if nx < 0 || ny < 0 || nx >= s as i64 || ny >= s as i64 {
+                            continue;
+                        }
+                        let u = ny as usize * s + nx as usize;
+                        if filled[u] {
+                            c += color[u].truncate();
+                            nm += normal[u];
+                            dp += depth[u];
+                            count += 1;
+                        }
+                    }
+                }
+                if count > 0 {
+                    let k = count as f32;
+                    grown.push((t, c / k, nm.normalize_or_zero(), dp / k));
+                }
+            }
+        }
+        if grown.is_empty() {
+            break;
+        }
+        for (t, c, nm, dp) in grown {
+            color[t] = c.extend(0.0);
+            normal[t] = nm;
+            depth[t] = dp;
+            filled[t] = true;
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! Rendering from an octahedral atlas: trompe's CPU reference of what an engine's impostor
+//! shader does. For each pixel whose ray meets the bounding sphere, the three frames around the
+//! view direction are looked up and blended by their barycentric weights; each lookup is
+//! parallax-corrected with the frame's depth (the ray is intersected with the plane at the depth
+//! read there, a few times over), and the blended base colour is relit with the blended normal.
+//!
+//! Invariants: a frame's texel `(x, y)` images the point `c + r·(2(x+½)/s − 1)·right +
+//! r·(1 − 2(y+½)/s)·up` of its plane, as its baking camera did; lookups are bilinear and clamped
+//! to the frame, never reading a neighbour frame.
+
+use super::bake::OctahedralAtlas;
+use super::mapping::frame_basis;
+use crate::camera::Pinhole;
+use crate::frame::{Image, Rgba};
+use crate::geom::Ray;
+use crate::render::shading::lambert;
+use crate::scene::Lighting;
+use glam::{DVec2, DVec3, Vec3};
+use rayon::prelude::*;
+
+/// Parallax refinement steps (0: the frame's plane through the centre, no depth).
+pub const PARALLAX_STEPS: u32 = 4;
+
+/// What a lookup returns, premultiplied by coverage.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sample {
+    color: Vec3,
+    normal: Vec3,
+    alpha: f32,
+}
+
+impl OctahedralAtlas {
+    /// Renders the atlas (placed in its own space) through `camera`, lit by `lighting`, over the
+    /// environment; `parallax` steps of depth correction per lookup.
+    pub fn render(&self, camera: &Pinhole, lighting: &Lighting, parallax: u32) -> Image<Rgba> {
+        let (w, h) = crate::camera::Projection::resolution(camera);
+        let view = (camera.position() - self.centre.as_dvec3()).normalize_or(DVec3::Y);
+        self.render_rays((w, h), view, |uv| camera.ray(uv), lighting, parallax)
+    }
+
+    /// [`OctahedralAtlas::render`] for any camera: `ray(pixel centre)` gives each pixel's ray,
+    /// `view` the direction toward the eye the frames are chosen by.
+    pub fn render_rays(
+        &self,
+        (w, h): (u32, u32),
+        view: DVec3,
+        ray: impl Fn(DVec2) -> Ray + Sync,
+        lighting: &Lighting,
+        parallax: u32,
+    ) -> Image<Rgba> {
+        let centre = self.centre.as_dvec3();
+        let r = f64::from(self.radius);
+        let frames = self.settings.grid.frames_around(view);
+        let pixels: Vec<Rgba> = (0..h as usize * w as usize)
+            .into_par_iter()
+            .map(|k| {
+                let (x, y) = (k % w as usize, k / w as usize);
+                let ray = ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let (o, dir) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+                let env = lighting.environment.radiance(ray.dir);
+                // Only rays through the bounding sphere can meet the object.
+                let oc = o - centre;
+                let b = oc.dot(dir);
+                if b * b - (oc.length_squared() - r * r) < 0.0 {
+                    return env.extend(1.0);
+                }
+                let mut acc = Sample::default();
+                for &((i, j), weight) in &frames {
+                    if weight <= 0.0 {
+                        continue;
+                    }
+                    if let Some(s) = self.lookup(i, j, o, dir, parallax) {
+                        acc.color += s.color * weight as f32;
+                        acc.normal += s.normal * weight as f32;
+                        acc.alpha += s.alpha * weight as f32;
+                    }
+                }
+                if acc.alpha <= 1e-6 {
+                    return env.extend(1.0);
+                }
+                let a = acc.alpha.min(1.0);
+                let albedo = acc.color / acc.alpha;
+                let n = acc.normal.normalize_or(-ray.dir);
+                (lambert(albedo, n, lighting) * a + env * (1.0 - a)).extend(1.0)
+            })
+            .collect();
+        match Image::from_vec(w, h, pixels) {
+            Ok(img) => img,
+            Err(_) => unreachable!("the camera's resolution is a valid image size"),
+        }
+    }
+
+    /// Frame `(i, j)` along the ray `o + t·dir`, parallax-corrected `steps` times.
+    fn lookup(&self, i: u32, j: u32, o: DVec3, dir: DVec3, steps: u32) -> Option<Sample> {
+        let d = self.settings.grid.direction(i, j);
+        let facing = dir.dot(d);
+        if facing >= -1e-9 {
+            return None;
+        }
+        let centre = self.centre.as_dvec3();
+        let r = f64::from(self.radius);
+        // The ray against the plane at signed offset `off` from the centre along `d`.
+        let at = |off: f64| {
+            let t = (centre + d * off - o).dot(d) / facing;
+            o + dir * t
+        };
+        let (right, up) = frame_basis(d);
+        let s = f64::from(self.settings.frame_size);
+        let texel = |p: DVec3| {
+            let q = p - centre;
+            DVec2::new(
+                (q.dot(right) / r + 1.0) * 0.5 * s,
+                (1.0 - q.dot(up) / r) * 0.5 * s,
+            )
+        };
+        let mut uv = texel(at(0.0));
+        for _ in 0..steps {
+            let depth = f64::from(self.bilinear(&self.depth, i, j, uv));
+            uv = texel(at(r - 2.0 * r * depth));
+        }
+        if uv.x < -1.0 || uv.y < -1.0 || uv.x > s + 1.0 || uv.y > s + 1.0 {
+            return None;
+        }
+        let c = self.bilinear(&self.color, i, j, uv);
+        let n = self.bilinear(&self.normal, i, j, uv);
+        Some(Sample {
+            color: c.truncate() * c.w,
+            normal: n * c.w,
+            alpha: c.w,
+        })
+    }
+
+    /// Bilinear lookup of frame `(i, j)` of `img` at frame texel coordinates `uv` (texel
+    /// centres at `+½`), clamped to the frame.
+    fn bilinear<T>(&self, img: &Image<T>, i: u32, j: u32, uv: DVec2) -> T
+    where
+        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
+        let s = self.settings.frame_size;
+        let max = f64::from(s - 1);
+        let p = (uv - DVec2::splat(0.5)).clamp(DVec2::ZERO, DVec2::splat(max));
+        let (x0, y0) = (p.x.floor() as u32, p.y.floor() as u32);
+        let (x1, y1) = ((x0 + 1).min(s - 1), (y0 + 1).min(s - 1));
+        let (fx, fy) = ((p.x - f64::from(x0)) as f32, (p.y - f64::from(y0)) as f32);
+        let (ox, oy) = (i * s, j * s);
+        let g = |x: u32, y: u32| img.get(ox + x, oy + y);
+        (g(x0, y0) * (1.0 - fx) + g(x1, y0) * fx) * (1.0 - fy)
+            + (g(x0, y1) * (1.0 - fx) + g(x1, y1) * fx) * fy
+    }
+}
