@@ -498,6 +498,13 @@ pub struct BakeArgs {
     /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
     #[arg(short, long)]
     output: PathBuf,
+    /// Bake an octahedral atlas of N × N frames instead (--resolution is the atlas side; NAME.png,
+    /// NAME-normal.exr and NAME-depth.exr go beside NAME.json).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=64))]
+    octahedral: Option<u32>,
+    /// With --octahedral: the upper hemisphere only (hemi-octahedral).
+    #[arg(long)]
+    hemi: bool,
 }
 
 /// `--camera` of `impostor`.
@@ -765,6 +772,57 @@ impl RenderArgs {
 }
 
 impl BakeArgs {
+    /// An octahedral atlas: refuses outputs that are inputs, loads the mesh, bakes, writes.
+    fn bake_octahedral(&self, n: u32) -> Result<trompe::octahedral::file::OctahedralReport> {
+        use trompe::octahedral::{BakeSettings, Coverage, Grid, bake, file};
+        let frame_size = self.resolution / n;
+        if frame_size < 8 {
+            anyhow::bail!(
+                "--resolution {} / --octahedral {n} leaves {frame_size} texels a frame; give at least 8",
+                self.resolution
+            );
+        }
+        let files = file::files(&self.output);
+        let mut plan = OutputPlan::new();
+        plan.creating_folders()
+            .reads([&self.input])
+            .writes(&files[0], &["json"])
+            .writes(&files[1], &["png"])
+            .writes(&files[2], &["exr"])
+            .writes(&files[3], &["exr"]);
+        plan.check_overwrites()?;
+        let loaded = trompe::geom::io::load(&self.input)
+            .with_context(|| format!("loading {}", self.input.display()))?;
+        check_plan(plan.reads(loaded.files.iter().cloned()))?;
+        plan.make_folders()
+            .context("creating the output's folder")?;
+        let settings = BakeSettings {
+            grid: Grid {
+                n,
+                coverage: if self.hemi {
+                    Coverage::Hemisphere
+                } else {
+                    Coverage::Sphere
+                },
+            },
+            frame_size,
+            dilation: 4,
+        };
+        let start = std::time::Instant::now();
+        let atlas = with_spinner("baking the octahedral atlas", || {
+            bake(
+                &loaded.mesh,
+                &trompe::scene::Surface::Diffuse(None),
+                settings,
+            )
+        })?;
+        let bake_time = start.elapsed();
+        let sidecar = file::save(&atlas, &self.output).context("writing the atlas")?;
+        Ok(file::OctahedralReport::new(
+            &atlas, sidecar, files, bake_time,
+        ))
+    }
+
     /// Refuses outputs that are inputs, loads the input, bakes.
     fn bake(self) -> Result<trompe::impostor::BakeReport> {
         let mut plan = OutputPlan::new();
@@ -899,11 +957,14 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             }
             print_timings(verbose, &report.timings);
         }
-        Command::Impostor(ImpostorCommand::Bake(args)) => {
-            let report = args.bake()?;
-            println!("{report}");
-            print_timings(verbose, &report.timings);
-        }
+        Command::Impostor(ImpostorCommand::Bake(args)) => match args.octahedral {
+            Some(n) => println!("{}", args.bake_octahedral(n)?),
+            None => {
+                let report = args.bake()?;
+                println!("{report}");
+                print_timings(verbose, &report.timings);
+            }
+        },
         Command::Relief(args) => args.walk()?,
         Command::Master(command) => command.run()?,
         Command::Views(ViewsCommand::Capture(args)) => args.capture()?,

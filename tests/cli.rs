@@ -934,3 +934,43 @@ fn render_c3rc_prints_its_statistics_and_refuses_bad_settings() {
         "subdivide",
     );
 }
+
+#[test]
+fn octahedral_bakes_write_the_atlas_and_its_layout() {
+    let d = scratch("cli_octahedral");
+    let json = d.join("duck.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--octahedral",
+        "8",
+        "--resolution",
+        "256",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["duck.json", "duck.png", "duck-normal.exr", "duck-depth.exr"] {
+        assert!(d.join(f).is_file(), "{f}");
+    }
+    let sidecar: trompe::octahedral::file::Sidecar =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!((sidecar.grid.n, sidecar.frame_size), (8, 32));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("switch distance"), "{out}");
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            "assets/gltf/Duck.glb",
+            "--octahedral",
+            "64",
+            "--resolution",
+            "256",
+            "-o",
+            json.to_str().unwrap(),
+        ]),
+        "texels a frame",
+    );
+}

@@ -9,6 +9,7 @@
 //! layout is defined.
 
 pub mod bake;
+pub mod file;
 pub mod mapping;
 pub mod render;
 

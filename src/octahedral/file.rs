@@ -1,0 +1,177 @@
+//! An octahedral atlas on disk: `NAME.json` (the layout, below), `NAME.png` (base colour, sRGB,
+//! alpha = coverage), `NAME-normal.exr` (object-space unit normals, float) and `NAME-depth.exr`
+//! (depth behind each frame's front plane over the bounding sphere's diameter, float). The JSON
+//! says everything a shader needs to read the maps: the grid (`n` frames a side, `sphere` or
+//! `hemisphere`), the frame size, the bounding sphere in the object's own space, and the maps'
+//! file names; the mapping is docs/conventions.md §8's.
+//!
+//! Invariants: written through [`crate::files::write_atomically`]-backed writers; nothing but
+//! the four files is written.
+
+use super::bake::OctahedralAtlas;
+use super::mapping::Grid;
+use crate::frame::{FrameError, io};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use thiserror::Error;
+
+/// The JSON sidecar of an octahedral atlas.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Sidecar {
+    /// Always `"trompe-octahedral-impostor"`.
+    pub format: String,
+    /// Layout version (1).
+    pub version: u32,
+    /// Frames a side and the directions covered.
+    pub grid: Grid,
+    /// Texels a frame side; the atlas is `n · frame_size` square.
+    pub frame_size: u32,
+    /// Texels of dilation around the object in each frame.
+    pub dilation: u32,
+    /// Bounding sphere centre, object space.
+    pub centre: [f32; 3],
+    /// Bounding sphere radius.
+    pub radius: f32,
+    /// Base colour + coverage (PNG, sRGB).
+    pub color: String,
+    /// Object-space normals (OpenEXR, float RGB).
+    pub normal: String,
+    /// Depth over the sphere's diameter from each frame's front plane (OpenEXR, float).
+    pub depth: String,
+}
+
+/// Errors writing an atlas.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum OctahedralFileError {
+    /// A map could not be written.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+    /// The sidecar could not be written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The sidecar's path has no file name.
+    #[error("{0}: not a file name")]
+    NotAFile(PathBuf),
+}
+
+/// The four files of an atlas whose sidecar is `json`.
+pub fn files(json: &Path) -> [PathBuf; 4] {
+    let stem = json
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let dir = json.parent().unwrap_or(Path::new(""));
+    [
+        json.to_path_buf(),
+        dir.join(format!("{stem}.png")),
+        dir.join(format!("{stem}-normal.exr")),
+        dir.join(format!("{stem}-depth.exr")),
+    ]
+}
+
+/// Writes `atlas` as `json` and its three maps beside it.
+pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralFileError> {
+    if json.file_stem().is_none() {
+        return Err(OctahedralFileError::NotAFile(json.to_path_buf()));
+    }
+    let [_, color, normal, depth] = files(json);
+    io::write_png(&color, &atlas.color)?;
+    io::write_exr_normals(&normal, &atlas.normal)?;
+    io::write_exr_depth(&depth, &atlas.depth)?;
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let sidecar = Sidecar {
+        format: "trompe-octahedral-impostor".into(),
+        version: 1,
+        grid: atlas.settings.grid,
+        frame_size: atlas.settings.frame_size,
+        dilation: atlas.settings.dilation,
+        centre: atlas.centre.to_array(),
+        radius: atlas.radius,
+        color: name(&color),
+        normal: name(&normal),
+        depth: name(&depth),
+    };
+    let text = serde_json::to_string_pretty(&sidecar).map_err(|e| OctahedralFileError::Io {
+        path: json.to_path_buf(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::files::write_atomically(json, text.as_bytes()).map_err(|source| {
+        OctahedralFileError::Io {
+            path: json.to_path_buf(),
+            source,
+        }
+    })?;
+    Ok(sidecar)
+}
+
+/// What a bake did.
+#[derive(Clone, Debug)]
+pub struct OctahedralReport {
+    /// The sidecar written.
+    pub sidecar: Sidecar,
+    /// Its path and the maps'.
+    pub files: [PathBuf; 4],
+    /// Time to bake.
+    pub bake_time: Duration,
+    /// Bytes of each file written.
+    pub bytes: [u64; 4],
+    /// Distance (in object units) from which one atlas texel covers one pixel of a 1080-row,
+    /// 60° view: where a renderer can switch from the mesh to the impostor.
+    pub switch_distance: f32,
+}
+
+impl OctahedralReport {
+    /// The report of `atlas` written to `files` in `bake_time`.
+    pub fn new(
+        atlas: &OctahedralAtlas,
+        sidecar: Sidecar,
+        files: [PathBuf; 4],
+        bake_time: Duration,
+    ) -> Self {
+        let bytes = files
+            .clone()
+            .map(|f| std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0));
+        let texel = 2.0 * atlas.radius / atlas.settings.frame_size as f32;
+        let pixel_angle = 60f32.to_radians() / 1080.0;
+        OctahedralReport {
+            sidecar,
+            files,
+            bake_time,
+            bytes,
+            switch_distance: texel / pixel_angle,
+        }
+    }
+}
+
+impl std::fmt::Display for OctahedralReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.sidecar;
+        let side = s.grid.n * s.frame_size;
+        writeln!(
+            f,
+            "octahedral impostor: {n} × {n} frames ({:?}) of {fs}², atlas {side}², baked in {:.2} s",
+            s.grid.coverage,
+            self.bake_time.as_secs_f64(),
+            n = s.grid.n,
+            fs = s.frame_size
+        )?;
+        for (path, bytes) in self.files.iter().zip(self.bytes) {
+            writeln!(f, "  {} ({:.1} MB)", path.display(), bytes as f64 / 1e6)?;
+        }
+        write!(
+            f,
+            "switch distance: {:.2} units (one texel a pixel at 1080 rows, 60° field of view)",
+            self.switch_distance
+        )
+    }
+}
