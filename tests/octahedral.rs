@@ -2,12 +2,11 @@
 //! against the exact render.
 
 use std::path::Path;
-use trompe::camera::Pinhole;
 use trompe::frame::envmap::EnvMap;
 use trompe::frame::metrics;
-use trompe::glam::{DVec3, Vec3};
-use trompe::octahedral::{BakeSettings, Coverage, Grid, OctahedralAtlas, bake};
-use trompe::scene::{Light, Lighting, RenderSettings, Surface, View};
+use trompe::glam::Vec3;
+use trompe::octahedral::{BakeSettings, Coverage, Grid, bake, turntable};
+use trompe::scene::{Light, Lighting, Surface};
 
 fn duck() -> trompe::geom::Mesh {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/gltf/Duck.glb");
@@ -113,51 +112,15 @@ fn dilation_fills_around_the_object_and_keeps_what_it_covers() {
     assert!(covered > 1000 && filled > 500, "{covered} {filled}");
 }
 
-/// Mean FLIP of a turntable against the exact render: with parallax and without.
-fn turntable(atlas: &OctahedralAtlas, mesh: &trompe::geom::Mesh, views: u32) -> (f64, f64, f64) {
-    let light = lighting();
-    let view_of = |eye: Vec3| View {
-        camera: Pinhole::look_at(eye, atlas.centre, Vec3::Y, 30.0, 160, 160).unwrap(),
-        meshes: vec![std::sync::Arc::new(mesh.clone())],
-        surfaces: vec![Surface::Diffuse(None)],
-    };
-    let settings = RenderSettings {
-        max_depth: 2,
-        time: 0.0,
-        ray_epsilon: 1e-4,
-    };
-    let (mut with, mut without, mut worst) = (0.0, 0.0, 0.0f64);
-    for k in 0..views {
-        let a = std::f64::consts::TAU * f64::from(k) / f64::from(views);
-        let elevation = 0.5 * ((k % 5) as f64 - 2.0) / 2.0;
-        let dir = DVec3::new(a.cos(), elevation, a.sin()).normalize();
-        let eye = atlas.centre + (dir * f64::from(atlas.radius) * 4.0).as_vec3();
-        let view = view_of(eye);
-        let exact = trompe::render::render_view(
-            &view,
-            &light,
-            &settings,
-            trompe::render::Method::Trace,
-            &(),
-            &mut Default::default(),
-        )
-        .unwrap();
-        let a_img = atlas.render(&view.camera, &light, 4);
-        let b_img = atlas.render(&view.camera, &light, 0);
-        let fa = metrics::flip(&exact.color, &a_img, None).unwrap();
-        with += fa;
-        worst = worst.max(fa);
-        without += metrics::flip(&exact.color, &b_img, None).unwrap();
-    }
-    let n = f64::from(views);
-    (with / n, without / n, worst)
-}
-
 #[test]
 fn a_turntable_of_the_duck_is_close_to_exact_and_parallax_helps() {
     let mesh = duck();
     let atlas = bake(&mesh, &Surface::Diffuse(None), settings(16, 96, 4)).unwrap();
-    let (with, without, worst) = turntable(&atlas, &mesh, 16);
+    let views = turntable(&atlas, &mesh, &Surface::Diffuse(None), &lighting(), 16, 160).unwrap();
+    let n = views.len() as f64;
+    let with = views.iter().map(|v| v.flip).sum::<f64>() / n;
+    let without = views.iter().map(|v| v.flip_flat).sum::<f64>() / n;
+    let worst = views.iter().map(|v| v.flip).fold(0.0, f64::max);
     println!(
         "Duck 16 × 16: mean FLIP {with:.4} with parallax (worst {worst:.4}), {without:.4} without"
     );

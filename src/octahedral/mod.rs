@@ -12,6 +12,8 @@ pub mod bake;
 pub mod file;
 pub mod mapping;
 pub mod render;
+pub mod turntable;
 
 pub use bake::{BakeSettings, OctahedralAtlas, bake};
 pub use mapping::{Coverage, Grid};
+pub use turntable::{TurntableView, turntable};

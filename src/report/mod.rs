@@ -10,6 +10,7 @@ mod hybrid;
 mod impostors;
 mod master;
 mod maze;
+mod octahedral;
 mod relief;
 mod views;
 
@@ -144,6 +145,9 @@ pub fn demo(
     let t = std::time::Instant::now();
     report.sections.push(hybrid::section(inputs, out)?);
     timed("hybrid reflections", t);
+    let t = std::time::Instant::now();
+    report.sections.push(octahedral::section(inputs, out)?);
+    timed("octahedral impostors", t);
     let t = std::time::Instant::now();
     report.sections.push(views::section(inputs, out)?);
     timed("calibrated views", t);
