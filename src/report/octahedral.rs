@@ -130,6 +130,9 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     Ok(s)
 }
 
+/// One score of a turntable view.
+type Score = fn(&TurntableView) -> f64;
+
 /// FLIP per view: parallax in orange, flat in grey, over a 0–0.2 scale.
 fn chart(views: &[TurntableView]) -> Result<Image<Rgba>, crate::frame::FrameError> {
     let (w, h) = (480u32, 160u32);
@@ -137,7 +140,7 @@ fn chart(views: &[TurntableView]) -> Result<Image<Rgba>, crate::frame::FrameErro
     let x = |k: usize| 10.0 + k as f64 * (f64::from(w) - 20.0) / (views.len().max(2) - 1) as f64;
     let y = |f: f64| f64::from(h) - 10.0 - (f / 0.2).min(1.0) * (f64::from(h) - 20.0);
     for k in 1..views.len() {
-        let series: [(fn(&TurntableView) -> f64, Vec4); 2] = [
+        let series: [(Score, Vec4); 2] = [
             (|v| v.flip_flat, Vec4::new(0.5, 0.5, 0.5, 1.0)),
             (|v| v.flip, Vec4::new(1.0, 0.5, 0.05, 1.0)),
         ];
