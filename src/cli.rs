@@ -505,6 +505,9 @@ pub struct BakeArgs {
     /// With --octahedral: the upper hemisphere only (hemi-octahedral).
     #[arg(long)]
     hemi: bool,
+    /// With --octahedral: also write NAME.glb, a glTF 2.0 card with the atlas and its layout.
+    #[arg(long)]
+    glb: bool,
 }
 
 /// `--camera` of `impostor`.
@@ -783,6 +786,7 @@ impl BakeArgs {
             );
         }
         let files = file::files(&self.output);
+        let glb = self.output.with_extension("glb");
         let mut plan = OutputPlan::new();
         plan.creating_folders()
             .reads([&self.input])
@@ -790,6 +794,9 @@ impl BakeArgs {
             .writes(&files[1], &["png"])
             .writes(&files[2], &["exr"])
             .writes(&files[3], &["exr"]);
+        if self.glb {
+            plan.writes(&glb, &["glb"]);
+        }
         plan.check_overwrites()?;
         let loaded = trompe::geom::io::load(&self.input)
             .with_context(|| format!("loading {}", self.input.display()))?;
@@ -818,6 +825,10 @@ impl BakeArgs {
         })?;
         let bake_time = start.elapsed();
         let sidecar = file::save(&atlas, &self.output).context("writing the atlas")?;
+        if self.glb {
+            trompe::octahedral::gltf::export(&self.output, &glb).context("writing the glTF")?;
+            eprintln!("wrote {}", glb.display());
+        }
         Ok(file::OctahedralReport::new(
             &atlas, sidecar, files, bake_time,
         ))

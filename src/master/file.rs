@@ -258,24 +258,7 @@ pub fn gltf_bytes(mesh: &Mesh, uvs: &[[f32; 2]], texture: &str) -> Result<Vec<u8
         ]
     });
     let json = serde_json::to_vec(&doc).map_err(|e| err(Path::new("mesh.glb"), e))?;
-    let glb = gltf::binary::Glb {
-        header: gltf::binary::Header {
-            magic: *b"glTF",
-            version: 2,
-            length: 0,
-        },
-        json: std::borrow::Cow::Owned(pad(json, b' ')),
-        bin: Some(std::borrow::Cow::Owned(pad(bin, 0))),
-    };
-    glb.to_vec().map_err(|e| err(Path::new("mesh.glb"), e))
-}
-
-/// `bytes` padded to a multiple of four (GLB chunks).
-fn pad(mut bytes: Vec<u8>, with: u8) -> Vec<u8> {
-    while !bytes.len().is_multiple_of(4) {
-        bytes.push(with);
-    }
-    bytes
+    crate::geom::io::glb_bytes(json, bin).map_err(|e| err(Path::new("mesh.glb"), e))
 }
 
 #[cfg(test)]

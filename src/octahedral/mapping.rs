@@ -23,6 +23,11 @@ pub enum Coverage {
 
 /// The unit square point of unit direction `d`.
 pub fn encode(d: DVec3, coverage: Coverage) -> DVec2 {
+    // The hemi map holds no direction below the horizon: those clamp to it.
+    let d = match coverage {
+        Coverage::Sphere => d,
+        Coverage::Hemisphere => DVec3::new(d.x, d.y.max(0.0), d.z),
+    };
     let d = d / (d.x.abs() + d.y.abs() + d.z.abs()).max(f64::MIN_POSITIVE);
     let p = match coverage {
         Coverage::Sphere => {
@@ -33,10 +38,8 @@ pub fn encode(d: DVec3, coverage: Coverage) -> DVec2 {
                 DVec2::new((1.0 - d.z.abs()) * sign(d.x), (1.0 - d.x.abs()) * sign(d.z))
             }
         }
-        Coverage::Hemisphere => {
-            // Below the horizon clamps to it; the diamond rotated 45° fills the square.
-            DVec2::new(d.x + d.z, d.z - d.x)
-        }
+        // The diamond rotated 45° fills the square.
+        Coverage::Hemisphere => DVec2::new(d.x + d.z, d.z - d.x),
     };
     (p * 0.5 + DVec2::splat(0.5)).clamp(DVec2::ZERO, DVec2::ONE)
 }

@@ -10,6 +10,7 @@
 
 pub mod bake;
 pub mod file;
+pub mod gltf;
 pub mod mapping;
 pub mod render;
 pub mod turntable;

@@ -26,6 +26,27 @@ pub struct LoadedMesh {
     pub files: Vec<PathBuf>,
 }
 
+/// A binary glTF (GLB) of a JSON document and its binary chunk, each padded to four bytes as the
+/// container requires (JSON with spaces, binary with zeros).
+pub fn glb_bytes(json: Vec<u8>, bin: Vec<u8>) -> Result<Vec<u8>, ::gltf::Error> {
+    fn pad(mut bytes: Vec<u8>, with: u8) -> Vec<u8> {
+        while !bytes.len().is_multiple_of(4) {
+            bytes.push(with);
+        }
+        bytes
+    }
+    ::gltf::binary::Glb {
+        header: ::gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
+        json: std::borrow::Cow::Owned(pad(json, b' ')),
+        bin: Some(std::borrow::Cow::Owned(pad(bin, 0))),
+    }
+    .to_vec()
+}
+
 /// Loads a mesh, choosing the format by extension (`.obj`, `.ply`, `.gltf`, `.glb`).
 pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let ext = path
