@@ -20,6 +20,7 @@
 
 pub mod hybrid;
 pub mod master;
+pub mod octahedral;
 pub mod relief;
 
 use crate::camera::Pinhole;

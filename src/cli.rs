@@ -121,6 +121,8 @@ pub enum BenchSuite {
     /// Hybrid reflections (paper 2): kd-tree construction and reflection rendering, beside exact
     /// and impostor reflections of the same frames.
     C3rc,
+    /// Octahedral impostors: 2048² bakes, and turntables against the exact render.
+    Octahedral,
 }
 
 /// `trompe impostor …`.
@@ -981,6 +983,17 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Views(ViewsCommand::Capture(args)) => args.capture()?,
         Command::Views(ViewsCommand::Score(args)) => args.score()?,
         Command::Views(ViewsCommand::Render(args)) => args.render()?,
+        Command::Bench {
+            suite: BenchSuite::Octahedral,
+            quick,
+            ..
+        } => {
+            let inputs = trompe::eval::fixtures::Shipped::locate();
+            let figures = with_spinner("timing", || {
+                trompe::bench::octahedral::octahedral(&inputs, quick)
+            })?;
+            println!("{figures}");
+        }
         Command::Bench {
             suite: BenchSuite::C3rc,
             quick,
