@@ -133,6 +133,50 @@ pub enum ImpostorCommand {
     Bake(BakeArgs),
     /// Fire rays at an object and compare every impostor answer with the exact BVH.
     Check(CheckArgs),
+    /// Join the manifests of a sharded octahedral batch into one.
+    MergeManifests(MergeArgs),
+}
+
+/// `trompe impostor merge-manifests`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// The shards' manifests (manifest-K-of-N.json).
+    #[arg(required = true)]
+    manifests: Vec<PathBuf>,
+    /// The joined manifest to write.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+impl MergeArgs {
+    fn merge(self) -> Result<()> {
+        let mut plan = OutputPlan::new();
+        plan.reads(self.manifests.iter())
+            .writes(&self.output, &["json"]);
+        plan.check_overwrites()?;
+        let manifests = self
+            .manifests
+            .iter()
+            .map(|p| {
+                let text = std::fs::read_to_string(p)
+                    .with_context(|| format!("reading {}", p.display()))?;
+                serde_json::from_str(&text)
+                    .with_context(|| format!("{}: not a batch manifest", p.display()))
+            })
+            .collect::<Result<Vec<trompe::octahedral::batch::Manifest>>>()?;
+        let merged = trompe::octahedral::batch::merge(&manifests)?;
+        let text = serde_json::to_string_pretty(&merged)?;
+        trompe::files::write_atomically(&self.output, text.as_bytes())
+            .with_context(|| format!("writing {}", self.output.display()))?;
+        let failed = merged.entries.iter().filter(|e| e.error.is_some()).count();
+        println!(
+            "{} files from {} shards, {failed} failed; wrote {}",
+            merged.entries.len(),
+            merged.shards.len(),
+            self.output.display()
+        );
+        Ok(())
+    }
 }
 
 /// `trompe views …`.
@@ -479,8 +523,10 @@ pub struct RenderArgs {
 #[derive(clap::Args, Debug)]
 pub struct BakeArgs {
     /// The object (.obj, .ply, .gltf, .glb), in its own coordinates; or a floor plan
-    /// (.maze) for --camera graph.
-    input: PathBuf,
+    /// (.maze) for --camera graph. With --octahedral, any number of meshes: a batch into the
+    /// folder -o names.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
     /// Impostor camera.
     #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
     camera: CameraArg,
@@ -510,6 +556,9 @@ pub struct BakeArgs {
     /// With --octahedral: also write NAME.glb, a glTF 2.0 card with the atlas and its layout.
     #[arg(long)]
     glb: bool,
+    /// With --octahedral and a batch: bake only shard K of N of the sorted inputs ("K/N").
+    #[arg(long)]
+    shard: Option<trompe::octahedral::batch::Shard>,
 }
 
 /// `--camera` of `impostor`.
@@ -778,8 +827,20 @@ impl RenderArgs {
 
 impl BakeArgs {
     /// An octahedral atlas: refuses outputs that are inputs, loads the mesh, bakes, writes.
-    fn bake_octahedral(&self, n: u32) -> Result<trompe::octahedral::file::OctahedralReport> {
-        use trompe::octahedral::{BakeSettings, Coverage, Grid, bake, file};
+    /// The one input of a single bake.
+    fn input(&self) -> Result<&PathBuf> {
+        match self.inputs.as_slice() {
+            [one] => Ok(one),
+            _ => anyhow::bail!(
+                "{} inputs: only --octahedral bakes several at once (into the folder -o names)",
+                self.inputs.len()
+            ),
+        }
+    }
+
+    /// The octahedral settings these arguments ask for.
+    fn octahedral_settings(&self, n: u32) -> Result<trompe::octahedral::BakeSettings> {
+        use trompe::octahedral::{BakeSettings, Coverage, Grid};
         let frame_size = self.resolution / n;
         if frame_size < 8 {
             anyhow::bail!(
@@ -787,25 +848,7 @@ impl BakeArgs {
                 self.resolution
             );
         }
-        let files = file::files(&self.output);
-        let glb = self.output.with_extension("glb");
-        let mut plan = OutputPlan::new();
-        plan.creating_folders()
-            .reads([&self.input])
-            .writes(&files[0], &["json"])
-            .writes(&files[1], &["png"])
-            .writes(&files[2], &["exr"])
-            .writes(&files[3], &["exr"]);
-        if self.glb {
-            plan.writes(&glb, &["glb"]);
-        }
-        plan.check_overwrites()?;
-        let loaded = trompe::geom::io::load(&self.input)
-            .with_context(|| format!("loading {}", self.input.display()))?;
-        check_plan(plan.reads(loaded.files.iter().cloned()))?;
-        plan.make_folders()
-            .context("creating the output's folder")?;
-        let settings = BakeSettings {
+        Ok(BakeSettings {
             grid: Grid {
                 n,
                 coverage: if self.hemi {
@@ -816,7 +859,106 @@ impl BakeArgs {
             },
             frame_size,
             dilation: 4,
-        };
+        })
+    }
+
+    /// Whether this is a batch: several inputs, or an output that is not a .json file.
+    fn is_batch(&self) -> bool {
+        self.inputs.len() > 1 || !has_extension(&self.output, "json") || self.shard.is_some()
+    }
+
+    /// A batch of octahedral bakes into the folder -o names: a shard of the sorted inputs,
+    /// each file baked or skipped with its error, a manifest; fails at the end if any failed.
+    fn bake_batch(&self, n: u32) -> Result<()> {
+        use trompe::octahedral::batch::{Shard, bake_all, outputs, shard_inputs};
+        let settings = self.octahedral_settings(n)?;
+        let shard = self.shard.unwrap_or(Shard { index: 1, count: 1 });
+        let mine = shard_inputs(&self.inputs, shard)?;
+        let manifest_path = self
+            .output
+            .join(format!("manifest-{}-of-{}.json", shard.index, shard.count));
+        let mut plan = OutputPlan::new();
+        plan.creating_folders().reads(self.inputs.iter());
+        for o in outputs(&mine, &self.output, self.glb) {
+            plan.writes(o, &["json", "png", "exr", "glb"]);
+        }
+        plan.writes(&manifest_path, &["json"]);
+        plan.check_overwrites()?;
+        std::fs::create_dir_all(&self.output)
+            .with_context(|| format!("creating {}", self.output.display()))?;
+        let pb = ProgressBar::new(mine.len() as u64);
+        pb.set_style(
+            ProgressStyle::with_template("{msg:>28} [{bar:30}] {pos}/{len} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        pb.set_message(format!("shard {}/{}", shard.index, shard.count));
+        let manifest = bake_all(
+            &mine,
+            &self.output,
+            settings,
+            self.glb,
+            shard,
+            &mut |e, secs| {
+                pb.suspend(|| match (&e.error, e.triangles) {
+                    (Some(err), _) => eprintln!("skipped {}: {err}", e.input.display()),
+                    (None, t) => eprintln!(
+                        "baked {} ({} triangles) in {secs:.2} s",
+                        e.input.display(),
+                        t.unwrap_or(0)
+                    ),
+                });
+                pb.inc(1);
+            },
+        );
+        pb.finish_and_clear();
+        let text = serde_json::to_string_pretty(&manifest)?;
+        trompe::files::write_atomically(&manifest_path, text.as_bytes())
+            .with_context(|| format!("writing {}", manifest_path.display()))?;
+        let failed = manifest
+            .entries
+            .iter()
+            .filter(|e| e.error.is_some())
+            .count();
+        println!(
+            "shard {}/{}: {} of {} files baked; wrote {}",
+            shard.index,
+            shard.count,
+            manifest.entries.len() - failed,
+            manifest.entries.len(),
+            manifest_path.display()
+        );
+        if failed > 0 {
+            anyhow::bail!(
+                "{failed} of {} files could not be baked (named above)",
+                manifest.entries.len()
+            );
+        }
+        Ok(())
+    }
+
+    fn bake_octahedral(&self, n: u32) -> Result<trompe::octahedral::file::OctahedralReport> {
+        use trompe::octahedral::{bake, file};
+        let settings = self.octahedral_settings(n)?;
+        let input = self.input()?;
+        let files = file::files(&self.output);
+        let glb = self.output.with_extension("glb");
+        let mut plan = OutputPlan::new();
+        plan.creating_folders()
+            .reads([input])
+            .writes(&files[0], &["json"])
+            .writes(&files[1], &["png"])
+            .writes(&files[2], &["exr"])
+            .writes(&files[3], &["exr"]);
+        if self.glb {
+            plan.writes(&glb, &["glb"]);
+        }
+        plan.check_overwrites()?;
+        let loaded = trompe::geom::io::load(input)
+            .with_context(|| format!("loading {}", input.display()))?;
+        check_plan(plan.reads(loaded.files.iter().cloned()))?;
+        plan.make_folders()
+            .context("creating the output's folder")?;
         let start = std::time::Instant::now();
         let atlas = with_spinner("baking the octahedral atlas", || {
             bake(
@@ -838,14 +980,15 @@ impl BakeArgs {
 
     /// Refuses outputs that are inputs, loads the input, bakes.
     fn bake(self) -> Result<trompe::impostor::BakeReport> {
+        let input = self.input()?.clone();
         let mut plan = OutputPlan::new();
         plan.creating_folders()
-            .reads([&self.input])
+            .reads([&input])
             .writes(&self.output, &["json"])
             .writes(self.output.with_extension("exr"), &["exr"])
             .writes(self.output.with_extension("png"), &["png"]);
         plan.check_overwrites()?;
-        let subject = load_subject(&self.input)?;
+        let subject = load_subject(&input)?;
         check_plan(plan.reads(subject.files()))?;
         plan.make_folders()
             .context("creating the output's folder")?;
@@ -970,7 +1113,9 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             }
             print_timings(verbose, &report.timings);
         }
+        Command::Impostor(ImpostorCommand::MergeManifests(args)) => args.merge()?,
         Command::Impostor(ImpostorCommand::Bake(args)) => match args.octahedral {
+            Some(n) if args.is_batch() => args.bake_batch(n)?,
             Some(n) => println!("{}", args.bake_octahedral(n)?),
             None => {
                 let report = args.bake()?;

@@ -974,3 +974,64 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
         "texels a frame",
     );
 }
+
+#[test]
+fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
+    let d = scratch("cli_octahedral_batch");
+    let inputs = d.join("in");
+    std::fs::create_dir_all(&inputs).unwrap();
+    std::fs::copy("assets/gltf/Duck.glb", inputs.join("Duck.glb")).unwrap();
+    std::fs::copy("assets/meshes/teapot.obj", inputs.join("teapot.obj")).unwrap();
+    std::fs::write(inputs.join("broken.obj"), "v 1 2\nf 1 2 3\n").unwrap();
+    let out = d.join("out");
+    let files: Vec<String> = ["Duck.glb", "broken.obj", "teapot.obj"]
+        .iter()
+        .map(|f| inputs.join(f).to_str().unwrap().to_string())
+        .collect();
+    let mut manifests = Vec::new();
+    for k in 1..=2 {
+        let shard = format!("{k}/2");
+        let mut args = vec!["impostor", "bake"];
+        args.extend(files.iter().map(String::as_str));
+        args.extend([
+            "--octahedral",
+            "4",
+            "--resolution",
+            "64",
+            "--shard",
+            &shard,
+            "-o",
+        ]);
+        args.push(out.to_str().unwrap());
+        let o = trompe(&args);
+        let e = stderr(&o);
+        assert!(!e.contains("panicked"), "{e}");
+        // Sorted, shard 2 of 2 holds broken.obj alone: it fails, by name.
+        if k == 2 {
+            fails_cleanly(&o, "broken.obj");
+        } else {
+            assert!(o.status.success(), "{e}");
+        }
+        manifests.push(out.join(format!("manifest-{k}-of-2.json")));
+    }
+    assert!(out.join("Duck.json").is_file() && out.join("teapot.png").is_file());
+    let merged = out.join("manifest.json");
+    let mut args = vec!["impostor", "merge-manifests"];
+    args.extend(manifests.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["-o", merged.to_str().unwrap()]);
+    let o = trompe(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m: trompe::octahedral::batch::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(&merged).unwrap()).unwrap();
+    assert_eq!(m.entries.len(), 3);
+    assert_eq!(m.entries.iter().filter(|e| e.error.is_some()).count(), 1);
+    // A manifest missing a shard does not merge.
+    let o = trompe(&[
+        "impostor",
+        "merge-manifests",
+        manifests[0].to_str().unwrap(),
+        "-o",
+        d.join("partial.json").to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "shards");
+}

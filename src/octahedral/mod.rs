@@ -9,6 +9,7 @@
 //! layout is defined.
 
 pub mod bake;
+pub mod batch;
 pub mod file;
 pub mod gltf;
 pub mod mapping;
