@@ -135,6 +135,35 @@ pub enum ImpostorCommand {
     Check(CheckArgs),
     /// Join the manifests of a sharded octahedral batch into one.
     MergeManifests(MergeArgs),
+    /// Write a baked octahedral impostor as a glTF 2.0 binary (a card with the atlas and its
+    /// layout) that engines load without trompe.
+    Export(ExportArgs),
+}
+
+/// `trompe impostor export`.
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    /// The impostor's sidecar (NAME.json, from `impostor bake --octahedral`).
+    input: PathBuf,
+    /// The .glb to write.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+impl ExportArgs {
+    fn export(self) -> Result<()> {
+        let mut plan = OutputPlan::new();
+        plan.creating_folders()
+            .reads(trompe::octahedral::file::files(&self.input))
+            .writes(&self.output, &["glb"]);
+        plan.check_overwrites()?;
+        plan.make_folders()
+            .context("creating the output's folder")?;
+        trompe::octahedral::gltf::export(&self.input, &self.output)
+            .with_context(|| format!("exporting {}", self.input.display()))?;
+        eprintln!("wrote {}", self.output.display());
+        Ok(())
+    }
 }
 
 /// `trompe impostor merge-manifests`.
@@ -1114,6 +1143,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             print_timings(verbose, &report.timings);
         }
         Command::Impostor(ImpostorCommand::MergeManifests(args)) => args.merge()?,
+        Command::Impostor(ImpostorCommand::Export(args)) => args.export()?,
         Command::Impostor(ImpostorCommand::Bake(args)) => match args.octahedral {
             Some(n) if args.is_batch() => args.bake_batch(n)?,
             Some(n) => println!("{}", args.bake_octahedral(n)?),

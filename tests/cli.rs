@@ -959,6 +959,38 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
     assert_eq!((sidecar.grid.n, sidecar.frame_size), (8, 32));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("switch distance"), "{out}");
+    let glb = d.join("duck.glb");
+    let o = trompe(&[
+        "impostor",
+        "export",
+        json.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(gltf::Gltf::open(&glb).is_ok());
+    // A sidecar of another kind of impostor is refused by name.
+    let spoc = d.join("spoc.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--resolution",
+        "32",
+        "-o",
+        spoc.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "export",
+            spoc.to_str().unwrap(),
+            "-o",
+            d.join("spoc.glb").to_str().unwrap(),
+        ]),
+        "spoc.json",
+    );
     fails_cleanly(
         &trompe(&[
             "impostor",

@@ -15,6 +15,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use thiserror::Error;
 
+/// The sidecar's `format`.
+pub const FORMAT: &str = "trompe-octahedral-impostor";
+
 /// The JSON sidecar of an octahedral atlas.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sidecar {
@@ -90,7 +93,7 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
             .unwrap_or_default()
     };
     let sidecar = Sidecar {
-        format: "trompe-octahedral-impostor".into(),
+        format: FORMAT.into(),
         version: 1,
         grid: atlas.settings.grid,
         frame_size: atlas.settings.frame_size,

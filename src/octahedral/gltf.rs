@@ -99,12 +99,15 @@ pub fn export(sidecar_path: &Path, out: &Path) -> Result<(), super::file::Octahe
         path: sidecar_path.to_path_buf(),
         source: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
     })?;
-    if sidecar.format != "trompe-octahedral-impostor" {
+    if sidecar.format != super::file::FORMAT {
         return Err(E::Io {
             path: sidecar_path.to_path_buf(),
             source: std::io::Error::new(
                 std::io::ErrorKind::InvalidData,
-                format!("format {:?} is not an octahedral impostor", sidecar.format),
+                format!(
+                    "format {:?} is not an octahedral impostor (only octahedral impostors export to glTF)",
+                    sidecar.format
+                ),
             ),
         });
     }
