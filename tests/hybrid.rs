@@ -212,6 +212,19 @@ fn frames_are_the_same_for_one_and_two_threads() {
 }
 
 #[test]
+fn a_spacing_that_is_not_a_positive_number_is_refused() {
+    let s = scene(FLAT_MIRROR);
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let settings = HybridSettings {
+            spacing: Some(bad),
+            ..HybridSettings::default()
+        };
+        let e = HybridReflections::prepare(&s, settings).unwrap_err();
+        assert!(e.to_string().contains("spacing"), "{e}");
+    }
+}
+
+#[test]
 fn a_spacing_past_the_budget_is_widened_and_said() {
     let s = scene(FLAT_MIRROR);
     let settings = HybridSettings {

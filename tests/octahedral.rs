@@ -127,3 +127,14 @@ fn a_turntable_of_the_duck_is_close_to_exact_and_parallax_helps() {
     assert!(with <= 0.05, "{with}");
     assert!(with < without, "{with} vs {without}");
 }
+
+#[test]
+fn grids_out_of_range_are_errors() {
+    let mesh = trompe::geom::icosphere(1);
+    for (n, size) in [(0, 16), (1, 16), (65, 16), (8, 0)] {
+        assert!(
+            bake(&mesh, &Surface::Diffuse(None), settings(n, size, 0)).is_err(),
+            "{n} {size}"
+        );
+    }
+}

@@ -107,6 +107,13 @@ impl HybridReflections {
         scene: &Scene,
         settings: HybridSettings,
     ) -> Result<HybridReflections, RenderError> {
+        if let Some(s) = settings.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(RenderError::Setting {
+                name: "spacing",
+                value: f64::from(s),
+                reason: "must be a positive number of scene units",
+            });
+        }
         let t = scene.render.time;
         let view = scene.view(t)?;
         let eye = view.camera.position().as_vec3();
@@ -140,7 +147,7 @@ impl HybridReflections {
                 .map(|(&o, &s)| {
                     points::estimate(&scene.objects[o].mesh, s * world_scale(scene, o, t))
                 })
-                .sum()
+                .fold(0u64, u64::saturating_add)
         };
         // Points are indexed in 32 bits.
         let budget = settings.max_points.clamp(1, u64::from(u32::MAX) / 2);

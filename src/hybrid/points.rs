@@ -64,7 +64,7 @@ pub fn estimate(mesh: &Mesh, spacing: f32) -> u64 {
             let pieces = (2.0 * area / (spacing * spacing)).max(longest / spacing);
             (2.0 * pieces.ceil() as f64 + 1.0) as u64
         })
-        .sum()
+        .fold(0u64, u64::saturating_add)
 }
 
 /// Stratified points over `mesh` about `spacing` apart, coloured as `surface` colours it.

@@ -90,6 +90,14 @@ pub fn bake(
     surface: &Surface,
     settings: BakeSettings,
 ) -> Result<OctahedralAtlas, crate::frame::FrameError> {
+    let n = settings.grid.n;
+    if !super::mapping::FRAMES_RANGE.contains(&n) || settings.frame_size == 0 {
+        return Err(crate::frame::FrameError::InvalidSize {
+            width: u64::from(n),
+            height: u64::from(settings.frame_size),
+            reason: "an octahedral grid has 2 to 64 frames a side, each at least one texel",
+        });
+    }
     let b = mesh.bounds();
     let centre = b.center();
     let radius = mesh
@@ -99,7 +107,6 @@ pub fn bake(
         .fold(0.0f32, f32::max)
         .max(1e-6)
         * 1.001;
-    let n = settings.grid.n;
     let s = settings.frame_size;
     let side = n * s;
     crate::frame::check_size(u64::from(side), u64::from(side))?;

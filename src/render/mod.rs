@@ -74,6 +74,16 @@ pub enum RenderError {
     /// The frame, the BVH or the impostors would need more memory than the budget allows.
     #[error(transparent)]
     Memory(#[from] crate::memory::OverBudget),
+    /// A setting out of its range.
+    #[error("{name} {value}: {reason}")]
+    Setting {
+        /// The setting.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        reason: &'static str,
+    },
     /// The time asked for is not a finite number.
     #[error("time {0}: must be a finite number of seconds")]
     Time(f32),
