@@ -35,9 +35,9 @@ pub struct FrameStats {
     pub c3rcs: u64,
     /// kd-tree nodes tested against view volumes.
     pub nodes_tested: u64,
-    /// Leaves kept.
+    /// Nodes kept: leaves, or inner nodes the level of detail reads thinned.
     pub leaves_kept: u64,
-    /// Points projected (each point of each kept leaf, once per C3RC).
+    /// Points projected (each point read from a kept node, once per C3RC).
     pub points_projected: u64,
     /// Valid projections found.
     pub projections: u64,
