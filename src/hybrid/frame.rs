@@ -91,7 +91,7 @@ impl std::fmt::Display for FrameStats {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         writeln!(
             f,
-            "C3RCs {}, nodes tested {}, leaves kept {}",
+            "C3RCs {}, nodes tested {}, nodes kept {}",
             self.c3rcs, self.nodes_tested, self.leaves_kept
         )?;
         writeln!(
