@@ -758,6 +758,9 @@ pub enum BenchError {
     /// A render failed.
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),
+    /// An octahedral bake failed.
+    #[error(transparent)]
+    Octahedral(#[from] crate::octahedral::BakeError),
     /// An image could not be made.
     #[error(transparent)]
     Frame(#[from] crate::frame::FrameError),

@@ -131,7 +131,7 @@ fn a_turntable_of_the_duck_is_close_to_exact_and_parallax_helps() {
 #[test]
 fn grids_out_of_range_are_errors() {
     let mesh = trompe::geom::icosphere(1);
-    for (n, size) in [(0, 16), (1, 16), (65, 16), (8, 0)] {
+    for (n, size) in [(0, 16), (1, 16), (65, 16), (8, 0), (64, u32::MAX / 2)] {
         assert!(
             bake(&mesh, &Surface::Diffuse(None), settings(n, size, 0)).is_err(),
             "{n} {size}"

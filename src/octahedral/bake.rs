@@ -19,6 +19,10 @@ use crate::scene::Surface;
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
+/// Bytes a texel of the atlas costs while it is baked: colour, normal and depth, and the
+/// frame's own buffers beside them.
+pub const BYTES_PER_TEXEL: u64 = 64;
+
 /// How to bake.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BakeSettings {
@@ -28,6 +32,18 @@ pub struct BakeSettings {
     pub frame_size: u32,
     /// Texels of dilation around the object in every frame.
     pub dilation: u32,
+}
+
+/// Why an atlas could not be baked.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BakeError {
+    /// The grid or the atlas has no valid size.
+    #[error(transparent)]
+    Size(#[from] crate::frame::FrameError),
+    /// The atlas would need more memory than the budget allows.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OverBudget),
 }
 
 /// A baked atlas, in the object's own space.
@@ -89,14 +105,15 @@ pub fn bake(
     mesh: &Mesh,
     surface: &Surface,
     settings: BakeSettings,
-) -> Result<OctahedralAtlas, crate::frame::FrameError> {
+) -> Result<OctahedralAtlas, BakeError> {
     let n = settings.grid.n;
     if !super::mapping::FRAMES_RANGE.contains(&n) || settings.frame_size == 0 {
         return Err(crate::frame::FrameError::InvalidSize {
             width: u64::from(n),
             height: u64::from(settings.frame_size),
             reason: "an octahedral grid has 2 to 64 frames a side, each at least one texel",
-        });
+        }
+        .into());
     }
     let b = mesh.bounds();
     let centre = b.center();
@@ -108,8 +125,12 @@ pub fn bake(
         .max(1e-6)
         * 1.001;
     let s = settings.frame_size;
-    let side = n * s;
-    crate::frame::check_size(u64::from(side), u64::from(side))?;
+    let side64 = u64::from(n) * u64::from(s);
+    let (side, _) = crate::frame::check_size(side64, side64)?;
+    crate::memory::check(
+        || format!("an octahedral atlas of {side} × {side}"),
+        crate::memory::times(side64 * side64, BYTES_PER_TEXEL),
+    )?;
     let frames: Vec<(Vec<Rgba>, Vec<Vec3>, Vec<f32>)> = (0..n * n)
         .into_par_iter()
         .map(|k| {

@@ -16,6 +16,6 @@ pub mod mapping;
 pub mod render;
 pub mod turntable;
 
-pub use bake::{BakeSettings, OctahedralAtlas, bake};
+pub use bake::{BakeError, BakeSettings, OctahedralAtlas, bake};
 pub use mapping::{Coverage, Grid};
 pub use turntable::{TurntableView, turntable};

@@ -48,6 +48,9 @@ pub enum ReportError {
     /// A capture could not be rendered.
     #[error(transparent)]
     Capture(#[from] crate::views::capture::CaptureError),
+    /// An octahedral bake failed.
+    #[error(transparent)]
+    Octahedral(#[from] crate::octahedral::BakeError),
     /// A relief walk failed.
     #[error(transparent)]
     Relief(Box<crate::relief::ReliefError>),
