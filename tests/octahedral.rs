@@ -1,6 +1,8 @@
 //! Octahedral impostors: a frame reproduced from its own direction, dilation, and a turntable
 //! against the exact render.
 
+mod common;
+use common::{fails_cleanly, scratch, stderr, trompe};
 use std::path::Path;
 use trompe::frame::envmap::EnvMap;
 use trompe::frame::metrics;
@@ -137,4 +139,137 @@ fn grids_out_of_range_are_errors() {
             "{n} {size}"
         );
     }
+}
+
+#[test]
+fn octahedral_bakes_write_the_atlas_and_its_layout() {
+    let d = scratch("cli_octahedral");
+    let json = d.join("duck.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--octahedral",
+        "8",
+        "--resolution",
+        "256",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["duck.json", "duck.png", "duck-normal.exr", "duck-depth.exr"] {
+        assert!(d.join(f).is_file(), "{f}");
+    }
+    let sidecar: trompe::octahedral::file::Sidecar =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!((sidecar.grid.n, sidecar.frame_size), (8, 32));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("switch distance"), "{out}");
+    let glb = d.join("duck.glb");
+    let o = trompe(&[
+        "impostor",
+        "export",
+        json.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(gltf::Gltf::open(&glb).is_ok());
+    // A sidecar of another kind of impostor is refused by name.
+    let spoc = d.join("spoc.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--resolution",
+        "32",
+        "-o",
+        spoc.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "export",
+            spoc.to_str().unwrap(),
+            "-o",
+            d.join("spoc.glb").to_str().unwrap(),
+        ]),
+        "spoc.json",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            "assets/gltf/Duck.glb",
+            "--octahedral",
+            "64",
+            "--resolution",
+            "256",
+            "-o",
+            json.to_str().unwrap(),
+        ]),
+        "texels a frame",
+    );
+}
+
+#[test]
+fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
+    let d = scratch("cli_octahedral_batch");
+    let inputs = d.join("in");
+    std::fs::create_dir_all(&inputs).unwrap();
+    std::fs::copy("assets/gltf/Duck.glb", inputs.join("Duck.glb")).unwrap();
+    std::fs::copy("assets/meshes/teapot.obj", inputs.join("teapot.obj")).unwrap();
+    std::fs::write(inputs.join("broken.obj"), "v 1 2\nf 1 2 3\n").unwrap();
+    let out = d.join("out");
+    let files: Vec<String> = ["Duck.glb", "broken.obj", "teapot.obj"]
+        .iter()
+        .map(|f| inputs.join(f).to_str().unwrap().to_string())
+        .collect();
+    let mut manifests = Vec::new();
+    for k in 1..=2 {
+        let shard = format!("{k}/2");
+        let mut args = vec!["impostor", "bake"];
+        args.extend(files.iter().map(String::as_str));
+        args.extend([
+            "--octahedral",
+            "4",
+            "--resolution",
+            "64",
+            "--shard",
+            &shard,
+            "-o",
+        ]);
+        args.push(out.to_str().unwrap());
+        let o = trompe(&args);
+        let e = stderr(&o);
+        assert!(!e.contains("panicked"), "{e}");
+        // Sorted, shard 2 of 2 holds broken.obj alone: it fails, by name.
+        if k == 2 {
+            fails_cleanly(&o, "broken.obj");
+        } else {
+            assert!(o.status.success(), "{e}");
+        }
+        manifests.push(out.join(format!("manifest-{k}-of-2.json")));
+    }
+    assert!(out.join("Duck.json").is_file() && out.join("teapot.png").is_file());
+    let merged = out.join("manifest.json");
+    let mut args = vec!["impostor", "merge-manifests"];
+    args.extend(manifests.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["-o", merged.to_str().unwrap()]);
+    let o = trompe(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m: trompe::octahedral::batch::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(&merged).unwrap()).unwrap();
+    assert_eq!(m.entries.len(), 3);
+    assert_eq!(m.entries.iter().filter(|e| e.error.is_some()).count(), 1);
+    // A manifest missing a shard does not merge.
+    let o = trompe(&[
+        "impostor",
+        "merge-manifests",
+        manifests[0].to_str().unwrap(),
+        "-o",
+        d.join("partial.json").to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "shards");
 }

@@ -1,7 +1,8 @@
 //! `trompe master encode|render|edit`: Master Texture Space (paper 5) on the command line —
 //! parse, call one `trompe::master::job` function, print its summary.
 
-use super::{WeightsArg, bar, check_plan, load_mesh, refuse_foreign_folder};
+use super::views::WeightsArg;
+use super::{bar, check_plan, load_mesh, refuse_foreign_folder};
 use anyhow::{Context, Result, bail};
 use clap::Subcommand;
 use std::path::PathBuf;
