@@ -13,6 +13,7 @@ use trompe::impostor::{BakeSettings, CameraChoice, Subject, ViewCamera, bake};
 use trompe::render::{self, Method, Progress, Timings};
 use trompe::scene::Scene;
 
+mod layers;
 mod master;
 mod octahedral;
 mod relief;
@@ -83,6 +84,10 @@ pub enum Command {
     /// Calibrated views: capture a model, texture it from views, score the result.
     #[command(subcommand)]
     Views(ViewsCommand),
+    /// Layered view-dependent projective textures (paper 4): sort a scene's objects into
+    /// visibility layers per view, write editable OpenRaster layers, render from them.
+    #[command(subcommand)]
+    Layers(layers::LayersCommand),
     /// Master Texture Space (paper 5): encode a model's calibrated views into pixel-aligned
     /// atlases with one UV set, render from them, propagate an edit to every view.
     #[command(subcommand)]
@@ -705,6 +710,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         },
         Command::Relief(args) => args.walk()?,
         Command::Master(command) => command.run()?,
+        Command::Layers(command) => command.run()?,
         Command::Views(ViewsCommand::Capture(args)) => args.capture()?,
         Command::Views(ViewsCommand::Score(args)) => args.score()?,
         Command::Views(ViewsCommand::Render(args)) => args.render()?,

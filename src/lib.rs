@@ -69,6 +69,7 @@ pub mod frame;
 pub mod geom;
 pub mod hybrid;
 pub mod impostor;
+pub mod layers;
 pub mod master;
 pub mod memory;
 pub mod octahedral;

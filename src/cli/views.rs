@@ -123,7 +123,7 @@ pub struct ViewsRenderArgs {
 }
 
 /// Parses "WIDTHxHEIGHT".
-fn parse_size2(text: &str) -> Result<(u32, u32), String> {
+pub(super) fn parse_size2(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text
         .split_once(['x', 'X', '×'])
         .ok_or_else(|| format!("{text:?}: expected WIDTHxHEIGHT"))?;

@@ -31,6 +31,12 @@ pub fn to_srgb8(image: &Image<Rgba>) -> Vec<u8> {
 /// Writes a linear colour image as an sRGB PNG, replacing `path` whole
 /// ([`crate::files::write_atomically`]).
 pub fn write_png(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
+    let encoded = encode_png(image, path)?;
+    publish(path, &encoded)
+}
+
+/// Encodes a linear colour image as sRGB PNG bytes (`path` only names it in errors).
+pub fn encode_png(image: &Image<Rgba>, path: &Path) -> Result<Vec<u8>, FrameError> {
     use image::ImageEncoder as _;
     let pixels = to_srgb8(image);
     let mut encoded = Vec::new();
@@ -42,7 +48,7 @@ pub fn write_png(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
             image::ExtendedColorType::Rgba8,
         )
         .map_err(|e| codec(path, e))?;
-    publish(path, &encoded)
+    Ok(encoded)
 }
 
 /// Replaces `path` whole with `bytes`.

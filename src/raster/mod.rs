@@ -249,6 +249,55 @@ pub fn rasterize_over<P: Projection, S: FragmentShader>(
     ))
 }
 
+/// One covered pixel of [`fragments`]: no depth test decided it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Covered {
+    /// Row-major pixel index.
+    pub pixel: u32,
+    /// Generalized depth at the pixel centre.
+    pub gd: f32,
+    /// What covers it.
+    pub item: ItemId,
+}
+
+/// Every fragment of `objects` through `camera`, hidden or not — what an A-buffer holds — in
+/// bands of [`BAND_ROWS`] rows, each band's fragments in input-triangle order (so the result
+/// does not depend on the thread count). Coverage follows the same watertight top-left rule as
+/// [`rasterize`]: the nearest of a pixel's fragments is the one `rasterize` keeps.
+///
+/// # Errors
+/// When the camera's image size is refused.
+pub fn fragments<P: Projection>(
+    camera: &P,
+    objects: &[&Mesh],
+) -> Result<Vec<Vec<Covered>>, FrameError> {
+    let (w, h) = camera.resolution();
+    crate::frame::check_size(w as u64, h as u64)?;
+    let mut binned = setup::Binned::default();
+    setup::screen_triangles(camera, objects, BAND_ROWS, &mut binned);
+    let bands = h.div_ceil(BAND_ROWS) as usize;
+    Ok((0..bands)
+        .into_par_iter()
+        .map(|band| {
+            let first = band as u32 * BAND_ROWS;
+            let rows = (first, (first + BAND_ROWS).min(h) - 1);
+            let mut out = Vec::new();
+            for chunk in binned.chunks() {
+                for t in chunk.band(band) {
+                    scan::cover(t, w, rows, |pixel, gd| {
+                        out.push(Covered {
+                            pixel: pixel as u32,
+                            gd,
+                            item: t.item,
+                        })
+                    });
+                }
+            }
+            out
+        })
+        .collect())
+}
+
 /// One band of rows just drawn, handed to the `finish` callback of [`draw_depth_then`].
 pub struct FinishedBand<'a, T> {
     /// Index of the band's first pixel in the row-major image (`first row × width`).

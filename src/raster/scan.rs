@@ -102,3 +102,44 @@ impl<T: Copy> Band<'_, T> {
         }
     }
 }
+
+/// Every pixel centre a triangle covers, with its `gd`, without a depth test: the fragments an
+/// A-buffer keeps (appended to `out` as `(pixel index, gd)`, row-major in the whole image).
+pub(super) fn cover(
+    t: &ScreenTri,
+    width: u32,
+    band_rows: (u32, u32),
+    mut out: impl FnMut(usize, f32),
+) {
+    let (y0, y1) = (t.rows.0.max(band_rows.0), t.rows.1.min(band_rows.1));
+    if y0 > y1 {
+        return;
+    }
+    let (x0, x1) = t.cols;
+    let [a, b, c] = t.fixed;
+    let px = x0 as i64 * ONE + ONE / 2;
+    let py = y0 as i64 * ONE + ONE / 2;
+    let mut e = [
+        Edge::new(b, c, px, py),
+        Edge::new(c, a, px, py),
+        Edge::new(a, b, px, py),
+    ];
+    let gd_p = t.planes[0];
+    for y in y0..=y1 {
+        let mut w = [e[0].value, e[1].value, e[2].value];
+        let dy = y as f64 + 0.5 - t.origin.y;
+        for x in x0..=x1 {
+            if (w[0] | w[1] | w[2]) >= 0 {
+                let dx = x as f64 + 0.5 - t.origin.x;
+                let gd = gd_p.f0 + gd_p.dfdx * dx + gd_p.dfdy * dy;
+                out(y as usize * width as usize + x as usize, gd as f32);
+            }
+            for k in 0..3 {
+                w[k] += e[k].step_x;
+            }
+        }
+        for edge in &mut e {
+            edge.value += edge.step_y;
+        }
+    }
+}

@@ -137,20 +137,24 @@ pub fn capture(
     settings: &CaptureSettings,
     progress: &dyn Progress,
 ) -> Result<ViewSet, CaptureError> {
-    if settings.count == 0 || settings.count > 10_000 {
-        return Err(CaptureError::Settings(format!(
-            "--count {}: must be between 1 and 10000",
-            settings.count
-        )));
-    }
-    let fov_ok = settings.fov_y > 1.0 && settings.fov_y < 170.0;
-    if !fov_ok || settings.distance.is_nan() || settings.distance <= 1.0 {
-        return Err(CaptureError::Settings(
-            "the field of view must be in (1°, 170°) and the distance above 1 radius".into(),
-        ));
-    }
-    let mut scene = capture_scene(mesh)?;
-    let bounds = scene.objects[0].mesh.bounds();
+    check(settings)?;
+    capture_of(capture_scene(mesh)?, settings, progress)
+}
+
+/// Renders a capture of a whole scene (its objects, light and environment), the rig around
+/// the bounds of all its objects at time 0.
+pub fn capture_of(
+    mut scene: Scene,
+    settings: &CaptureSettings,
+    progress: &dyn Progress,
+) -> Result<ViewSet, CaptureError> {
+    check(settings)?;
+    let bounds = scene
+        .objects
+        .iter()
+        .map(|o| o.mesh.transformed(&o.world_from_object).bounds())
+        .reduce(|a, b| a.union(b))
+        .ok_or_else(|| CaptureError::Settings("the scene has no objects".into()))?;
     let centre = ((bounds.min + bounds.max) * 0.5).as_dvec3();
     let radius = (bounds.extent().length() * 0.5) as f64;
     let (w, h) = settings.size;
@@ -212,6 +216,23 @@ pub fn capture(
         image_folder: PathBuf::new(),
         warnings: Vec::new(),
     })
+}
+
+/// Refuses settings out of range.
+fn check(settings: &CaptureSettings) -> Result<(), CaptureError> {
+    if settings.count == 0 || settings.count > 10_000 {
+        return Err(CaptureError::Settings(format!(
+            "--count {}: must be between 1 and 10000",
+            settings.count
+        )));
+    }
+    let fov_ok = settings.fov_y > 1.0 && settings.fov_y < 170.0;
+    if !fov_ok || settings.distance.is_nan() || settings.distance <= 1.0 {
+        return Err(CaptureError::Settings(
+            "the field of view must be in (1°, 170°) and the distance above 1 radius".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Writes a capture as a COLMAP text model and PNG images into `dir` (images under `images/`).
