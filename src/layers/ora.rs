@@ -370,19 +370,25 @@ fn parse_stack(xml: &str) -> Result<(u32, u32, Vec<LayerSpec>), String> {
     let mut layers = Vec::new();
     // Offsets of the enclosing stacks.
     let mut offsets: Vec<(i64, i64)> = vec![(0, 0)];
+    let mut open = 0usize;
     loop {
         let event = reader
             .read_event()
             .map_err(|e| format!("not well-formed XML: {e}"))?;
         let (e, empty) = match &event {
-            Event::Start(e) => (e, false),
+            Event::Start(e) => {
+                open += 1;
+                (e, false)
+            }
             Event::Empty(e) => (e, true),
             Event::End(e) => {
+                open = open.saturating_sub(1);
                 if e.name().as_ref() == "stack" && offsets.len() > 1 {
                     offsets.pop();
                 }
                 continue;
             }
+            Event::Eof if open > 0 => return Err("ends before its elements are closed".into()),
             Event::Eof => break,
             _ => continue,
         };

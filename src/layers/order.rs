@@ -264,6 +264,35 @@ pub fn order_view(
     ))
 }
 
+/// The exact criterion checked on a finished ordering: the pairs `(a, b)` of items where `a`
+/// hides `b` at some pixel although `b`'s layer is not after `a`'s, `b` not forced — none, for a
+/// correct ordering (sorted, each pair once).
+pub fn violations(ordered: &Ordered, tolerance: f32) -> Vec<(u32, u32)> {
+    let ab = &ordered.abuffer;
+    let layer = |i: u32| ordered.layer_of[i as usize];
+    let mut out = per_chunk(ab, |range| {
+        let mut out = Vec::new();
+        for p in range {
+            let here = ab.at(p);
+            for (k, a) in here.iter().enumerate() {
+                for b in &here[k + 1..] {
+                    let wrong = match (layer(a.item), layer(b.item)) {
+                        (Some(la), Some(lb)) => lb <= la,
+                        _ => false,
+                    };
+                    if wrong && hides(a.gd, b.gd, tolerance) && !ordered.forced.contains(&b.item) {
+                        out.push((a.item, b.item));
+                    }
+                }
+            }
+        }
+        out
+    });
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// Every fragment of the meshes through the camera.
 fn all_fragments(camera: &Pinhole, meshes: &[Mesh]) -> Result<Vec<Vec<Covered>>, FrameError> {
     let refs: Vec<&Mesh> = meshes.iter().collect();
