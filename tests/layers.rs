@@ -305,8 +305,11 @@ fn an_ora_written_and_read_back_keeps_pixels_names_and_placements_and_opens_with
     assert_eq!(bytes, std::fs::read(&again).expect("bytes"));
 }
 
-/// A zip holding `entries` (name, bytes), `mimetype` first.
-fn zip_of(path: &Path, entries: &[(&str, Vec<u8>)]) {
+/// A zip entry: name and bytes.
+type Entry<'a> = (&'a str, Vec<u8>);
+
+/// A zip holding `entries`, `mimetype` first.
+fn zip_of(path: &Path, entries: &[Entry]) {
     let mut z = zip::ZipWriter::new(std::fs::File::create(path).expect("create"));
     let stored =
         zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
@@ -329,7 +332,7 @@ fn a_malformed_or_truncated_ora_is_an_error_that_names_the_entry() {
     let stack = |layer: &str| {
         format!(r#"<image w="20" h="10"><stack>{layer}</stack></image>"#).into_bytes()
     };
-    let cases: Vec<(&str, Vec<(&str, Vec<u8>)>, &str)> = vec![
+    let cases: Vec<(&str, Vec<Entry>, &str)> = vec![
         ("no-stack.ora", vec![mime.clone()], "stack.xml"),
         (
             "no-png.ora",
