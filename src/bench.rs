@@ -19,6 +19,7 @@
 //! building them).
 
 pub mod hybrid;
+pub mod layers;
 pub mod master;
 pub mod octahedral;
 pub mod relief;
@@ -755,6 +756,9 @@ pub enum BenchError {
     /// A Master Texture workload failed.
     #[error(transparent)]
     Master(#[from] crate::master::MasterError),
+    /// A layers workload failed.
+    #[error(transparent)]
+    Layers(#[from] Box<crate::layers::LayersError>),
     /// A render failed.
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),
@@ -800,6 +804,7 @@ pub fn run(
         .chain(graph_impostors(&maze, &maze_path, &bunny, quick))
         .chain(relief::relief(inputs, quick)?)
         .chain(master::master(inputs, quick)?)
+        .chain(layers::layers(inputs, quick)?)
         .collect();
     Ok(BenchReport {
         heading: heading(path, mesh),

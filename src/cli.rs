@@ -130,6 +130,8 @@ pub enum BenchSuite {
     C3rc,
     /// Octahedral impostors: 2048² bakes, and turntables against the exact render.
     Octahedral,
+    /// Layered projective textures (paper 4): layers of a 100k-triangle scene from two views.
+    Layers,
 }
 
 /// `trompe impostor …`.
@@ -735,13 +737,14 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             println!("{tables}");
         }
         Command::Bench {
-            suite: suite @ (BenchSuite::Relief | BenchSuite::Master),
+            suite: suite @ (BenchSuite::Relief | BenchSuite::Master | BenchSuite::Layers),
             quick,
             ..
         } => {
             let inputs = trompe::eval::fixtures::Shipped::locate();
             let (name, figures) = with_spinner("timing", || match suite {
                 BenchSuite::Master => ("master", trompe::bench::master::master(&inputs, quick)),
+                BenchSuite::Layers => ("layers", trompe::bench::layers::layers(&inputs, quick)),
                 _ => ("relief", trompe::bench::relief::relief(&inputs, quick)),
             });
             let report = trompe::bench::BenchReport {

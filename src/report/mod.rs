@@ -1,6 +1,6 @@
 //! The demo report: `trompe demo` renders the scenes shipped in `scenes/`, measures every method
 //! against the exact one, and writes `index.html` — run metadata, a table of contents, then one
-//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `relief`, `master`), each built as data and
+//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `layers`, `relief`, `master`), each built as data and
 //! written by the one HTML writer in `html`. A new capability adds a section file and one line
 //! in `demo`.
 
@@ -8,6 +8,7 @@ mod foundation;
 pub mod html;
 mod hybrid;
 mod impostors;
+mod layers;
 mod master;
 mod maze;
 mod octahedral;
@@ -57,6 +58,9 @@ pub enum ReportError {
     /// A Master Texture encoding failed.
     #[error(transparent)]
     Master(Box<crate::master::MasterError>),
+    /// Layered projective textures failed.
+    #[error(transparent)]
+    Layers(Box<crate::layers::LayersError>),
     /// A camera of a shipped scene is invalid.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
@@ -154,6 +158,9 @@ pub fn demo(
     let t = std::time::Instant::now();
     report.sections.push(views::section(inputs, out)?);
     timed("calibrated views", t);
+    let t = std::time::Instant::now();
+    report.sections.push(layers::section(inputs, out)?);
+    timed("layered projective textures", t);
     let t = std::time::Instant::now();
     report.sections.push(relief::section(inputs, out)?);
     timed("relief impostors", t);

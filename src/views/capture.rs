@@ -149,14 +149,8 @@ pub fn capture_of(
     progress: &dyn Progress,
 ) -> Result<ViewSet, CaptureError> {
     check(settings)?;
-    let bounds = scene
-        .objects
-        .iter()
-        .map(|o| o.mesh.transformed(&o.world_from_object).bounds())
-        .reduce(|a, b| a.union(b))
+    let (centre, radius) = bounding_sphere(&scene)
         .ok_or_else(|| CaptureError::Settings("the scene has no objects".into()))?;
-    let centre = ((bounds.min + bounds.max) * 0.5).as_dvec3();
-    let radius = (bounds.extent().length() * 0.5) as f64;
     let (w, h) = settings.size;
     let f = h as f64 * 0.5 / (settings.fov_y.to_radians() * 0.5).tan();
     let intrinsics = Intrinsics::pinhole(w, h, f, f, w as f64 * 0.5, h as f64 * 0.5);
@@ -216,6 +210,18 @@ pub fn capture_of(
         image_folder: PathBuf::new(),
         warnings: Vec::new(),
     })
+}
+
+/// The centre and radius of the sphere around the box of a scene's objects at time 0 — what
+/// a rig stands around; `None` without objects.
+pub fn bounding_sphere(scene: &Scene) -> Option<(DVec3, f64)> {
+    let bounds = scene
+        .objects
+        .iter()
+        .map(|o| o.mesh.transformed(&o.world_from_object).bounds())
+        .reduce(|a, b| a.union(b))?;
+    let centre = ((bounds.min + bounds.max) * 0.5).as_dvec3();
+    Some((centre, (bounds.extent().length() * 0.5) as f64))
 }
 
 /// Refuses settings out of range.
