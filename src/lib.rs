@@ -39,6 +39,8 @@
 //!   two-thread pipeline.
 //! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility,
 //!   view-dependent projective texturing (VDTM / ULR).
+//! * [`layers`] — layered view-dependent projective textures: visibility layers per view,
+//!   editable OpenRaster image layers, rendering through each layer's sub-frustum.
 //! * [`master`] — Master Texture Space: many views of a mesh encoded in pixel-aligned atlases
 //!   with one UV set, rendered view-dependently, edited once for every view.
 //! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.

@@ -7,7 +7,7 @@
 //! an OpenRaster file an artist edits in GIMP or Krita ([`ora`]) or filled automatically
 //! ([`fill`]); then every object rendered from new viewpoints textured by its layers, each
 //! through its asymmetric sub-frustum ([`frustum`]), blended across views ([`render`]).
-//! A [`LayerSet`] is the whole of it in memory; [`file`] saves and loads it.
+//! A [`LayerSet`] is the whole of it in memory; [`file`](mod@file) saves and loads it.
 //!
 //! Invariants: meshes are in world space, in scene object order (object id = index); a view's
 //! image layers are in its undistorted pinhole's pixels; the layers of a view composite back to

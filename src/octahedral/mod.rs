@@ -2,7 +2,7 @@
 //! Godot's octahedral impostors bake): an object seen from an `n × n` grid of directions laid out
 //! by the octahedral map of the sphere (or hemi-octahedral map of the upper hemisphere), each
 //! frame an orthographic view framed on its bounding sphere, with base colour and coverage, normal
-//! and depth ([`bake`]); and the renderer that blends the three frames around a view direction
+//! and depth ([`bake`](mod@bake)); and the renderer that blends the three frames around a view direction
 //! with parallax correction and relighting ([`render`]). Layout: conventions §8.
 //!
 //! Invariants: the atlas is in the object's own space; [`mapping`] is the one place the frame
