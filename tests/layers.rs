@@ -492,3 +492,28 @@ fn the_command_line_builds_renders_and_refuses_a_broken_project() {
     ]);
     fails_cleanly(&o, "layers.json: object 1");
 }
+
+#[test]
+fn a_colmap_model_of_the_scene_builds_the_same_layers_as_the_capture_it_came_from() {
+    let (scene, views) = captured(2);
+    let dir = scratch("layers-colmap");
+    let model = dir.join("model");
+    let set = trompe::views::ViewSet {
+        views: views.clone(),
+        image_folder: PathBuf::new(),
+        warnings: Vec::new(),
+    };
+    trompe::views::capture::write_capture(&model, &set).expect("written");
+    let loaded = {
+        let mut s = trompe::views::ViewSet::load(&model, None).expect("model");
+        s.load_images().expect("images");
+        s.views
+    };
+    let from_model = built(&scene, &loaded, &BuildSettings::default());
+    let from_capture = built(&scene, &views, &BuildSettings::default());
+    for (a, b) in from_model.layers.iter().zip(&from_capture.layers) {
+        assert_eq!(a.assignment, b.assignment);
+        let rects = |l: &layers::ViewLayers| l.layers.iter().map(|x| x.rect).collect::<Vec<_>>();
+        assert_eq!(rects(a), rects(b));
+    }
+}
