@@ -517,3 +517,63 @@ fn a_colmap_model_of_the_scene_builds_the_same_layers_as_the_capture_it_came_fro
         assert_eq!(rects(a), rects(b));
     }
 }
+
+/// Runs Krita headless (under `xvfb-run`) on `input`, exporting `output`; `None` with the reason
+/// printed when Krita or xvfb-run is not installed (CI installs both).
+fn krita(input: &Path, output: &Path) -> Option<()> {
+    let found = |tool: &str| {
+        std::process::Command::new("sh")
+            .args(["-c", &format!("command -v {tool}")])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if !found("krita") || !found("xvfb-run") {
+        eprintln!("skipped: krita or xvfb-run is not installed (.ci/run installs them)");
+        return None;
+    }
+    let o = std::process::Command::new("xvfb-run")
+        .args(["-a", "krita"])
+        .arg(input)
+        .args(["--export", "--export-filename"])
+        .arg(output)
+        .output()
+        .expect("krita runs");
+    assert!(
+        output.is_file(),
+        "krita wrote nothing: {}",
+        common::stderr(&o)
+    );
+    Some(())
+}
+
+#[test]
+fn krita_opens_the_layers_as_written_and_what_it_saves_renders_the_same() {
+    let (scene, views) = captured(2);
+    let set = built(&scene, &views, &BuildSettings::default());
+    let dir = scratch("layers-krita");
+    layers::file::save(&dir, &set).expect("saved");
+    let file = dir.join(layers::file::ora_name(&set.views[0].name));
+    // Krita's composite of the stack is the photograph's.
+    let png = dir.join("krita.png");
+    if krita(&file, &png).is_none() {
+        return;
+    }
+    let flat = trompe::frame::io::read_png(&png).expect("krita's png");
+    let composite = ora::read(&file)
+        .expect("read")
+        .composite()
+        .expect("composite");
+    assert_eq!(to_srgb8(&flat), to_srgb8(&composite));
+    // Krita's own OpenRaster file (nested stack, its own entry names) textures the same frame.
+    let (meshes, names) = layers::scene_objects(&scene).expect("objects");
+    let cam = scene.camera.at(0.0).expect("camera");
+    let render = |dir: &Path| {
+        let set = layers::file::load(dir, meshes.clone(), names.clone()).expect("loaded");
+        layers::render::render(&cam, &set, &RenderSettings::default()).expect("rendered")
+    };
+    let before = render(&dir);
+    let saved = dir.join("krita.ora");
+    krita(&file, &saved).expect("krita ran a moment ago");
+    std::fs::copy(&saved, &file).expect("replaced");
+    assert_eq!(before.image.pixels(), render(&dir).image.pixels());
+}
