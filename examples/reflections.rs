@@ -9,6 +9,7 @@
 use std::error::Error;
 use std::path::PathBuf;
 use trompe::frame::{io, metrics};
+use trompe::render::shading::Shadows;
 use trompe::render::{ImpostorInputs, ReflectorImpostors};
 use trompe::{Bvh, EnvironmentOnly, Exact, Scene, SecondaryQuery, Timings, Tracer, render_trace};
 
@@ -28,6 +29,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let inputs = ImpostorInputs {
         resolution,
         baked: &[],
+        // The impostors' texels shadowed as the tracer shadows what it hits.
+        shadows: Some(Shadows {
+            occluders: &primary,
+            epsilon: scene.render.ray_epsilon,
+        }),
     };
     let impostors = ReflectorImpostors::build(&view, &scene.lighting, inputs, &mut timings)?;
     let exact = Exact(&primary);

@@ -30,7 +30,7 @@ use crate::frame::envmap::EnvMap;
 use crate::geom::{Mesh, Ray};
 use crate::raster::{ItemId, NoAttributes, RasterStats, RasterTarget, rasterize};
 use crate::render::{Timings, render_raster};
-use crate::scene::{Light, Lighting, Surface, View};
+use crate::scene::{Lighting, RenderSettings, Surface, View};
 use crate::trace::{BruteForce, Bvh, RayQuery};
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
@@ -115,8 +115,9 @@ pub fn plain_raster(camera: &Pinhole, mesh: &Mesh) -> (RasterTarget<()>, RasterS
 }
 
 /// The raster render method's view of `mesh` alone (diffuse, its own materials) through
-/// `camera`, lit by a grey sky and a sun: what rendering the object's image with a pinhole
-/// costs — a frame of colour, distance, normals and ids, the maps an impostor holds.
+/// `camera`, lit by a grey sky (no sun, so no shadow rays and no BVH): what rendering the
+/// object's image with a pinhole costs — a frame of colour, distance, normals and ids, the maps
+/// an impostor holds.
 pub fn raster_view(camera: &Pinhole, mesh: &Mesh) -> (View, Lighting) {
     let view = View {
         camera: camera.clone(),
@@ -125,10 +126,7 @@ pub fn raster_view(camera: &Pinhole, mesh: &Mesh) -> (View, Lighting) {
     };
     let lighting = Lighting {
         environment: EnvMap::constant(Vec3::splat(0.3)),
-        light: Some(Light {
-            direction: Vec3::new(0.3, 1.0, 0.4).normalize(),
-            radiance: Vec3::ONE,
-        }),
+        light: None,
     };
     (view, lighting)
 }
@@ -136,7 +134,12 @@ pub fn raster_view(camera: &Pinhole, mesh: &Mesh) -> (View, Lighting) {
 /// Renders a [`raster_view`] by the raster method.
 pub fn render_raster_once((view, lighting): &(View, Lighting)) -> Frame {
     let mut timings = Timings::default();
-    render_raster(view, lighting, &(), &mut timings).expect("camera size is valid")
+    let settings = RenderSettings {
+        max_depth: 1,
+        time: 0.0,
+        ray_epsilon: 1e-4,
+    };
+    render_raster(view, lighting, &settings, &(), &mut timings).expect("camera size is valid")
 }
 
 /// The bytes a depth + item rasterization writes, copied once (the raster peer).

@@ -27,7 +27,7 @@ intensity = 0.6
 
 [light]
 direction = [0.3, 1.0, 0.6]
-intensity = 0.8
+intensity = 2.51
 
 [[object]]
 name = "mirror"

@@ -112,7 +112,7 @@ fov_y = 45.0
 resolution = [160, 120]
 [light]
 direction = [0.4, 1.0, 0.6]
-intensity = 0.8
+intensity = 2.51
 [render]
 background = [0.3, 0.3, 0.35]
 [[object]]

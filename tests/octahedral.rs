@@ -20,7 +20,7 @@ fn lighting() -> Lighting {
         environment: EnvMap::constant(Vec3::new(0.25, 0.3, 0.35)),
         light: Some(Light {
             direction: Vec3::new(0.4, 1.0, 0.6).normalize(),
-            radiance: Vec3::splat(0.9),
+            irradiance: Vec3::splat(0.9 * std::f32::consts::PI),
         }),
     }
 }
@@ -55,7 +55,7 @@ fn a_frame_is_reproduced_from_its_own_direction() {
                 let ray = camera.ray(trompe::glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
                 let env = light.environment.radiance(ray.dir);
                 let lit = if c.w > 0.0 {
-                    trompe::render::shading::lambert(c.truncate(), n, &light) * c.w
+                    trompe::render::shading::lambert(c.truncate(), n, &light, |_| true) * c.w
                         + env * (1.0 - c.w)
                 } else {
                     env

@@ -288,3 +288,78 @@ material = {{ type = "mirror", tint = [0.9, 0.9, 0.9] }}
         "{e}"
     );
 }
+
+#[test]
+fn a_sphere_shadows_exactly_the_ground_pixels_whose_shadow_ray_the_bvh_blocks() {
+    use trompe::geom::Ray;
+    use trompe::glam::{DVec2, Vec3};
+    use trompe::trace::{Bvh, RayQuery};
+    let text = r#"
+[camera]
+position = [0.0, 2.0, 2.5]
+look_at = [0.0, 0.0, 0.0]
+fov_y = 45.0
+resolution = [96, 72]
+[light]
+direction = [0.4, 1.0, 0.2]
+intensity = 3.0
+[render]
+background = [0.0, 0.0, 0.0]
+[[object]]
+name = "ground"
+shape = "plane"
+scale = 4.0
+material = { type = "diffuse", color = [0.5, 0.5, 0.5] }
+[[object]]
+name = "ball"
+shape = "sphere"
+fit = 0.6
+translate = [0.0, 0.4, 0.0]
+material = { type = "diffuse", color = [0.8, 0.3, 0.2] }
+"#;
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/shadow-test.toml");
+    let s = Scene::from_toml(text, &path).unwrap();
+    let view = s.view(0.0).unwrap();
+    let bvh = Bvh::build(view.meshes.clone());
+    let light = s.lighting.light.as_ref().unwrap();
+    let (w, h) = (96, 72);
+    for method in [Method::Trace, Method::Raster] {
+        let (frame, _) = render(&s, method, &()).unwrap();
+        let (mut shadowed, mut agree, mut ground) = (0, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                if frame.object_id.get(x, y) != 0 {
+                    continue;
+                }
+                ground += 1;
+                let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let p = ray.at(frame.depth.get(x, y));
+                let blocked = bvh.any_hit(
+                    &Ray::new(p + Vec3::Y * s.render.ray_epsilon, light.direction),
+                    f32::INFINITY,
+                );
+                // Albedo 0.5, irradiance 3 at cos θ = l·y: 0.5 · 3 · cos θ / π when lit.
+                let lit = 0.5 * light.irradiance.x * light.direction.y / std::f32::consts::PI;
+                let expected = if blocked { 0.0 } else { lit };
+                let c = frame.color.get(x, y).x;
+                shadowed += blocked as u32;
+                agree += ((c - expected).abs() < 1e-4) as u32;
+            }
+        }
+        assert!(
+            shadowed > 100,
+            "{method}: the ball casts a shadow ({shadowed} pixels)"
+        );
+        // Traced: every ground pixel. Rasterized: the same but where a pixel's rasterized
+        // position falls on the other side of the shadow's edge.
+        let need = if method == Method::Trace {
+            ground
+        } else {
+            ground - ground / 200
+        };
+        assert!(
+            agree >= need,
+            "{method}: {agree} of {ground} ground pixels as expected"
+        );
+    }
+}

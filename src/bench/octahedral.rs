@@ -92,7 +92,7 @@ pub fn octahedral(inputs: &Shipped, quick: bool) -> Result<OctahedralFigures, Be
         environment: EnvMap::constant(Vec3::new(0.25, 0.3, 0.35)),
         light: Some(Light {
             direction: Vec3::new(0.4, 1.0, 0.6).normalize(),
-            radiance: Vec3::splat(0.9),
+            irradiance: Vec3::splat(0.9 * std::f32::consts::PI),
         }),
     };
     let truck = inputs

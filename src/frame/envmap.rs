@@ -59,7 +59,7 @@ impl EnvMap {
     /// Radiance arriving from direction `d` (need not be normalized).
     pub fn radiance(&self, d: Vec3) -> Vec3 {
         let st = self.lookup_uv(d);
-        self.radiance.sample_uv_lonlat(st) * self.intensity
+        self.radiance.sample_panorama(st) * self.intensity
     }
 
     /// Cosine-weighted mean radiance over the hemisphere around `n` (irradiance / π): the
@@ -110,7 +110,19 @@ fn rotate_y(d: Vec3, angle: f32) -> Vec3 {
 }
 
 impl Image<Vec3> {
-    /// Bilinear lookup of a longitude-latitude map: repeats in `u`, clamps in `v`.
+    /// Bilinear lookup of a panorama with Mitsuba's texel placement (docs/conventions.md §1.3):
+    /// an `H`-row map's continuous row is `v·(H − 1)` (the first row's centre at the `+y` pole,
+    /// the last's at `−y`), its column `u·W − ½`, wrapping around.
+    fn sample_panorama(&self, st: Vec2) -> Vec3 {
+        let rows = self.height().saturating_sub(1) as f32;
+        // `sample_bilinear` takes pixel coordinates, texel centres at +½.
+        let uv = Vec2::new(st.x * self.width() as f32, st.y * rows + 0.5);
+        self.sample_bilinear(uv, Wrap::Repeat, Wrap::Clamp)
+    }
+
+    /// Bilinear lookup of a longitude-latitude grid whose texel centres are at
+    /// `((x + ½)/W, (y + ½)/H)` (the irradiance grid trompe computes): repeats in `u`, clamps
+    /// in `v`.
     fn sample_uv_lonlat(&self, st: Vec2) -> Vec3 {
         let uv = Vec2::new(st.x * self.width() as f32, st.y * self.height() as f32);
         self.sample_bilinear(uv, Wrap::Repeat, Wrap::Clamp)

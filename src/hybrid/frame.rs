@@ -12,7 +12,7 @@ use crate::camera::{C3rc, Pinhole, Projection};
 use crate::frame::{Frame, Image, NO_OBJECT};
 use crate::geom::Ray;
 use crate::progress::Progress;
-use crate::render::shading::lambert;
+use crate::render::shading::{lambert, lit};
 use crate::render::{RenderError, Tracer, shade_pixels};
 use crate::scene::{Scene, Surface, View};
 use crate::trace::{Bvh, Exact, Hit, RayQuery, SecondaryQuery};
@@ -268,7 +268,9 @@ pub fn render_frame(
                 n = -n;
             }
             Reflected::Point(
-                lambert(cloud.points.albedo[i], n, &scene.lighting),
+                lambert(cloud.points.albedo[i], n, &scene.lighting, |l| {
+                    lit(&bvh, q.as_vec3(), n, l, scene.render.ray_epsilon)
+                }),
                 (q.as_vec3() - hit.position).length(),
             )
         })

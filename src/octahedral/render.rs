@@ -81,7 +81,8 @@ impl OctahedralAtlas {
                 let a = acc.alpha.min(1.0);
                 let albedo = acc.color / acc.alpha;
                 let n = acc.normal.normalize_or(-ray.dir);
-                (lambert(albedo, n, lighting) * a + env * (1.0 - a)).extend(1.0)
+                // An atlas holds no occluders: relit unshadowed, as an engine's shader does.
+                (lambert(albedo, n, lighting, |_| true) * a + env * (1.0 - a)).extend(1.0)
             })
             .collect();
         match Image::from_vec(w, h, pixels) {

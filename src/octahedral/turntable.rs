@@ -1,14 +1,17 @@
 //! A turntable of an atlas against the exact render: views all around the object — a full turn
 //! whose elevation swings from the horizon to 60°, then straight down and straight up, where
 //! octahedral bakers' frames are sparsest in screen terms — each rendered from the atlas with
-//! and without parallax and scored by FLIP against the Whitted tracer's frame of the mesh.
+//! and without parallax and scored by FLIP against the Whitted tracer's frame of the mesh, lit
+//! as the atlas is (an atlas carries no occluders, so neither casts shadow rays).
 
 use super::bake::OctahedralAtlas;
 use crate::camera::Pinhole;
 use crate::frame::{FrameError, metrics};
 use crate::geom::Mesh;
-use crate::render::{Method, RenderError, render_view};
+use crate::geom::Ray;
+use crate::render::{RenderError, Tracer, render_trace};
 use crate::scene::{Lighting, RenderSettings, Surface, View};
+use crate::trace::{Bvh, Exact, Hit, RayQuery};
 use glam::{DVec3, Vec3};
 use std::sync::Arc;
 
@@ -64,14 +67,18 @@ pub fn turntable(
             meshes: vec![Arc::new(mesh.clone())],
             surfaces: vec![surface.clone()],
         };
-        let exact = render_view(
-            &view,
+        // The exact frame lit as the atlas is: an atlas carries no occluders, so the light
+        // is not shadowed here either — what is scored is the bake, not the lighting model.
+        let bvh = Bvh::build(view.meshes.clone());
+        let unshadowed = Unshadowed(&bvh);
+        let tracer = Tracer {
+            view: &view,
+            primary: &unshadowed,
+            secondary: &Exact(&bvh),
             lighting,
-            &settings,
-            Method::Trace,
-            &(),
-            &mut Default::default(),
-        )?;
+            settings: &settings,
+        };
+        let exact = render_trace(&tracer, &())?;
         let score = |parallax: u32| -> Result<f64, FrameError> {
             metrics::flip(
                 &exact.color,
@@ -87,4 +94,16 @@ pub fn turntable(
         });
     }
     Ok(out)
+}
+
+/// The BVH with shadow rays that never meet anything.
+struct Unshadowed<'a>(&'a Bvh);
+
+impl RayQuery for Unshadowed<'_> {
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.0.closest_hit(ray, t_max)
+    }
+    fn any_hit(&self, _: &Ray, _: f32) -> bool {
+        false
+    }
 }

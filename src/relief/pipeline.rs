@@ -711,7 +711,19 @@ pub fn raster_subset(
         meshes: objects.iter().map(|&o| view.meshes[o].clone()).collect(),
         surfaces: objects.iter().map(|&o| view.surfaces[o].clone()).collect(),
     };
-    let mut frame = crate::render::render_raster(&subset, lighting, &(), timings)?;
+    // Shadow rays offset as a scene's are: 10⁻⁴ of the objects' radius.
+    let radius = subset
+        .meshes
+        .iter()
+        .map(|m| m.bounds())
+        .reduce(|a, b| a.union(b))
+        .map_or(1.0, |b| b.radius());
+    let settings = crate::scene::RenderSettings {
+        max_depth: 1,
+        time: 0.0,
+        ray_epsilon: 1e-4 * radius,
+    };
+    let mut frame = crate::render::render_raster(&subset, lighting, &settings, &(), timings)?;
     for id in frame.object_id.pixels_mut() {
         if let Some(&o) = objects.get(*id as usize) {
             *id = o as u32;

@@ -191,7 +191,7 @@ impl SoftwareShader {
                     if cos > 0.0 {
                         let shadow = Ray::new(hit.position + ng * eps, sun.direction);
                         if !self.scene.any_hit(&shadow, f32::INFINITY) {
-                            e += sun.radiance * cos;
+                            e += sun.irradiance * (cos / std::f32::consts::PI);
                         }
                     }
                 }
@@ -276,7 +276,7 @@ pub(crate) mod tests {
             environment: EnvMap::constant(Vec3::splat(0.1)),
             light: Some(Light {
                 direction: Vec3::Y,
-                radiance: Vec3::ONE,
+                irradiance: Vec3::splat(std::f32::consts::PI),
             }),
         };
         let settings = RenderSettings {

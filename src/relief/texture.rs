@@ -167,7 +167,7 @@ mod tests {
             environment: crate::frame::envmap::EnvMap::constant(Vec3::splat(0.3)),
             light: Some(crate::scene::Light {
                 direction: Vec3::new(0.3, 0.5, 1.0).normalize(),
-                radiance: Vec3::splat(0.8),
+                irradiance: Vec3::splat(0.8 * std::f32::consts::PI),
             }),
         };
         let settings = RenderSettings {

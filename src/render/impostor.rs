@@ -15,7 +15,7 @@
 //! a diffuse object is seen in a mirror or through glass only as an impostor; the result does
 //! not depend on the thread count.
 
-use super::shading::{albedo, lambert};
+use super::shading::{Shadows, albedo, lambert};
 use super::trace::{Tracer, render_trace};
 use super::{Progress, RenderError, Timings};
 use crate::camera::Pinhole;
@@ -61,13 +61,13 @@ impl ReflectorImpostors {
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
         let baked = if inputs.baked.iter().any(Option::is_some) {
             timings.time("load baked impostors", || {
-                load_baked(view, lighting, inputs.baked)
+                load_baked(view, lighting, inputs.baked, inputs.shadows)
             })?
         } else {
             Vec::new()
         };
         let per_object = timings.time("build impostors", || {
-            reflector_impostors(view, lighting, resolution, &baked)
+            reflector_impostors(view, lighting, resolution, &baked, inputs.shadows)
         })?;
         Ok(timings.time("prepare walks, specular BVH", || {
             Self::from_impostors(view, per_object)
@@ -129,6 +129,9 @@ pub struct ImpostorInputs<'a> {
     pub resolution: u32,
     /// Per object id, a baked impostor's sidecar.
     pub baked: &'a [Option<PathBuf>],
+    /// What shadows the impostors' texels as the tracer shadows what it hits (`None`: lit
+    /// unshadowed).
+    pub shadows: Option<Shadows<'a>>,
 }
 
 /// Renders `view` by the impostor method.
@@ -141,6 +144,13 @@ pub fn render_impostor(
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
     let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+    let inputs = ImpostorInputs {
+        shadows: Some(Shadows {
+            occluders: &bvh,
+            epsilon: settings.ray_epsilon,
+        }),
+        ..inputs
+    };
     let secondary = ReflectorImpostors::build(view, lighting, inputs, timings)?;
     let tracer = Tracer {
         view,
@@ -159,6 +169,7 @@ fn load_baked(
     view: &View,
     lighting: &Lighting,
     files: &[Option<PathBuf>],
+    shadows: Option<Shadows<'_>>,
 ) -> Result<Vec<Option<Impostor>>, RenderError> {
     let mut out = Vec::with_capacity(files.len());
     for (object, file) in files.iter().enumerate() {
@@ -179,7 +190,10 @@ fn load_baked(
         }
         let eye = imp.camera().viewpoint().as_vec3();
         imp.relight(|albedo, normal, position| {
-            lambert(albedo, toward(normal, eye - position), lighting)
+            let n = toward(normal, eye - position);
+            lambert(albedo, n, lighting, |l| {
+                shadows.is_none_or(|s| s.lit(position, n, l))
+            })
         });
         // The object's id in this scene, whatever id it was baked with.
         imp.set_object_id(object as u32);
@@ -200,6 +214,7 @@ fn reflector_impostors(
     lighting: &Lighting,
     resolution: u32,
     baked: &[Option<Impostor>],
+    shadows: Option<Shadows<'_>>,
 ) -> Result<Vec<Vec<Impostor>>, RenderError> {
     let diffuse: Vec<usize> = (0..view.surfaces.len())
         .filter(|&o| matches!(view.surfaces[o], Surface::Diffuse(_)))
@@ -232,7 +247,9 @@ fn reflector_impostors(
             // The tracer's diffuse shading, with the normal turned toward the reflector.
             let color = |s: &SurfaceSample| {
                 let n = toward(s.normal, eye - s.position);
-                lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting)
+                lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting, |l| {
+                    shadows.is_none_or(|sh| sh.lit(s.position, n, l))
+                })
             };
             for camera in cameras {
                 seen.push(builder.build(camera, mesh, o as u32, &color)?);

@@ -147,6 +147,7 @@ pub fn render_at(
             let inputs = impostor::ImpostorInputs {
                 resolution,
                 baked: &baked,
+                shadows: None,
             };
             render_impostor(
                 &view,
@@ -216,7 +217,7 @@ pub fn render_view(
         return Err(RenderError::NonFinite { object });
     }
     match method {
-        Method::Raster => render_raster(view, lighting, progress, timings),
+        Method::Raster => render_raster(view, lighting, settings, progress, timings),
         Method::Trace => {
             let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
             let tracer = Tracer {
@@ -232,6 +233,7 @@ pub fn render_view(
             let inputs = impostor::ImpostorInputs {
                 resolution,
                 baked: &[],
+                shadows: None,
             };
             render_impostor(view, lighting, settings, inputs, progress, timings)
         }

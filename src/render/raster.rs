@@ -1,12 +1,14 @@
 //! The raster method: rasterize a visibility buffer through the view camera, then shade each
-//! pixel from its fragment (deferred, so each pixel is shaded once).
+//! pixel from its fragment (deferred, so each pixel is shaded once); the light's shadows are
+//! shadow rays through the scene's BVH, built only when the scene has a light.
 
-use super::shading::{albedo, lambert};
+use super::shading::{Shadows, albedo, lambert};
 use super::{Progress, RenderError, Timings};
 use crate::frame::Frame;
 use crate::geom::optics::{facing, fresnel, reflect, refract};
 use crate::raster::{Fragment, StoreFragment, rasterize};
-use crate::scene::{Lighting, Surface, View};
+use crate::scene::{Lighting, RenderSettings, Surface, View};
+use crate::trace::Bvh;
 use glam::{DVec2, Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -14,10 +16,19 @@ use rayon::prelude::*;
 pub fn render_raster(
     view: &View,
     lighting: &Lighting,
+    settings: &RenderSettings,
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
     let meshes = view.mesh_refs();
+    let occluders = lighting
+        .light
+        .as_ref()
+        .map(|_| timings.time("build BVH (shadows)", || Bvh::build(view.meshes.clone())));
+    let shadows = occluders.as_ref().map(|b| Shadows {
+        occluders: b,
+        epsilon: settings.ray_epsilon,
+    });
     let (target, _stats) = timings.time("rasterize", || {
         rasterize(&view.camera, &meshes, &StoreFragment, None)
     })?;
@@ -34,7 +45,7 @@ pub fn render_raster(
                     match fragments[y * w as usize + x] {
                         None => color[x] = lighting.environment.radiance(ray.dir).extend(1.0),
                         Some(f) => {
-                            let s = shade_fragment(view, lighting, &f, ray.dir);
+                            let s = shade_fragment(view, lighting, shadows, &f, ray.dir);
                             color[x] = s.color.extend(1.0);
                             depth[x] = view.camera.distance(uv, f.gd as f64) as f32;
                             normal[x] = s.normal;
@@ -53,7 +64,13 @@ struct Shaded {
     normal: Vec3,
 }
 
-fn shade_fragment(view: &View, lighting: &Lighting, f: &Fragment, d: Vec3) -> Shaded {
+fn shade_fragment(
+    view: &View,
+    lighting: &Lighting,
+    shadows: Option<Shadows<'_>>,
+    f: &Fragment,
+    d: Vec3,
+) -> Shaded {
     let mesh = &view.meshes[f.item.object as usize];
     let surface = &view.surfaces[f.item.object as usize];
     let tri = f.item.triangle as usize;
@@ -65,10 +82,19 @@ fn shade_fragment(view: &View, lighting: &Lighting, f: &Fragment, d: Vec3) -> Sh
         .uvs
         .as_ref()
         .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
-    let (n, _, front) = facing(d, n, mesh.face_normal(tri));
+    let (n, ng, front) = facing(d, n, mesh.face_normal(tri));
     let env = &lighting.environment;
     let color = match surface {
-        Surface::Diffuse(_) => lambert(albedo(mesh, surface, f.item.triangle, uv), n, lighting),
+        Surface::Diffuse(_) => {
+            let c = mesh.corners(tri);
+            let p = c[0] * b.x + c[1] * b.y + c[2] * b.z;
+            lambert(
+                albedo(mesh, surface, f.item.triangle, uv),
+                n,
+                lighting,
+                |l| shadows.is_none_or(|s| s.lit(p, ng, l)),
+            )
+        }
         Surface::Mirror { tint } => *tint * env.radiance(reflect(d, n)),
         Surface::Glass { ior, tint } => {
             let eta = if front { 1.0 / ior } else { *ior };

@@ -6,7 +6,7 @@
 //! environment alone is classic environment mapping. Rays that escape, or reach the depth limit,
 //! take the environment's radiance.
 
-use super::shading::{albedo, lambert};
+use super::shading::{albedo, lambert, lit};
 use super::{Progress, RenderError};
 use crate::frame::Frame;
 use crate::geom::Ray;
@@ -77,6 +77,8 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
                 albedo(mesh, surface, hit.triangle, hit.uv),
                 n,
                 self.lighting,
+                // Hard shadows: the light is seen unless the scene blocks the shadow ray.
+                |l| lit(self.primary, hit.position, ng, l, eps),
             ),
             Surface::Mirror { tint } => {
                 *tint * follow(hit.position + ng * eps, reflect(d, n), true)

@@ -221,7 +221,7 @@ fn mirror_frames(
         environment: env,
         light: Some(Light {
             direction: Vec3::new(0.3, 0.8, 0.5).normalize(),
-            radiance: Vec3::splat(0.75),
+            irradiance: Vec3::splat(0.75 * std::f32::consts::PI),
         }),
     };
     let albedo = Vec3::new(0.9, 0.45, 0.15);
@@ -262,7 +262,9 @@ fn mirror_frames(
         } else {
             p.normal
         };
-        crate::render::shading::lambert(albedo, n, &lighting)
+        crate::render::shading::lambert(albedo, n, &lighting, |l| {
+            crate::render::shading::lit(&primary, p.position, n, l, settings.ray_epsilon)
+        })
     };
     let mut answers = Vec::new();
     for kind in [ViewCamera::Spoc(None), ViewCamera::Pinhole] {

@@ -178,8 +178,10 @@ pub struct CameraSpec {
 pub struct Light {
     /// Unit direction toward the light.
     pub direction: Vec3,
-    /// Radiance scale (colour × intensity).
-    pub radiance: Vec3,
+    /// Irradiance on a surface facing the light (colour × intensity; W/m², as Mitsuba,
+    /// Blender's sun and glTF's `KHR_lights_punctual` give it): a white Lambertian surface
+    /// facing it has radiance `irradiance / π`.
+    pub irradiance: Vec3,
 }
 
 /// Everything a renderer needs to light a surface.
@@ -366,7 +368,7 @@ impl Scene {
                     .ok_or_else(|| invalid("light.direction", "must not be zero".into()))?;
                 Some(Light {
                     direction,
-                    radiance: vec3(l.color) * l.intensity,
+                    irradiance: vec3(l.color) * l.intensity,
                 })
             }
             None => None,

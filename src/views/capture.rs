@@ -87,7 +87,7 @@ pub fn capture_scene(mesh: &Path) -> Result<Scene, SceneError> {
     let mesh = std::path::absolute(mesh).unwrap_or_else(|_| mesh.to_path_buf());
     let text = format!(
         "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_y = 40.0\nresolution = [64, 64]\n\
-         [light]\ndirection = [0.4, 1.0, 0.6]\nintensity = 2.0\n\
+         [light]\ndirection = [0.4, 1.0, 0.6]\nintensity = 6.28\n\
          [render]\nbackground = [0.5, 0.5, 0.5]\n\
          [[object]]\nmesh = {:?}\n",
         mesh.display().to_string()
