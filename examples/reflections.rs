@@ -34,6 +34,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             occluders: &primary,
             epsilon: scene.render.ray_epsilon,
         }),
+        pinhole: false,
     };
     let impostors = ReflectorImpostors::build(&view, &scene.lighting, inputs, &mut timings)?;
     let exact = Exact(&primary);

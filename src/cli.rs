@@ -223,7 +223,7 @@ pub struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
     method: MethodArg,
-    /// Impostor resolution (square), for --method impostor.
+    /// Impostor resolution (square), for --method impostor and pinhole-impostor.
     #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
           value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
     impostor_resolution: u32,
@@ -350,6 +350,12 @@ pub enum MethodArg {
     /// Exact primary rays; rays from mirrors and glass answered by SPOC impostors of the diffuse
     /// objects (paper 1).
     Impostor,
+    /// As impostor, with planar (pinhole) depth images instead of SPOCs (paper 1's Fig. 6
+    /// baseline).
+    PinholeImpostor,
+    /// Exact primary rays; rays from mirrors and glass take the environment's radiance
+    /// (environment mapping, what engines do without ray tracing).
+    Envmap,
     /// Exact primary rays; first reflections splatted from points of the diffuse objects through
     /// continuous 3-ray cameras (paper 2).
     C3rc,
@@ -363,6 +369,8 @@ impl MethodArg {
             MethodArg::Raster => Some(Method::Raster),
             MethodArg::Trace => Some(Method::Trace),
             MethodArg::Impostor => Some(Method::Impostor(impostor_resolution)),
+            MethodArg::PinholeImpostor => Some(Method::PinholeImpostor(impostor_resolution)),
+            MethodArg::Envmap => Some(Method::EnvMap),
             MethodArg::C3rc => None,
         }
     }

@@ -67,7 +67,7 @@ impl ReflectorImpostors {
             Vec::new()
         };
         let per_object = timings.time("build impostors", || {
-            reflector_impostors(view, lighting, resolution, &baked, inputs.shadows)
+            reflector_impostors(view, lighting, &inputs, &baked)
         })?;
         Ok(timings.time("prepare walks, specular BVH", || {
             Self::from_impostors(view, per_object)
@@ -132,6 +132,8 @@ pub struct ImpostorInputs<'a> {
     /// What shadows the impostors' texels as the tracer shadows what it hits (`None`: lit
     /// unshadowed).
     pub shadows: Option<Shadows<'a>>,
+    /// Planar (pinhole) depth images where a SPOC would be built: paper 1's Fig. 6 baseline.
+    pub pinhole: bool,
 }
 
 /// Renders `view` by the impostor method.
@@ -212,10 +214,15 @@ fn toward(n: Vec3, to: Vec3) -> Vec3 {
 fn reflector_impostors(
     view: &View,
     lighting: &Lighting,
-    resolution: u32,
+    inputs: &ImpostorInputs<'_>,
     baked: &[Option<Impostor>],
-    shadows: Option<Shadows<'_>>,
 ) -> Result<Vec<Vec<Impostor>>, RenderError> {
+    let (resolution, shadows) = (inputs.resolution, inputs.shadows);
+    let outside = if inputs.pinhole {
+        ViewCamera::Pinhole
+    } else {
+        ViewCamera::Spoc(None)
+    };
     let diffuse: Vec<usize> = (0..view.surfaces.len())
         .filter(|&o| matches!(view.surfaces[o], Surface::Diffuse(_)))
         .collect();
@@ -236,13 +243,14 @@ fn reflector_impostors(
                 continue;
             }
             let mesh = &view.meshes[o];
-            let cameras = impostor_cameras(mesh, eye, region, resolution).map_err(|reason| {
-                RenderError::Impostor {
-                    object: o,
-                    reflector: r,
-                    reason,
-                }
-            })?;
+            let cameras =
+                impostor_cameras(mesh, eye, region, resolution, outside).map_err(|reason| {
+                    RenderError::Impostor {
+                        object: o,
+                        reflector: r,
+                        reason,
+                    }
+                })?;
             let surface = &view.surfaces[o];
             // The tracer's diffuse shading, with the normal turned toward the reflector.
             let color = |s: &SurfaceSample| {
@@ -269,12 +277,18 @@ pub fn placed_cameras(
     resolution: u32,
 ) -> Result<Vec<ImpostorCamera>, &'static str> {
     let b = reflector.bounds();
-    impostor_cameras(mesh, b.center(), b.radius() as f64, resolution)
+    impostor_cameras(
+        mesh,
+        b.center(),
+        b.radius() as f64,
+        resolution,
+        ViewCamera::Spoc(None),
+    )
 }
 
 /// The cameras of the impostors of `mesh` seen from `eye`, whose secondary rays come from a
-/// region of radius `region`: a SPOC framed on the mesh when the eye is outside its bounding
-/// sphere; for a flat mesh the eye stands over, a parallel projection along its normal, which
+/// region of radius `region`: a camera of kind `outside` (a SPOC, or a pinhole for the planar
+/// baseline) framed on the mesh when the eye is outside its bounding sphere; for a flat mesh the eye stands over, a parallel projection along its normal, which
 /// captures all of it; for an object around the eye (a room, or an object the reflector stands
 /// in the bounding sphere of), the six 90° pinholes of a cube map at the eye, which together
 /// see everything visible from it.
@@ -283,6 +297,7 @@ fn impostor_cameras(
     eye: Vec3,
     region: f64,
     resolution: u32,
+    outside: ViewCamera,
 ) -> Result<Vec<ImpostorCamera>, &'static str> {
     let b = mesh.bounds();
     let (center, radius) = (b.center(), b.radius());
@@ -299,7 +314,7 @@ fn impostor_cameras(
     };
     let err = |_| "its impostor camera is degenerate";
     if eye.distance(center) > radius * 1.001 {
-        return Ok(vec![fitted(ViewCamera::Spoc(None), eye).map_err(err)?]);
+        return Ok(vec![fitted(outside, eye).map_err(err)?]);
     }
     let extent = b.extent();
     let thin = extent.min_position();

@@ -25,7 +25,7 @@ pub use trace::{Tracer, render_trace, shade_pixels};
 use crate::frame::{Frame, FrameError};
 pub use crate::progress::{Progress, Timings};
 use crate::scene::{Lighting, RenderSettings, Scene, View};
-use crate::trace::{Bvh, Exact};
+use crate::trace::{Bvh, EnvironmentOnly, Exact};
 use thiserror::Error;
 
 /// Which renderer.
@@ -38,6 +38,22 @@ pub enum Method {
     /// Primary rays through the BVH; what mirrors and glass send out answered by SPOC
     /// impostors of the diffuse objects, this many texels square (paper 1).
     Impostor(u32),
+    /// As [`Method::Impostor`], with planar (pinhole) depth images from the same points instead
+    /// of SPOCs: the baseline of paper 1's Fig. 6.
+    PinholeImpostor(u32),
+    /// Primary rays through the BVH; what mirrors and glass send out takes the environment's
+    /// radiance (environment mapping: what engines do without ray tracing).
+    EnvMap,
+}
+
+impl Method {
+    /// Texels a side of the impostors the method builds, if it builds any.
+    pub fn impostor_resolution(self) -> Option<u32> {
+        match self {
+            Method::Impostor(r) | Method::PinholeImpostor(r) => Some(r),
+            _ => None,
+        }
+    }
 }
 
 impl std::fmt::Display for Method {
@@ -46,6 +62,8 @@ impl std::fmt::Display for Method {
             Method::Raster => "raster",
             Method::Trace => "trace",
             Method::Impostor(_) => "impostor",
+            Method::PinholeImpostor(_) => "pinhole-impostor",
+            Method::EnvMap => "envmap",
         })
     }
 }
@@ -142,12 +160,13 @@ pub fn render_at(
     let view = timings.time("evaluate scene", || scene.view(t))?;
     check_memory(&view, method)?;
     let frame = match method {
-        Method::Impostor(resolution) => {
+        Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
             let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
             let inputs = impostor::ImpostorInputs {
                 resolution,
                 baked: &baked,
                 shadows: None,
+                pinhole: matches!(method, Method::PinholeImpostor(_)),
             };
             render_impostor(
                 &view,
@@ -185,7 +204,7 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), RenderError> {
     let mut needed = times(w as u64 * h as u64, BYTES_PER_PIXEL)
         .saturating_add(times(triangles, BVH_BYTES_PER_TRIANGLE));
     let mut what = format!("a {w} × {h} render of {triangles} triangles");
-    if let Method::Impostor(side) = method {
+    if let Some(side) = method.impostor_resolution() {
         crate::frame::check_size(side as u64, side as u64)?;
         // At most one impostor an object.
         let objects = view.meshes.len() as u64;
@@ -229,13 +248,25 @@ pub fn render_view(
             };
             timings.time("trace", || render_trace(&tracer, progress))
         }
-        Method::Impostor(resolution) => {
+        Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
             let inputs = impostor::ImpostorInputs {
                 resolution,
                 baked: &[],
                 shadows: None,
+                pinhole: matches!(method, Method::PinholeImpostor(_)),
             };
             render_impostor(view, lighting, settings, inputs, progress, timings)
+        }
+        Method::EnvMap => {
+            let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+            let tracer = Tracer {
+                view,
+                primary: &bvh,
+                secondary: &EnvironmentOnly,
+                lighting,
+                settings,
+            };
+            timings.time("trace", || render_trace(&tracer, progress))
         }
     }
 }

@@ -37,7 +37,12 @@ pub(super) fn section(
         let h = scene.camera.height;
         let mut methods = vec![Method::Trace, Method::Raster];
         if name != "diffuse" {
-            methods.push(Method::Impostor(render::DEFAULT_IMPOSTOR_RESOLUTION));
+            let r = render::DEFAULT_IMPOSTOR_RESOLUTION;
+            methods.extend([
+                Method::Impostor(r),
+                Method::PinholeImpostor(r),
+                Method::EnvMap,
+            ]);
         }
         let mut frames = Vec::new();
         for method in methods {
