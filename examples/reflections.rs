@@ -35,6 +35,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             epsilon: scene.render.ray_epsilon,
         }),
         pinhole: false,
+        refraction: trompe::render::Refraction::Exact,
     };
     let impostors = ReflectorImpostors::build(&view, &scene.lighting, inputs, &mut timings)?;
     let exact = Exact(&primary);

@@ -223,6 +223,11 @@ pub struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
     method: MethodArg,
+    /// How glass refracts what the eye sees through it: traced through the object, or by
+    /// Wyman's image-space approximation of its far side (trace, impostor, pinhole-impostor and
+    /// envmap methods).
+    #[arg(long, value_enum, default_value_t = RefractionArg::Exact)]
+    refraction: RefractionArg,
     /// Impostor resolution (square), for --method impostor and pinhole-impostor.
     #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
           value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
@@ -338,6 +343,15 @@ fn parse_vec3(text: &str) -> Result<glam::Vec3, String> {
 fn has_extension(path: &Path, ext: &str) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+}
+
+/// `--refraction`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum RefractionArg {
+    /// Both interfaces traced.
+    Exact,
+    /// Wyman's image-space approximation (SIGGRAPH 2005).
+    Wyman,
 }
 
 /// `--method`.
@@ -523,8 +537,13 @@ impl RenderArgs {
         let frame = match self.method.method(self.impostor_resolution) {
             Some(method) => {
                 let pb = bar(&format!("{method}"), s.camera.height as u64);
+                let refraction = match self.refraction {
+                    RefractionArg::Exact => render::Refraction::Exact,
+                    RefractionArg::Wyman => render::Refraction::Wyman,
+                };
                 let (frame, steps) =
-                    render::render_at(&s, t, method, pb.as_ref()).context("rendering")?;
+                    render::render_refracting(&s, t, method, refraction, pb.as_ref())
+                        .context("rendering")?;
                 timings.0.extend(steps.0);
                 frame
             }

@@ -363,3 +363,77 @@ material = { type = "diffuse", color = [0.8, 0.3, 0.2] }
         );
     }
 }
+
+#[test]
+fn wyman_exit_rays_are_exact_on_a_spheres_centre_line_and_close_near_it() {
+    use std::sync::Arc;
+    use trompe::geom::optics::facing;
+    use trompe::glam::{DVec2, Vec3};
+    use trompe::render::wyman::{BackFaces, exact_exit, exit_ray};
+    use trompe::scene::View;
+    use trompe::trace::{Bvh, RayQuery};
+    // A unit glass sphere seen from 5 units away, an odd image so the centre pixel's ray is the
+    // centre line.
+    let sphere = Arc::new(trompe::geom::icosphere(5));
+    let ior = 1.5;
+    let camera = trompe::camera::Pinhole::look_at(
+        Vec3::new(0.0, 0.0, 5.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        30.0,
+        65,
+        65,
+    )
+    .unwrap();
+    let view = View {
+        camera: camera.clone(),
+        meshes: vec![sphere.clone()],
+        surfaces: vec![Surface::Glass {
+            ior,
+            tint: Vec3::ONE,
+        }],
+    };
+    let backs = BackFaces::build(&view).unwrap();
+    let bvh = Bvh::build(vec![sphere.clone()]);
+    let (mut centre, mut errors) = (None, Vec::new());
+    for y in 0..65u32 {
+        for x in 0..65u32 {
+            let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            let Some(hit) = bvh.closest_hit(&ray, f32::INFINITY) else {
+                continue;
+            };
+            let (n1, _, _) = facing(ray.dir, hit.normal, hit.geometric_normal);
+            let pixel = (y * 65 + x) as usize;
+            let d_v = backs.at(pixel, 0).map_or(0.0, |(t, _)| t - hit.t);
+            let d_n = backs.d_n_at(&sphere, 0, hit.triangle, hit.bary);
+            let wy = exit_ray(hit.position, n1, ray.dir, ior, d_v, d_n, |p| {
+                backs.at_point(p, 0).map(|(_, n)| n)
+            })
+            .unwrap();
+            let ex = exact_exit(&bvh, &hit, ray.dir, ior, 1e-5).unwrap();
+            let angle = wy.1.angle_between(ex.1).to_degrees();
+            let incidence = (-ray.dir.dot(n1)).acos().to_degrees();
+            if (x, y) == (32, 32) {
+                centre = Some((angle, wy.0.distance(ex.0)));
+            }
+            errors.push((incidence, angle));
+        }
+    }
+    let (angle, offset) = centre.expect("the centre pixel sees the sphere");
+    assert!(
+        angle < 0.05 && offset < 1e-3,
+        "centre line: {angle}° apart, exits {offset} apart"
+    );
+    // Within 30° of normal incidence Wyman's distance estimate stays close.
+    let near: Vec<f32> = errors.iter().filter(|e| e.0 < 30.0).map(|e| e.1).collect();
+    let mean = near.iter().sum::<f32>() / near.len() as f32;
+    let worst = near.iter().cloned().fold(0.0, f32::max);
+    println!("Wyman vs exact exit directions, incidence < 30°: mean {mean:.2}°, worst {worst:.2}°");
+    assert!(near.len() > 100, "{}", near.len());
+    assert!(mean < 1.5 && worst < 3.0, "mean {mean}°, worst {worst}°");
+    let all = errors.iter().map(|e| e.1).sum::<f32>() / errors.len() as f32;
+    println!(
+        "over the whole sphere ({} pixels, grazing included): mean {all:.2}°",
+        errors.len()
+    );
+}

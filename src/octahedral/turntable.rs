@@ -6,7 +6,7 @@
 
 use super::bake::OctahedralAtlas;
 use crate::camera::Pinhole;
-use crate::frame::{FrameError, metrics};
+use crate::frame::{Frame, FrameError, metrics};
 use crate::geom::Mesh;
 use crate::geom::Ray;
 use crate::render::{RenderError, Tracer, render_trace};
@@ -67,18 +67,7 @@ pub fn turntable(
             meshes: vec![Arc::new(mesh.clone())],
             surfaces: vec![surface.clone()],
         };
-        // The exact frame lit as the atlas is: an atlas carries no occluders, so the light
-        // is not shadowed here either — what is scored is the bake, not the lighting model.
-        let bvh = Bvh::build(view.meshes.clone());
-        let unshadowed = Unshadowed(&bvh);
-        let tracer = Tracer {
-            view: &view,
-            primary: &unshadowed,
-            secondary: &Exact(&bvh),
-            lighting,
-            settings: &settings,
-        };
-        let exact = render_trace(&tracer, &())?;
+        let exact = exact_unshadowed(&view, lighting, &settings)?;
         let score = |parallax: u32| -> Result<f64, FrameError> {
             metrics::flip(
                 &exact.color,
@@ -94,6 +83,26 @@ pub fn turntable(
         });
     }
     Ok(out)
+}
+
+/// The Whitted tracer's frame of `view` lit as an atlas is: an atlas carries no occluders, so
+/// the light is not shadowed here either — what a comparison scores is the bake, not the
+/// lighting model.
+pub fn exact_unshadowed(
+    view: &View,
+    lighting: &Lighting,
+    settings: &RenderSettings,
+) -> Result<Frame, RenderError> {
+    let bvh = Bvh::build(view.meshes.clone());
+    let unshadowed = Unshadowed(&bvh);
+    let tracer = Tracer {
+        view,
+        primary: &unshadowed,
+        secondary: &Exact(&bvh),
+        lighting,
+        settings,
+    };
+    render_trace(&tracer, &())
 }
 
 /// The BVH with shadow rays that never meet anything.

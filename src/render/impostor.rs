@@ -16,7 +16,7 @@
 //! not depend on the thread count.
 
 use super::shading::{Shadows, albedo, lambert};
-use super::trace::{Tracer, render_trace};
+use super::trace::Tracer;
 use super::{Progress, RenderError, Timings};
 use crate::camera::Pinhole;
 use crate::frame::Frame;
@@ -134,6 +134,8 @@ pub struct ImpostorInputs<'a> {
     pub shadows: Option<Shadows<'a>>,
     /// Planar (pinhole) depth images where a SPOC would be built: paper 1's Fig. 6 baseline.
     pub pinhole: bool,
+    /// How the eye's refractions into glass are found.
+    pub refraction: super::Refraction,
 }
 
 /// Renders `view` by the impostor method.
@@ -161,7 +163,7 @@ pub fn render_impostor(
         lighting,
         settings,
     };
-    timings.time("trace", || render_trace(&tracer, progress))
+    super::trace_frame(&tracer, inputs.refraction, progress, timings)
 }
 
 /// The baked impostors `files` names, per object id, each checked against the object as the

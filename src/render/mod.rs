@@ -16,6 +16,7 @@ mod impostor;
 mod raster;
 pub mod shading;
 mod trace;
+pub mod wyman;
 
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use impostor::{ImpostorInputs, ReflectorImpostors, placed_cameras};
@@ -66,6 +67,16 @@ impl std::fmt::Display for Method {
             Method::EnvMap => "envmap",
         })
     }
+}
+
+/// How the eye's refractions into glass objects are found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Refraction {
+    /// Traced through the object: both interfaces exact.
+    #[default]
+    Exact,
+    /// Wyman's image-space approximation of the second interface ([`wyman`]).
+    Wyman,
 }
 
 /// Errors from rendering.
@@ -153,6 +164,18 @@ pub fn render_at(
     method: Method,
     progress: &dyn Progress,
 ) -> Result<(Frame, Timings), RenderError> {
+    render_refracting(scene, t, method, Refraction::Exact, progress)
+}
+
+/// [`render_at`], glass refracting the eye's rays by `refraction` (the raster method ignores
+/// it: it looks refractions up in the panorama).
+pub fn render_refracting(
+    scene: &Scene,
+    t: f32,
+    method: Method,
+    refraction: Refraction,
+    progress: &dyn Progress,
+) -> Result<(Frame, Timings), RenderError> {
     if !t.is_finite() {
         return Err(RenderError::Time(t));
     }
@@ -167,6 +190,7 @@ pub fn render_at(
                 baked: &baked,
                 shadows: None,
                 pinhole: matches!(method, Method::PinholeImpostor(_)),
+                refraction,
             };
             render_impostor(
                 &view,
@@ -179,9 +203,9 @@ pub fn render_at(
         }
         _ => render_view(
             &view,
-            &scene.lighting,
-            &scene.render,
+            (&scene.lighting, &scene.render),
             method,
+            refraction,
             progress,
             &mut timings,
         )?,
@@ -220,9 +244,9 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), RenderError> {
 /// Renders an evaluated view.
 pub fn render_view(
     view: &View,
-    lighting: &Lighting,
-    settings: &RenderSettings,
+    (lighting, settings): (&Lighting, &RenderSettings),
     method: Method,
+    refraction: Refraction,
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
@@ -246,7 +270,7 @@ pub fn render_view(
                 lighting,
                 settings,
             };
-            timings.time("trace", || render_trace(&tracer, progress))
+            trace_frame(&tracer, refraction, progress, timings)
         }
         Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
             let inputs = impostor::ImpostorInputs {
@@ -254,6 +278,7 @@ pub fn render_view(
                 baked: &[],
                 shadows: None,
                 pinhole: matches!(method, Method::PinholeImpostor(_)),
+                refraction,
             };
             render_impostor(view, lighting, settings, inputs, progress, timings)
         }
@@ -266,7 +291,25 @@ pub fn render_view(
                 lighting,
                 settings,
             };
-            timings.time("trace", || render_trace(&tracer, progress))
+            trace_frame(&tracer, refraction, progress, timings)
+        }
+    }
+}
+
+/// Traces a frame with `tracer`, the eye's refractions as `refraction` says.
+pub fn trace_frame<P: crate::trace::RayQuery, S: crate::trace::SecondaryQuery + ?Sized>(
+    tracer: &Tracer<'_, P, S>,
+    refraction: Refraction,
+    progress: &dyn Progress,
+    timings: &mut Timings,
+) -> Result<Frame, RenderError> {
+    match refraction {
+        Refraction::Exact => timings.time("trace", || render_trace(tracer, progress)),
+        Refraction::Wyman => {
+            let backs = timings.time("back faces (Wyman pass 1)", || {
+                wyman::BackFaces::build(tracer.view)
+            })?;
+            timings.time("trace", || wyman::render(tracer, &backs, progress))
         }
     }
 }

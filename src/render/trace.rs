@@ -44,7 +44,8 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
         }
     }
 
-    fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
+    /// Radiance leaving `hit` back along `ray`, at recursion depth `depth`.
+    pub fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
         if let Some(l) = hit.radiance {
             return l;
         }
@@ -59,13 +60,7 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
         let follow = |origin: Vec3, dir: Vec3, outward: bool| {
             let ray = Ray::new(origin, dir);
             if outward {
-                match self.secondary.secondary_hit(hit.object, &ray) {
-                    Some(Hit {
-                        radiance: Some(l), ..
-                    }) => l,
-                    Some(h) if !last => self.shade(&ray, &h, depth + 1),
-                    _ => env.radiance(dir),
-                }
+                self.leaving(hit.object, &ray, depth)
             } else if last {
                 env.radiance(dir)
             } else {
@@ -97,6 +92,22 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
     }
 }
 
+impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
+    /// Radiance arriving along `ray`, which leaves object `object` into the open at recursion
+    /// depth `depth`: what the secondary query answers (its radiance, or one more bounce on
+    /// what it hit), the environment's when it answers nothing.
+    pub fn leaving(&self, object: u32, ray: &Ray, depth: u32) -> Vec3 {
+        let last = depth + 1 >= self.settings.max_depth;
+        match self.secondary.secondary_hit(object, ray) {
+            Some(Hit {
+                radiance: Some(l), ..
+            }) => l,
+            Some(h) if !last => self.shade(ray, &h, depth + 1),
+            _ => self.lighting.environment.radiance(ray.dir),
+        }
+    }
+}
+
 /// Traces one primary ray per pixel centre.
 pub fn render_trace<P: RayQuery, S: SecondaryQuery + ?Sized>(
     tracer: &Tracer<'_, P, S>,
@@ -114,6 +125,20 @@ pub fn shade_pixels<P: RayQuery, S: SecondaryQuery + ?Sized>(
     progress: &dyn Progress,
     primary_hit: impl Fn(usize, &Ray) -> Option<Hit> + Sync,
 ) -> Result<Frame, RenderError> {
+    shade_pixels_with(tracer, progress, primary_hit, |_, ray, hit| {
+        tracer.shade(ray, hit, 0)
+    })
+}
+
+/// [`shade_pixels`] with the shading of each primary hit given (`shade(pixel index, ray, hit)`): a method
+/// that answers some primary hits its own way (Wyman's refraction) and leaves the rest to
+/// [`Tracer::shade`].
+pub fn shade_pixels_with<P: RayQuery, S: SecondaryQuery + ?Sized>(
+    tracer: &Tracer<'_, P, S>,
+    progress: &dyn Progress,
+    primary_hit: impl Fn(usize, &Ray) -> Option<Hit> + Sync,
+    shade: impl Fn(usize, &Ray, &Hit) -> Vec3 + Sync,
+) -> Result<Frame, RenderError> {
     let camera = &tracer.view.camera;
     let (w, h) = crate::camera::Projection::resolution(camera);
     let mut frame = Frame::new(w, h)?;
@@ -125,7 +150,7 @@ pub fn shade_pixels<P: RayQuery, S: SecondaryQuery + ?Sized>(
                 match primary_hit(y * w as usize + x, &ray) {
                     None => color[x] = tracer.lighting.environment.radiance(ray.dir).extend(1.0),
                     Some(hit) => {
-                        color[x] = tracer.shade(&ray, &hit, 0).extend(1.0);
+                        color[x] = shade(y * w as usize + x, &ray, &hit).extend(1.0);
                         depth[x] = hit.t;
                         normal[x] = facing(ray.dir, hit.normal, hit.geometric_normal).0;
                         id[x] = hit.object;

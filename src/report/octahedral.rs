@@ -8,7 +8,6 @@ use crate::camera::Pinhole;
 use crate::frame::envmap::EnvMap;
 use crate::frame::{Image, Rgba, io, metrics};
 use crate::octahedral::{BakeSettings, Coverage, Grid, TurntableView, bake, turntable};
-use crate::render::{Method, render_view};
 use crate::scene::{Light, Lighting, RenderSettings, Surface, View};
 use glam::{DVec2, Vec3, Vec4};
 use std::path::Path;
@@ -60,14 +59,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
             time: 0.0,
             ray_epsilon: atlas.radius * 1e-4,
         };
-        let exact = render_view(
-            &view,
-            &lighting,
-            &settings,
-            Method::Trace,
-            &(),
-            &mut Default::default(),
-        )?;
+        let exact = crate::octahedral::turntable::exact_unshadowed(&view, &lighting, &settings)?;
         let imp = atlas.render(
             &view.camera,
             &lighting,
