@@ -154,29 +154,8 @@ fn sample_layer(
     z: f64,
     tolerance: f64,
 ) -> Option<Rgba> {
-    let (w, h) = img.size();
-    let (fx, fy) = (tx.x - 0.5, tx.y - 0.5);
-    let (x0, y0) = (fx.floor(), fy.floor());
-    let (ax, ay) = ((fx - x0) as f32, (fy - y0) as f32);
-    let mut sum = Vec4::ZERO;
-    let mut weight = 0.0f32;
-    for (dx, dy, wgt) in [
-        (0.0, 0.0, (1.0 - ax) * (1.0 - ay)),
-        (1.0, 0.0, ax * (1.0 - ay)),
-        (0.0, 1.0, (1.0 - ax) * ay),
-        (1.0, 1.0, ax * ay),
-    ] {
-        let (x, y) = (x0 + dx, y0 + dy);
-        if wgt <= 0.0 || x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
-            continue;
-        }
-        let (x, y) = (x as u32, y as u32);
-        let c = img.get(x, y);
+    img.sample_bilinear_where(tx, |x, y, c| {
         let g = depth.get(x, y) as f64;
-        if c.w >= 0.5 && g > 0.0 && (1.0 / g - z).abs() <= tolerance * z {
-            sum += c * wgt;
-            weight += wgt;
-        }
-    }
-    (weight > 0.0).then(|| sum / weight)
+        c.w >= 0.5 && g > 0.0 && (1.0 / g - z).abs() <= tolerance * z
+    })
 }

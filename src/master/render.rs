@@ -18,29 +18,7 @@ use rayon::prelude::*;
 /// Colour of `master` at atlas point `p`, bilinear over the texels that hold a colour (alpha),
 /// or `None` when none of the four does.
 pub fn lookup(master: &Image<Rgba>, p: DVec2) -> Option<Rgba> {
-    let (w, h) = master.size();
-    let (fx, fy) = (p.x - 0.5, p.y - 0.5);
-    let (x0, y0) = (fx.floor(), fy.floor());
-    let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
-    let mut sum = Vec4::ZERO;
-    let mut weight = 0.0f32;
-    for (dx, dy, wgt) in [
-        (0.0, 0.0, (1.0 - tx) * (1.0 - ty)),
-        (1.0, 0.0, tx * (1.0 - ty)),
-        (0.0, 1.0, (1.0 - tx) * ty),
-        (1.0, 1.0, tx * ty),
-    ] {
-        let (x, y) = (x0 + dx, y0 + dy);
-        if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 || wgt <= 0.0 {
-            continue;
-        }
-        let c = master.get(x as u32, y as u32);
-        if c.w > 0.0 {
-            sum += c * wgt;
-            weight += wgt;
-        }
-    }
-    (weight > 0.0).then(|| sum / weight)
+    master.sample_bilinear_where(p, |_, _, c| c.w > 0.0)
 }
 
 /// Whether `master` holds the surface at atlas point `p` (its nearest texel has alpha).
