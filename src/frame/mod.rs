@@ -370,6 +370,43 @@ pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
+impl Image<Rgba> {
+    /// A bilinear lookup at pixel point `p` (texel centres at `+½`) over only the taps
+    /// `keep(x, y, texel)` accepts, their weights renormalized; taps outside the image are
+    /// skipped. `None` when no tap with a weight is accepted — a lookup that never mixes in
+    /// what is not the surface (transparent texels, another depth).
+    pub fn sample_bilinear_where(
+        &self,
+        p: glam::DVec2,
+        keep: impl Fn(u32, u32, Rgba) -> bool,
+    ) -> Option<Rgba> {
+        let (w, h) = self.size();
+        let (fx, fy) = (p.x - 0.5, p.y - 0.5);
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
+        let mut sum = Vec4::ZERO;
+        let mut weight = 0.0f32;
+        for (dx, dy, wgt) in [
+            (0.0, 0.0, (1.0 - tx) * (1.0 - ty)),
+            (1.0, 0.0, tx * (1.0 - ty)),
+            (0.0, 1.0, (1.0 - tx) * ty),
+            (1.0, 1.0, tx * ty),
+        ] {
+            let (x, y) = (x0 + dx, y0 + dy);
+            if wgt <= 0.0 || x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                continue;
+            }
+            let (x, y) = (x as u32, y as u32);
+            let c = self.get(x, y);
+            if keep(x, y, c) {
+                sum += c * wgt;
+                weight += wgt;
+            }
+        }
+        (weight > 0.0).then(|| sum / weight)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -465,42 +502,5 @@ mod tests {
             let x = i as f32 / 100.0;
             assert!((srgb_to_linear(linear_to_srgb(x)) - x).abs() < 1e-5);
         }
-    }
-}
-
-impl Image<Rgba> {
-    /// A bilinear lookup at pixel point `p` (texel centres at `+½`) over only the taps
-    /// `keep(x, y, texel)` accepts, their weights renormalized; taps outside the image are
-    /// skipped. `None` when no tap with a weight is accepted — a lookup that never mixes in
-    /// what is not the surface (transparent texels, another depth).
-    pub fn sample_bilinear_where(
-        &self,
-        p: glam::DVec2,
-        keep: impl Fn(u32, u32, Rgba) -> bool,
-    ) -> Option<Rgba> {
-        let (w, h) = self.size();
-        let (fx, fy) = (p.x - 0.5, p.y - 0.5);
-        let (x0, y0) = (fx.floor(), fy.floor());
-        let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
-        let mut sum = Vec4::ZERO;
-        let mut weight = 0.0f32;
-        for (dx, dy, wgt) in [
-            (0.0, 0.0, (1.0 - tx) * (1.0 - ty)),
-            (1.0, 0.0, tx * (1.0 - ty)),
-            (0.0, 1.0, (1.0 - tx) * ty),
-            (1.0, 1.0, tx * ty),
-        ] {
-            let (x, y) = (x0 + dx, y0 + dy);
-            if wgt <= 0.0 || x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
-                continue;
-            }
-            let (x, y) = (x as u32, y as u32);
-            let c = self.get(x, y);
-            if keep(x, y, c) {
-                sum += c * wgt;
-                weight += wgt;
-            }
-        }
-        (weight > 0.0).then(|| sum / weight)
     }
 }
