@@ -437,3 +437,96 @@ fn wyman_exit_rays_are_exact_on_a_spheres_centre_line_and_close_near_it() {
         errors.len()
     );
 }
+
+#[test]
+fn a_planar_mirror_answered_by_a_pinhole_impostor_from_the_mirrored_eye_matches_trace() {
+    use std::sync::Arc;
+    use trompe::glam::{Mat4, Vec3};
+    use trompe::impostor::{ImpostorCamera, build};
+    use trompe::render::shading::{albedo, lambert, lit};
+    use trompe::render::{ReflectorImpostors, Tracer, render_trace};
+    use trompe::scene::View;
+    use trompe::trace::{Bvh, Exact};
+    // A vertical mirror in the z = 0 plane facing +z, the Duck between it and the eye.
+    let s = scene("duck-mirror.toml");
+    let duck = trompe::geom::io::load(&common::asset("gltf/Duck.glb"))
+        .unwrap()
+        .mesh;
+    let b = duck.bounds();
+    let fit = Mat4::from_translation(Vec3::new(0.0, 0.0, 1.2))
+        * Mat4::from_scale(Vec3::splat(0.5 / b.extent().max_element()))
+        * Mat4::from_translation(-Vec3::new(b.center().x, b.min.y, b.center().z));
+    let duck = Arc::new(duck.transformed(&fit));
+    let mirror = Arc::new(trompe::geom::plane(1).transformed(
+        &(Mat4::from_translation(Vec3::new(0.0, 0.75, 0.0))
+            * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2)
+            * Mat4::from_scale(Vec3::splat(2.0))),
+    ));
+    let eye = Vec3::new(0.35, 0.9, 3.0);
+    let camera =
+        trompe::camera::Pinhole::look_at(eye, Vec3::new(0.0, 0.5, 0.0), Vec3::Y, 40.0, 160, 120)
+            .unwrap();
+    let surfaces = vec![Surface::Diffuse(None), Surface::Mirror { tint: Vec3::ONE }];
+    let view = View {
+        camera,
+        meshes: vec![duck.clone(), mirror],
+        surfaces: surfaces.clone(),
+    };
+    let bvh = Bvh::build(view.meshes.clone());
+    // Every ray the mirror reflects passes through the eye mirrored in its plane: a pinhole
+    // there sees exactly what those rays meet.
+    let mirrored = Vec3::new(eye.x, eye.y, -eye.z);
+    let target = duck.bounds().center();
+    let half = duck.bounds().radius() / mirrored.distance(target);
+    let fov = 2.0 * half.atan().to_degrees() * 1.1;
+    let pinhole =
+        trompe::camera::Pinhole::look_at(mirrored, target, Vec3::Y, fov as f64, 1024, 1024)
+            .unwrap()
+            .with_near(0.01);
+    let eps = 1e-4;
+    let color = |p: &trompe::impostor::SurfaceSample| {
+        let n = if p.normal.dot(mirrored - p.position) < 0.0 {
+            -p.normal
+        } else {
+            p.normal
+        };
+        lambert(
+            albedo(&duck, &surfaces[0], p.triangle, p.uv),
+            n,
+            &s.lighting,
+            |l| lit(&bvh, p.position, n, l, eps),
+        )
+    };
+    let imp = build(ImpostorCamera::Pinhole(pinhole), &duck, 0, &color).unwrap();
+    let answers = ReflectorImpostors::from_impostors(&view, vec![Vec::new(), vec![imp]]);
+    let settings = trompe::scene::RenderSettings {
+        max_depth: 4,
+        time: 0.0,
+        ray_epsilon: eps,
+    };
+    let frame = |secondary: &dyn trompe::trace::SecondaryQuery| {
+        let tracer = Tracer {
+            view: &view,
+            primary: &bvh,
+            secondary,
+            lighting: &s.lighting,
+            settings: &settings,
+        };
+        render_trace(&tracer, &()).unwrap()
+    };
+    let exact = frame(&Exact(&bvh));
+    let imposted = frame(&answers);
+    // Over the mirror's pixels (the Duck's reflection and the panorama's).
+    let mask = exact.object_id.map(|id| id == 1);
+    let flip = metrics::flip(&exact.color, &imposted.color, Some(&mask)).unwrap();
+    let seen = mask.pixels().iter().filter(|&&m| m).count();
+    println!(
+        "planar mirror, pinhole impostor from the mirrored eye: FLIP {flip:.5} over {seen} px"
+    );
+    assert!(seen > 2000, "the mirror covers {seen} pixels");
+    assert!(flip <= 0.01, "FLIP {flip} over the mirror");
+    // The Duck is in the mirror: the panorama alone misses it.
+    let env = frame(&trompe::trace::EnvironmentOnly);
+    let without = metrics::flip(&exact.color, &env.color, Some(&mask)).unwrap();
+    assert!(without > 10.0 * flip, "the panorama alone: FLIP {without}");
+}
