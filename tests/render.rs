@@ -448,7 +448,7 @@ fn a_planar_mirror_answered_by_a_pinhole_impostor_from_the_mirrored_eye_matches_
     use trompe::scene::View;
     use trompe::trace::{Bvh, Exact};
     // A vertical mirror in the z = 0 plane facing +z, the Duck between it and the eye.
-    let s = scene("duck-mirror.toml");
+    let s = scene("reflections.toml");
     let duck = trompe::geom::io::load(&common::asset("gltf/Duck.glb"))
         .unwrap()
         .mesh;
