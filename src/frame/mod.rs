@@ -382,7 +382,13 @@ impl Image<Rgba> {
     ) -> Option<Rgba> {
         let (w, h) = self.size();
         let (fx, fy) = (p.x - 0.5, p.y - 0.5);
-        let (x0, y0) = (fx.floor(), fy.floor());
+        // floor without a libm call (x86-64's baseline has no rounding instruction): this
+        // runs for every pixel of a view-dependent blend.
+        let floor = |v: f64| {
+            let i = v as i64 as f64;
+            if i > v { i - 1.0 } else { i }
+        };
+        let (x0, y0) = (floor(fx), floor(fy));
         let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
         let mut sum = Vec4::ZERO;
         let mut weight = 0.0f32;

@@ -250,36 +250,11 @@ const SAME_SURFACE: f64 = 0.05;
 /// own pixel grid (a view without distortion). Falls back to the nearest texel when no tap is on
 /// the surface.
 pub(crate) fn sample_on_surface(img: &Image<Rgba>, gd: &Image<f32>, px: DVec2, z: f64) -> Rgba {
-    let (w, h) = img.size();
-    let (fx, fy) = (px.x - 0.5, px.y - 0.5);
-    // floor without a libm call (x86-64's baseline has no rounding instruction).
-    let floor = |v: f64| {
-        let i = v as i64 as f64;
-        if i > v { i - 1.0 } else { i }
-    };
-    let (x0, y0) = (floor(fx), floor(fy));
-    let (tx, ty) = ((fx - x0) as f32, (fy - y0) as f32);
-    let clamp = |v: f64, n: u32| (v as i64).clamp(0, n as i64 - 1) as u32;
-    let mut sum = Vec4::ZERO;
-    let mut weight = 0.0f32;
-    for (dx, dy, wgt) in [
-        (0.0, 0.0, (1.0 - tx) * (1.0 - ty)),
-        (1.0, 0.0, tx * (1.0 - ty)),
-        (0.0, 1.0, (1.0 - tx) * ty),
-        (1.0, 1.0, tx * ty),
-    ] {
-        let (x, y) = (clamp(x0 + dx, w), clamp(y0 + dy, h));
+    img.sample_bilinear_where(px, |x, y, _| {
         let g = gd.get(x, y) as f64;
-        if g > 0.0 && (1.0 / g - z).abs() <= SAME_SURFACE * z && wgt > 0.0 {
-            sum += img.get(x, y) * wgt;
-            weight += wgt;
-        }
-    }
-    if weight > 0.0 {
-        sum / weight
-    } else {
-        img.sample_nearest(Vec2::new(px.x as f32, px.y as f32))
-    }
+        g > 0.0 && (1.0 / g - z).abs() <= SAME_SURFACE * z
+    })
+    .unwrap_or_else(|| img.sample_nearest(Vec2::new(px.x as f32, px.y as f32)))
 }
 
 /// Per triangle, the usable view that sees its centroid with the largest projected area.
