@@ -27,15 +27,12 @@ fn main() -> Result<(), Box<dyn Error>> {
     // What answers the rays mirrors and glass send out: one renderer, three answers.
     let mut timings = Timings::default();
     let inputs = ImpostorInputs {
-        resolution,
-        baked: &[],
         // The impostors' texels shadowed as the tracer shadows what it hits.
         shadows: Some(Shadows {
             occluders: &primary,
             epsilon: scene.render.ray_epsilon,
         }),
-        pinhole: false,
-        refraction: trompe::render::Refraction::Exact,
+        ..ImpostorInputs::new(resolution)
     };
     let impostors = ReflectorImpostors::build(&view, &scene.lighting, inputs, &mut timings)?;
     let exact = Exact(&primary);

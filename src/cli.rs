@@ -228,6 +228,10 @@ pub struct RenderArgs {
     /// envmap methods).
     #[arg(long, value_enum, default_value_t = RefractionArg::Exact)]
     refraction: RefractionArg,
+    /// How mirrors see other mirrors under --method impostor and pinhole-impostor: traced
+    /// exactly, or as impostors that store their normals (paper 1's inter-reflections).
+    #[arg(long, value_enum, default_value_t = MirrorsArg::Exact)]
+    mirrors: MirrorsArg,
     /// Impostor resolution (square), for --method impostor and pinhole-impostor.
     #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
           value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
@@ -352,6 +356,15 @@ pub enum RefractionArg {
     Exact,
     /// Wyman's image-space approximation (SIGGRAPH 2005).
     Wyman,
+}
+
+/// `--mirrors`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MirrorsArg {
+    /// Mirror-to-mirror rays traced through a BVH of the mirrors and glass.
+    Exact,
+    /// Other mirrors seen as impostors storing their normals; the ray reflects on.
+    Impostor,
 }
 
 /// `--method`.
@@ -537,13 +550,17 @@ impl RenderArgs {
         let frame = match self.method.method(self.impostor_resolution) {
             Some(method) => {
                 let pb = bar(&format!("{method}"), s.camera.height as u64);
-                let refraction = match self.refraction {
-                    RefractionArg::Exact => render::Refraction::Exact,
-                    RefractionArg::Wyman => render::Refraction::Wyman,
-                };
+                let options = render::RenderOptions::new(method)
+                    .refraction(match self.refraction {
+                        RefractionArg::Exact => render::Refraction::Exact,
+                        RefractionArg::Wyman => render::Refraction::Wyman,
+                    })
+                    .mirrors(match self.mirrors {
+                        MirrorsArg::Exact => render::Mirrors::Exact,
+                        MirrorsArg::Impostor => render::Mirrors::Impostor,
+                    });
                 let (frame, steps) =
-                    render::render_refracting(&s, t, method, refraction, pb.as_ref())
-                        .context("rendering")?;
+                    render::render_with(&s, t, options, pb.as_ref()).context("rendering")?;
                 timings.0.extend(steps.0);
                 frame
             }

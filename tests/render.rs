@@ -530,3 +530,117 @@ fn a_planar_mirror_answered_by_a_pinhole_impostor_from_the_mirrored_eye_matches_
     let without = metrics::flip(&exact.color, &env.color, Some(&mask)).unwrap();
     assert!(without > 10.0 * flip, "the panorama alone: FLIP {without}");
 }
+
+/// Two facing planar mirrors and the Duck between them, seen obliquely: the view, and the
+/// pixels whose reflected ray meets the other mirror (second-bounce pixels).
+fn facing_mirrors(size: (u32, u32)) -> (trompe::scene::View, trompe::Image<bool>) {
+    use std::sync::Arc;
+    use trompe::geom::optics::{facing, reflect};
+    use trompe::glam::{DVec2, Mat4, Vec3};
+    use trompe::trace::{Bvh, RayQuery};
+    let duck = trompe::geom::io::load(&common::asset("gltf/Duck.glb"))
+        .unwrap()
+        .mesh;
+    let b = duck.bounds();
+    let fit = Mat4::from_translation(Vec3::new(0.3, 0.0, 1.2))
+        * Mat4::from_scale(Vec3::splat(0.6 / b.extent().max_element()))
+        * Mat4::from_translation(-Vec3::new(b.center().x, b.min.y, b.center().z));
+    let floor = trompe::geom::plane(1).transformed(&Mat4::from_scale(Vec3::splat(3.0)));
+    let wall = |z: f32, turn: f32| {
+        Arc::new(trompe::geom::plane(1).transformed(
+            &(Mat4::from_translation(Vec3::new(0.0, 0.8, z))
+                * Mat4::from_rotation_x(turn)
+                * Mat4::from_scale(Vec3::new(2.4, 1.0, 1.4))),
+        ))
+    };
+    let half_pi = std::f32::consts::FRAC_PI_2;
+    let camera = trompe::camera::Pinhole::look_at(
+        Vec3::new(-0.5, 1.3, 2.0),
+        Vec3::new(0.2, 0.6, 0.0),
+        Vec3::Y,
+        45.0,
+        size.0,
+        size.1,
+    )
+    .unwrap();
+    let view = trompe::scene::View {
+        camera,
+        meshes: vec![
+            Arc::new(duck.transformed(&fit)),
+            Arc::new(floor),
+            wall(0.0, half_pi),
+            wall(2.4, -half_pi),
+        ],
+        surfaces: vec![
+            Surface::Diffuse(None),
+            Surface::Diffuse(None),
+            Surface::Mirror {
+                tint: Vec3::splat(0.9),
+            },
+            Surface::Mirror {
+                tint: Vec3::splat(0.9),
+            },
+        ],
+    };
+    let bvh = Bvh::build(view.meshes.clone());
+    let mut second = trompe::Image::new(size.0, size.1, false).unwrap();
+    for (x, y) in (0..size.1).flat_map(|y| (0..size.0).map(move |x| (x, y))) {
+        let v = {
+            let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            bvh.closest_hit(&ray, f32::INFINITY)
+                .filter(|h| h.object >= 2)
+                .is_some_and(|h| {
+                    let (n, ng, _) = facing(ray.dir, h.normal, h.geometric_normal);
+                    let out = trompe::Ray::new(h.position + ng * 1e-4, reflect(ray.dir, n));
+                    bvh.closest_hit(&out, f32::INFINITY)
+                        .is_some_and(|g| g.object >= 2 && g.object != h.object)
+                })
+        };
+        second.set(x, y, v);
+    }
+    (view, second)
+}
+
+#[test]
+fn two_facing_mirrors_seen_through_impostors_agree_with_tracing_on_the_second_bounce() {
+    use trompe::render::{Mirrors, RenderOptions, render_view};
+    let s = scene("reflections.toml");
+    let (view, second) = facing_mirrors((200, 150));
+    let settings = trompe::scene::RenderSettings {
+        max_depth: 6,
+        ..s.render
+    };
+    let frame = |options: RenderOptions| {
+        render_view(
+            &view,
+            (&s.lighting, &settings),
+            options,
+            &[],
+            &(),
+            &mut Default::default(),
+        )
+        .unwrap()
+    };
+    let exact = frame(RenderOptions::new(Method::Trace));
+    let imposted = frame(RenderOptions::new(Method::Impostor(512)).mirrors(Mirrors::Impostor));
+    let pixels: Vec<_> = (0..150)
+        .flat_map(|y| (0..200).map(move |x| (x, y)))
+        .filter(|&(x, y)| second.get(x, y))
+        .collect();
+    assert!(pixels.len() > 3000, "{} second-bounce pixels", pixels.len());
+    // Agreement: every channel within 0.02 + 5 % of the traced radiance.
+    let agree = pixels
+        .iter()
+        .filter(|&&(x, y)| {
+            let (e, i) = (exact.color.get(x, y), imposted.color.get(x, y));
+            (e - i).truncate().abs().max_element() <= 0.02 + 0.05 * e.truncate().max_element()
+        })
+        .count();
+    let share = agree as f64 / pixels.len() as f64;
+    eprintln!(
+        "{agree} of {} second-bounce pixels agree ({:.2} %)",
+        pixels.len(),
+        100.0 * share
+    );
+    assert!(share >= 0.99, "{:.2} % agree", 100.0 * share);
+}

@@ -17,7 +17,7 @@
 
 use super::shading::{Shadows, albedo, lambert};
 use super::trace::Tracer;
-use super::{Progress, RenderError, Timings};
+use super::{Mirrors, Progress, RenderError, Timings};
 use crate::camera::Pinhole;
 use crate::frame::Frame;
 use crate::geom::{Mesh, Ray};
@@ -26,6 +26,7 @@ use crate::scene::{Lighting, RenderSettings, Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
 use glam::Vec3;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Impostor resolution (square) when none is asked for.
 pub const DEFAULT_IMPOSTOR_RESOLUTION: u32 = 512;
@@ -34,22 +35,47 @@ pub const DEFAULT_IMPOSTOR_RESOLUTION: u32 = 512;
 const FLAT: f32 = 0.01;
 
 /// The answers of paper 1 §6's method to the rays mirrors and glass send out: per mirror or
-/// glass object, impostors of the diffuse objects it sees, and the mirrors and glass exactly
-/// (a BVH of them alone), the nearer answer winning.
+/// glass object, impostors of the diffuse objects it sees (and, with [`Mirrors::Impostor`], of
+/// the other mirrors, which carry their normals so the ray reflects on), and the specular
+/// objects it sees exactly through a BVH of them alone; the nearer answer wins.
 pub struct ReflectorImpostors {
     /// Per object id: the impostors its rays meet (empty for a diffuse object).
-    per_object: Vec<Vec<Impostor>>,
-    /// Scene ids of the mirror and glass objects, in `specular`'s order.
-    specular_ids: Vec<u32>,
-    /// The mirror and glass objects alone, exact.
-    specular: Bvh,
+    per_object: Vec<Vec<Seen>>,
+    /// Per object id: the specular objects its rays meet exactly (`None` for a diffuse object).
+    exact: Vec<Option<Arc<ExactSpecular>>>,
+}
+
+/// One impostor a reflector's rays meet.
+struct Seen {
+    impostor: Impostor,
+    /// Its hits carry the impostor's colour (a diffuse object's); otherwise they carry none,
+    /// and the tracer reflects on off the stored normal (a mirror's).
+    radiance: bool,
+}
+
+/// Specular objects seen exactly: a BVH of their meshes and their scene ids.
+struct ExactSpecular {
+    ids: Vec<u32>,
+    bvh: Bvh,
+}
+
+impl ExactSpecular {
+    fn new(view: &View, ids: Vec<u32>) -> Arc<Self> {
+        let bvh = Bvh::build(
+            ids.iter()
+                .map(|&o| view.meshes[o as usize].clone())
+                .collect(),
+        );
+        Arc::new(Self { ids, bvh })
+    }
 }
 
 impl ReflectorImpostors {
     /// Builds, for every mirror or glass object of `view`, `inputs.resolution²` impostors of
     /// the diffuse objects seen from its centre, shaded as the tracer shades them under
     /// `lighting` — or, for an object `inputs.baked` names a file for, that baked impostor,
-    /// lit the same way, for every mirror and glass object.
+    /// lit the same way, for every mirror and glass object — and, with
+    /// [`Mirrors::Impostor`], impostors of the other mirrors.
     pub fn build(
         view: &View,
         lighting: &Lighting,
@@ -70,52 +96,97 @@ impl ReflectorImpostors {
             reflector_impostors(view, lighting, &inputs, &baked)
         })?;
         Ok(timings.time("prepare walks, specular BVH", || {
-            Self::from_impostors(view, per_object)
+            Self::assemble(view, per_object, inputs.mirrors)
         }))
     }
 
     /// Wraps impostors made elsewhere (baked, or built with settings of one's own):
-    /// `per_object[o]` are those object `o`'s rays meet; mirrors and glass of `view` see one
-    /// another exactly.
-    pub fn from_impostors(view: &View, mut per_object: Vec<Vec<Impostor>>) -> Self {
-        per_object.resize_with(view.surfaces.len(), Vec::new);
-        for imp in per_object.iter().flatten() {
-            imp.prepare_walks();
-        }
-        let specular_ids: Vec<u32> = (0..view.surfaces.len() as u32)
-            .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
+    /// `per_object[o]` are those object `o`'s rays meet, their hits carrying the impostors'
+    /// colours; mirrors and glass of `view` see one another exactly.
+    pub fn from_impostors(view: &View, per_object: Vec<Vec<Impostor>>) -> Self {
+        let per_object = per_object
+            .into_iter()
+            .map(|seen| {
+                seen.into_iter()
+                    .map(|impostor| Seen {
+                        impostor,
+                        radiance: true,
+                    })
+                    .collect()
+            })
             .collect();
-        let specular = Bvh::build(
-            specular_ids
-                .iter()
-                .map(|&o| view.meshes[o as usize].clone())
-                .collect(),
-        );
-        Self {
-            per_object,
-            specular_ids,
-            specular,
+        Self::assemble(view, per_object, Mirrors::Exact)
+    }
+
+    fn assemble(view: &View, mut per_object: Vec<Vec<Seen>>, mirrors: Mirrors) -> Self {
+        per_object.resize_with(view.surfaces.len(), Vec::new);
+        for seen in per_object.iter().flatten() {
+            seen.impostor.prepare_walks();
         }
+        let specular = |o: u32| !matches!(view.surfaces[o as usize], Surface::Diffuse(_));
+        let ids = 0..view.surfaces.len() as u32;
+        let exact = match mirrors {
+            // One BVH of every mirror and glass object, for all of them.
+            Mirrors::Exact => {
+                let all = ExactSpecular::new(view, ids.clone().filter(|&o| specular(o)).collect());
+                ids.map(|o| specular(o).then(|| all.clone())).collect()
+            }
+            // Each sees itself and the glass exactly; the other mirrors are impostors.
+            Mirrors::Impostor => {
+                let glass = |o: u32| matches!(view.surfaces[o as usize], Surface::Glass { .. });
+                ids.map(|r| {
+                    specular(r).then(|| {
+                        let seen = (0..view.surfaces.len() as u32)
+                            .filter(|&o| o == r || glass(o))
+                            .collect();
+                        ExactSpecular::new(view, seen)
+                    })
+                })
+                .collect()
+            }
+        };
+        Self { per_object, exact }
     }
 
     /// The impostors the rays of object `reflector` meet.
-    pub fn of(&self, reflector: u32) -> &[Impostor] {
+    pub fn of(&self, reflector: u32) -> impl Iterator<Item = &Impostor> {
         self.per_object
             .get(reflector as usize)
-            .map_or(&[], Vec::as_slice)
+            .into_iter()
+            .flatten()
+            .map(|s| &s.impostor)
     }
 }
 
 impl SecondaryQuery for ReflectorImpostors {
     fn secondary_hit(&self, reflector: u32, ray: &Ray) -> Option<Hit> {
         let seen = self
-            .of(reflector)
-            .iter()
-            .filter_map(|imp| imp.closest_hit(ray, f32::INFINITY));
-        let exact = self.specular.closest_hit(ray, f32::INFINITY).map(|h| Hit {
-            object: self.specular_ids[h.object as usize],
-            ..h
-        });
+            .per_object
+            .get(reflector as usize)
+            .into_iter()
+            .flatten()
+            .filter_map(|s| {
+                let hit = s.impostor.closest_hit(ray, f32::INFINITY)?;
+                Some(if s.radiance {
+                    hit
+                } else {
+                    Hit {
+                        radiance: None,
+                        ..hit
+                    }
+                })
+            });
+        let exact = self
+            .exact
+            .get(reflector as usize)
+            .and_then(Option::as_ref)
+            .and_then(|e| {
+                let h = e.bvh.closest_hit(ray, f32::INFINITY)?;
+                Some(Hit {
+                    object: e.ids[h.object as usize],
+                    ..h
+                })
+            });
         seen.chain(exact).min_by(|a, b| a.t.total_cmp(&b.t))
     }
 }
@@ -136,6 +207,23 @@ pub struct ImpostorInputs<'a> {
     pub pinhole: bool,
     /// How the eye's refractions into glass are found.
     pub refraction: super::Refraction,
+    /// How mirrors see the other mirrors.
+    pub mirrors: Mirrors,
+}
+
+impl ImpostorInputs<'_> {
+    /// Impostors of `resolution²` texels, built for every object, lit unshadowed, through
+    /// SPOCs; refractions exact; mirrors seen exactly.
+    pub fn new(resolution: u32) -> Self {
+        ImpostorInputs {
+            resolution,
+            baked: &[],
+            shadows: None,
+            pinhole: false,
+            refraction: super::Refraction::Exact,
+            mirrors: Mirrors::Exact,
+        }
+    }
 }
 
 /// Renders `view` by the impostor method.
@@ -212,22 +300,25 @@ fn toward(n: Vec3, to: Vec3) -> Vec3 {
 }
 
 /// Per object of `view`: for a mirror or glass object, an impostor of every diffuse object seen
-/// from its centre (built in parallel inside); nothing for a diffuse object.
+/// from its centre (and, with [`Mirrors::Impostor`], of every other mirror, normals only);
+/// nothing for a diffuse object.
 fn reflector_impostors(
     view: &View,
     lighting: &Lighting,
     inputs: &ImpostorInputs<'_>,
     baked: &[Option<Impostor>],
-) -> Result<Vec<Vec<Impostor>>, RenderError> {
+) -> Result<Vec<Vec<Seen>>, RenderError> {
     let (resolution, shadows) = (inputs.resolution, inputs.shadows);
     let outside = if inputs.pinhole {
         ViewCamera::Pinhole
     } else {
         ViewCamera::Spoc(None)
     };
-    let diffuse: Vec<usize> = (0..view.surfaces.len())
-        .filter(|&o| matches!(view.surfaces[o], Surface::Diffuse(_)))
-        .collect();
+    let seen_as_impostor = |o: usize| match view.surfaces[o] {
+        Surface::Diffuse(_) => true,
+        Surface::Mirror { .. } => inputs.mirrors == Mirrors::Impostor,
+        Surface::Glass { .. } => false,
+    };
     let mut out = Vec::with_capacity(view.surfaces.len());
     // One builder for all: its working memory is allocated once, not once per impostor.
     let mut builder = ImpostorBuilder::new();
@@ -238,10 +329,15 @@ fn reflector_impostors(
         }
         let reflector = view.meshes[r].bounds();
         let (eye, region) = (reflector.center(), reflector.radius() as f64);
-        let mut seen = Vec::with_capacity(diffuse.len());
-        for &o in &diffuse {
+        let mut seen = Vec::new();
+        for o in (0..view.surfaces.len()).filter(|&o| o != r && seen_as_impostor(o)) {
+            let surface = &view.surfaces[o];
+            let radiance = matches!(surface, Surface::Diffuse(_));
             if let Some(Some(imp)) = baked.get(o) {
-                seen.push(imp.clone());
+                seen.push(Seen {
+                    impostor: imp.clone(),
+                    radiance,
+                });
                 continue;
             }
             let mesh = &view.meshes[o];
@@ -253,16 +349,22 @@ fn reflector_impostors(
                         reason,
                     }
                 })?;
-            let surface = &view.surfaces[o];
-            // The tracer's diffuse shading, with the normal turned toward the reflector.
+            // The tracer's diffuse shading, with the normal turned toward the reflector; a
+            // mirror's texels keep only their normals.
             let color = |s: &SurfaceSample| {
+                if !radiance {
+                    return Vec3::ZERO;
+                }
                 let n = toward(s.normal, eye - s.position);
                 lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting, |l| {
                     shadows.is_none_or(|sh| sh.lit(s.position, n, l))
                 })
             };
             for camera in cameras {
-                seen.push(builder.build(camera, mesh, o as u32, &color)?);
+                seen.push(Seen {
+                    impostor: builder.build(camera, mesh, o as u32, &color)?,
+                    radiance,
+                });
             }
         }
         out.push(seen);

@@ -79,6 +79,57 @@ pub enum Refraction {
     Wyman,
 }
 
+/// How mirrors see one another under the impostor methods.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Mirrors {
+    /// Traced exactly, through a BVH of the mirror and glass objects alone (beyond the paper).
+    #[default]
+    Exact,
+    /// As impostors that store their normals (paper 1 §6, second-order reflections): a ray
+    /// meeting one reflects off the stored surface, and the reflected ray is answered again by
+    /// that mirror's impostors, up to the scene's `max_depth`. Each mirror still sees itself
+    /// and the glass exactly.
+    Impostor,
+}
+
+/// How a frame is rendered: the method and the choices it leaves open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// What answers the rays.
+    pub method: Method,
+    /// How the eye's refractions into glass are found.
+    pub refraction: Refraction,
+    /// How mirrors see one another (impostor methods).
+    pub mirrors: Mirrors,
+}
+
+impl RenderOptions {
+    /// `method`, with exact refraction and exact mirror-to-mirror rays.
+    pub fn new(method: Method) -> Self {
+        Self {
+            method,
+            refraction: Refraction::Exact,
+            mirrors: Mirrors::Exact,
+        }
+    }
+
+    /// The same, glass refracting the eye's rays by `refraction`.
+    pub fn refraction(self, refraction: Refraction) -> Self {
+        Self { refraction, ..self }
+    }
+
+    /// The same, mirrors seeing one another as `mirrors` says.
+    pub fn mirrors(self, mirrors: Mirrors) -> Self {
+        Self { mirrors, ..self }
+    }
+}
+
+impl From<Method> for RenderOptions {
+    fn from(method: Method) -> Self {
+        Self::new(method)
+    }
+}
+
 /// Errors from rendering.
 #[derive(Debug, Error)]
 #[non_exhaustive]
@@ -164,16 +215,15 @@ pub fn render_at(
     method: Method,
     progress: &dyn Progress,
 ) -> Result<(Frame, Timings), RenderError> {
-    render_refracting(scene, t, method, Refraction::Exact, progress)
+    render_with(scene, t, RenderOptions::new(method), progress)
 }
 
-/// [`render_at`], glass refracting the eye's rays by `refraction` (the raster method ignores
-/// it: it looks refractions up in the panorama).
-pub fn render_refracting(
+/// Renders `scene` at time `t` as `options` say (the raster method ignores the refraction
+/// and mirror choices: it looks both up in the panorama).
+pub fn render_with(
     scene: &Scene,
     t: f32,
-    method: Method,
-    refraction: Refraction,
+    options: RenderOptions,
     progress: &dyn Progress,
 ) -> Result<(Frame, Timings), RenderError> {
     if !t.is_finite() {
@@ -181,35 +231,16 @@ pub fn render_refracting(
     }
     let mut timings = Timings::default();
     let view = timings.time("evaluate scene", || scene.view(t))?;
-    check_memory(&view, method)?;
-    let frame = match method {
-        Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
-            let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
-            let inputs = impostor::ImpostorInputs {
-                resolution,
-                baked: &baked,
-                shadows: None,
-                pinhole: matches!(method, Method::PinholeImpostor(_)),
-                refraction,
-            };
-            render_impostor(
-                &view,
-                &scene.lighting,
-                &scene.render,
-                inputs,
-                progress,
-                &mut timings,
-            )?
-        }
-        _ => render_view(
-            &view,
-            (&scene.lighting, &scene.render),
-            method,
-            refraction,
-            progress,
-            &mut timings,
-        )?,
-    };
+    check_memory(&view, options.method)?;
+    let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
+    let frame = render_view(
+        &view,
+        (&scene.lighting, &scene.render),
+        options,
+        &baked,
+        progress,
+        &mut timings,
+    )?;
     Ok((frame, timings))
 }
 
@@ -241,12 +272,13 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), RenderError> {
     Ok(check(|| what, needed)?)
 }
 
-/// Renders an evaluated view.
+/// Renders an evaluated view; `baked[o]` names a baked impostor that stands in for object `o`
+/// under the impostor methods (an empty slice: none).
 pub fn render_view(
     view: &View,
     (lighting, settings): (&Lighting, &RenderSettings),
-    method: Method,
-    refraction: Refraction,
+    options: RenderOptions,
+    baked: &[Option<std::path::PathBuf>],
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
@@ -259,7 +291,8 @@ pub fn render_view(
     {
         return Err(RenderError::NonFinite { object });
     }
-    match method {
+    let refraction = options.refraction;
+    match options.method {
         Method::Raster => render_raster(view, lighting, settings, progress, timings),
         Method::Trace => {
             let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
@@ -273,12 +306,12 @@ pub fn render_view(
             trace_frame(&tracer, refraction, progress, timings)
         }
         Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
-            let inputs = impostor::ImpostorInputs {
-                resolution,
-                baked: &[],
-                shadows: None,
-                pinhole: matches!(method, Method::PinholeImpostor(_)),
+            let inputs = ImpostorInputs {
+                baked,
+                pinhole: matches!(options.method, Method::PinholeImpostor(_)),
                 refraction,
+                mirrors: options.mirrors,
+                ..ImpostorInputs::new(resolution)
             };
             render_impostor(view, lighting, settings, inputs, progress, timings)
         }

@@ -95,15 +95,18 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
 impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
     /// Radiance arriving along `ray`, which leaves object `object` into the open at recursion
     /// depth `depth`: what the secondary query answers (its radiance, or one more bounce on
-    /// what it hit), the environment's when it answers nothing.
+    /// what it hit), the environment's when it answers nothing or the depth limit is reached
+    /// — whatever answers, so every secondary query stops at the same depth.
     pub fn leaving(&self, object: u32, ray: &Ray, depth: u32) -> Vec3 {
-        let last = depth + 1 >= self.settings.max_depth;
+        if depth + 1 >= self.settings.max_depth {
+            return self.lighting.environment.radiance(ray.dir);
+        }
         match self.secondary.secondary_hit(object, ray) {
             Some(Hit {
                 radiance: Some(l), ..
             }) => l,
-            Some(h) if !last => self.shade(ray, &h, depth + 1),
-            _ => self.lighting.environment.radiance(ray.dir),
+            Some(h) => self.shade(ray, &h, depth + 1),
+            None => self.lighting.environment.radiance(ray.dir),
         }
     }
 }
