@@ -24,7 +24,7 @@ use crate::geom::{Mesh, Ray};
 use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, ViewCamera};
 use crate::scene::{Lighting, RenderSettings, Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
-use glam::Vec3;
+use glam::{Affine3A, Mat4, Vec3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -46,11 +46,76 @@ pub struct ReflectorImpostors {
 }
 
 /// One impostor a reflector's rays meet.
-struct Seen {
-    impostor: Impostor,
+pub(super) struct Seen {
+    /// The impostor, as built (shared between the reflectors that see it, and between frames).
+    pub impostor: Arc<Impostor>,
+    /// Where its object has moved since it was built (`None`: nowhere).
+    pub placement: Option<Placement>,
     /// Its hits carry the impostor's colour (a diffuse object's); otherwise they carry none,
     /// and the tracer reflects on off the stored normal (a mirror's).
-    radiance: bool,
+    pub radiance: bool,
+}
+
+/// The rigid motion that carries an impostor from where its object was when it was built to
+/// where it is now: a ray is taken into the impostor's frame, and its hit back out.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Placement {
+    now_from_built: Affine3A,
+    built_from_now: Affine3A,
+}
+
+impl Placement {
+    /// The motion `now_from_built` (rigid: rotation and translation), or `None` when it is the
+    /// identity.
+    pub fn of(now_from_built: Mat4) -> Option<Self> {
+        if now_from_built == Mat4::IDENTITY {
+            return None;
+        }
+        let now_from_built = Affine3A::from_mat4(now_from_built);
+        Some(Self {
+            now_from_built,
+            built_from_now: now_from_built.inverse(),
+        })
+    }
+
+    /// A point where it was built, now.
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.now_from_built.transform_point3(p)
+    }
+
+    /// A direction where it was built, now (unit in, unit out: the motion is rigid).
+    pub fn vector(&self, v: Vec3) -> Vec3 {
+        self.now_from_built.transform_vector3(v)
+    }
+}
+
+impl Seen {
+    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        let hit = match &self.placement {
+            None => self.impostor.closest_hit(ray, f32::INFINITY)?,
+            Some(m) => {
+                let there = Ray::new(
+                    m.built_from_now.transform_point3(ray.origin),
+                    m.built_from_now.transform_vector3(ray.dir),
+                );
+                let h = self.impostor.closest_hit(&there, f32::INFINITY)?;
+                Hit {
+                    position: m.point(h.position),
+                    normal: m.vector(h.normal),
+                    geometric_normal: m.vector(h.geometric_normal),
+                    ..h
+                }
+            }
+        };
+        Some(if self.radiance {
+            hit
+        } else {
+            Hit {
+                radiance: None,
+                ..hit
+            }
+        })
+    }
 }
 
 /// Specular objects seen exactly: a BVH of their meshes and their scene ids.
@@ -86,9 +151,7 @@ impl ReflectorImpostors {
         // A size the maps can have, said as such rather than as a degenerate camera.
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
         let baked = if inputs.baked.iter().any(Option::is_some) {
-            timings.time("load baked impostors", || {
-                load_baked(view, lighting, inputs.baked, inputs.shadows)
-            })?
+            timings.time("load baked impostors", || load_baked(view, inputs.baked))?
         } else {
             Vec::new()
         };
@@ -109,7 +172,8 @@ impl ReflectorImpostors {
             .map(|seen| {
                 seen.into_iter()
                     .map(|impostor| Seen {
-                        impostor,
+                        impostor: Arc::new(impostor),
+                        placement: None,
                         radiance: true,
                     })
                     .collect()
@@ -118,7 +182,9 @@ impl ReflectorImpostors {
         Self::assemble(view, per_object, Mirrors::Exact)
     }
 
-    fn assemble(view: &View, mut per_object: Vec<Vec<Seen>>, mirrors: Mirrors) -> Self {
+    /// The answers from the impostors each object's rays meet, `per_object`; the mirror and
+    /// glass objects seen exactly as `mirrors` says.
+    pub(super) fn assemble(view: &View, mut per_object: Vec<Vec<Seen>>, mirrors: Mirrors) -> Self {
         per_object.resize_with(view.surfaces.len(), Vec::new);
         for seen in per_object.iter().flatten() {
             seen.impostor.prepare_walks();
@@ -154,7 +220,7 @@ impl ReflectorImpostors {
             .get(reflector as usize)
             .into_iter()
             .flatten()
-            .map(|s| &s.impostor)
+            .map(|s| s.impostor.as_ref())
     }
 }
 
@@ -165,17 +231,7 @@ impl SecondaryQuery for ReflectorImpostors {
             .get(reflector as usize)
             .into_iter()
             .flatten()
-            .filter_map(|s| {
-                let hit = s.impostor.closest_hit(ray, f32::INFINITY)?;
-                Some(if s.radiance {
-                    hit
-                } else {
-                    Hit {
-                        radiance: None,
-                        ..hit
-                    }
-                })
-            });
+            .filter_map(|s| s.closest_hit(ray));
         let exact = self
             .exact
             .get(reflector as usize)
@@ -255,13 +311,11 @@ pub fn render_impostor(
 }
 
 /// The baked impostors `files` names, per object id, each checked against the object as the
-/// view places it and lit as [`reflector_impostors`] lights the impostors it builds (the
-/// tracer's diffuse shading, the normal turned toward the impostor's viewpoint).
-fn load_baked(
+/// view places it, its object id set to the object's; their colours are the albedo they were
+/// baked with, for [`lit`] to light.
+pub(super) fn load_baked(
     view: &View,
-    lighting: &Lighting,
     files: &[Option<PathBuf>],
-    shadows: Option<Shadows<'_>>,
 ) -> Result<Vec<Option<Impostor>>, RenderError> {
     let mut out = Vec::with_capacity(files.len());
     for (object, file) in files.iter().enumerate() {
@@ -280,18 +334,36 @@ fn load_baked(
                 object_box: [mb.min.to_array(), mb.max.to_array()],
             });
         }
-        let eye = imp.camera().viewpoint().as_vec3();
-        imp.relight(|albedo, normal, position| {
-            let n = toward(normal, eye - position);
-            lambert(albedo, n, lighting, |l| {
-                shadows.is_none_or(|s| s.lit(position, n, l))
-            })
-        });
         // The object's id in this scene, whatever id it was baked with.
         imp.set_object_id(object as u32);
+        imp.prepare_walks();
         out.push(Some(imp));
     }
     Ok(out)
+}
+
+/// `unlit` — an impostor whose colours are albedo — lit as the tracer lights what it hits,
+/// where `placement` has carried it (the diffuse shading under `lighting`, the normal turned
+/// toward the impostor's viewpoint, the light's shadow ray through `shadows`).
+pub(super) fn lit(
+    unlit: &Impostor,
+    placement: Option<Placement>,
+    lighting: &Lighting,
+    shadows: Option<Shadows<'_>>,
+) -> Impostor {
+    let mut imp = unlit.clone();
+    let eye = imp.camera().viewpoint().as_vec3();
+    imp.relight(|albedo, normal, position| {
+        let (eye, normal, position) = match &placement {
+            None => (eye, normal, position),
+            Some(m) => (m.point(eye), m.vector(normal), m.point(position)),
+        };
+        let n = toward(normal, eye - position);
+        lambert(albedo, n, lighting, |l| {
+            shadows.is_none_or(|s| s.lit(position, n, l))
+        })
+    });
+    imp
 }
 
 /// `n`, or `−n` when it faces away from `to`.
@@ -299,70 +371,107 @@ fn toward(n: Vec3, to: Vec3) -> Vec3 {
     if n.dot(to) < 0.0 { -n } else { n }
 }
 
-/// Per object of `view`: for a mirror or glass object, an impostor of every diffuse object seen
-/// from its centre (and, with [`Mirrors::Impostor`], of every other mirror, normals only);
-/// nothing for a diffuse object.
+/// Whether the impostor method answers the rays of mirror and glass objects meeting object `o`
+/// with impostors of it: a diffuse object always; a mirror with [`Mirrors::Impostor`].
+pub(super) fn seen_as_impostor(view: &View, o: usize, mirrors: Mirrors) -> bool {
+    match view.surfaces[o] {
+        Surface::Diffuse(_) => true,
+        Surface::Mirror { .. } => mirrors == Mirrors::Impostor,
+        Surface::Glass { .. } => false,
+    }
+}
+
+/// The impostors of object `o` that the rays of mirror or glass object `r` meet, built from
+/// `r`'s centre: their colours the albedo of a diffuse object (for [`lit`] to light), black
+/// for a mirror, whose impostors keep only its surface.
+pub(super) fn build_unlit(
+    view: &View,
+    (r, o): (usize, usize),
+    inputs: &ImpostorInputs<'_>,
+    builder: &mut ImpostorBuilder,
+) -> Result<Vec<Impostor>, RenderError> {
+    let outside = if inputs.pinhole {
+        ViewCamera::Pinhole
+    } else {
+        ViewCamera::Spoc(None)
+    };
+    let reflector = view.meshes[r].bounds();
+    let (eye, region) = (reflector.center(), reflector.radius() as f64);
+    let (mesh, surface) = (&view.meshes[o], &view.surfaces[o]);
+    let cameras =
+        impostor_cameras(mesh, eye, region, inputs.resolution, outside).map_err(|reason| {
+            RenderError::Impostor {
+                object: o,
+                reflector: r,
+                reason,
+            }
+        })?;
+    let diffuse = matches!(surface, Surface::Diffuse(_));
+    let color = |s: &SurfaceSample| {
+        if diffuse {
+            albedo(mesh, surface, s.triangle, s.uv)
+        } else {
+            Vec3::ZERO
+        }
+    };
+    cameras
+        .into_iter()
+        .map(|camera| {
+            let imp = builder.build(camera, mesh, o as u32, &color)?;
+            imp.prepare_walks();
+            Ok(imp)
+        })
+        .collect()
+}
+
+/// Per object of `view`: for a mirror or glass object, impostors of every object it sees as
+/// one ([`seen_as_impostor`]), built from its centre and lit, or the baked impostor `baked`
+/// holds for it; nothing for a diffuse object.
 fn reflector_impostors(
     view: &View,
     lighting: &Lighting,
     inputs: &ImpostorInputs<'_>,
     baked: &[Option<Impostor>],
 ) -> Result<Vec<Vec<Seen>>, RenderError> {
-    let (resolution, shadows) = (inputs.resolution, inputs.shadows);
-    let outside = if inputs.pinhole {
-        ViewCamera::Pinhole
-    } else {
-        ViewCamera::Spoc(None)
-    };
-    let seen_as_impostor = |o: usize| match view.surfaces[o] {
-        Surface::Diffuse(_) => true,
-        Surface::Mirror { .. } => inputs.mirrors == Mirrors::Impostor,
-        Surface::Glass { .. } => false,
-    };
+    // A baked impostor is lit once and seen by every mirror and glass object.
+    let baked: Vec<Option<Arc<Impostor>>> = baked
+        .iter()
+        .map(|b| {
+            b.as_ref()
+                .map(|imp| Arc::new(lit(imp, None, lighting, inputs.shadows)))
+        })
+        .collect();
     let mut out = Vec::with_capacity(view.surfaces.len());
     // One builder for all: its working memory is allocated once, not once per impostor.
     let mut builder = ImpostorBuilder::new();
     for (r, surface) in view.surfaces.iter().enumerate() {
+        let mut seen = Vec::new();
         if matches!(surface, Surface::Diffuse(_)) {
-            out.push(Vec::new());
+            out.push(seen);
             continue;
         }
-        let reflector = view.meshes[r].bounds();
-        let (eye, region) = (reflector.center(), reflector.radius() as f64);
-        let mut seen = Vec::new();
-        for o in (0..view.surfaces.len()).filter(|&o| o != r && seen_as_impostor(o)) {
-            let surface = &view.surfaces[o];
-            let radiance = matches!(surface, Surface::Diffuse(_));
+        for o in (0..view.surfaces.len()).filter(|&o| o != r) {
+            if !seen_as_impostor(view, o, inputs.mirrors) {
+                continue;
+            }
+            let radiance = matches!(view.surfaces[o], Surface::Diffuse(_));
             if let Some(Some(imp)) = baked.get(o) {
                 seen.push(Seen {
                     impostor: imp.clone(),
+                    placement: None,
                     radiance,
                 });
                 continue;
             }
-            let mesh = &view.meshes[o];
-            let cameras =
-                impostor_cameras(mesh, eye, region, resolution, outside).map_err(|reason| {
-                    RenderError::Impostor {
-                        object: o,
-                        reflector: r,
-                        reason,
-                    }
-                })?;
-            // The tracer's diffuse shading, with the normal turned toward the reflector; a
-            // mirror's texels keep only their normals.
-            let color = |s: &SurfaceSample| {
-                if !radiance {
-                    return Vec3::ZERO;
-                }
-                let n = toward(s.normal, eye - s.position);
-                lambert(albedo(mesh, surface, s.triangle, s.uv), n, lighting, |l| {
-                    shadows.is_none_or(|sh| sh.lit(s.position, n, l))
-                })
-            };
-            for camera in cameras {
+            for unlit in build_unlit(view, (r, o), inputs, &mut builder)? {
+                let impostor = if radiance {
+                    lit(&unlit, None, lighting, inputs.shadows)
+                } else {
+                    unlit
+                };
                 seen.push(Seen {
-                    impostor: builder.build(camera, mesh, o as u32, &color)?,
+                    impostor: Arc::new(impostor),
+                    placement: None,
                     radiance,
                 });
             }

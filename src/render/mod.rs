@@ -14,6 +14,7 @@
 
 mod impostor;
 mod raster;
+pub mod sequence;
 pub mod shading;
 mod trace;
 pub mod wyman;
@@ -21,6 +22,7 @@ pub mod wyman;
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use impostor::{ImpostorInputs, ReflectorImpostors, placed_cameras};
 pub use raster::render_raster;
+pub use sequence::{FrameReport, Sequence};
 pub use trace::{Tracer, render_trace, shade_pixels};
 
 use crate::frame::{Frame, FrameError};
@@ -282,15 +284,7 @@ pub fn render_view(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
-    // Geometry past what f32 holds (a translation of 3e38, an animation run far) is refused
-    // here, before any structure is built over it.
-    if let Some(object) = view
-        .meshes
-        .iter()
-        .position(|m| !m.bounds().extent().is_finite())
-    {
-        return Err(RenderError::NonFinite { object });
-    }
+    check_finite(view)?;
     let refraction = options.refraction;
     match options.method {
         Method::Raster => render_raster(view, lighting, settings, progress, timings),
@@ -326,6 +320,19 @@ pub fn render_view(
             };
             trace_frame(&tracer, refraction, progress, timings)
         }
+    }
+}
+
+/// Refuses geometry past what f32 holds (a translation of 3e38, an animation run far), before
+/// any structure is built over it.
+fn check_finite(view: &View) -> Result<(), RenderError> {
+    match view
+        .meshes
+        .iter()
+        .position(|m| !m.bounds().extent().is_finite())
+    {
+        Some(object) => Err(RenderError::NonFinite { object }),
+        None => Ok(()),
     }
 }
 

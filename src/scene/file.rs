@@ -154,6 +154,8 @@ pub struct ObjectFile {
     pub material: Option<MaterialFile>,
     /// Motion over time.
     pub animate: Option<AnimateFile>,
+    /// A deformation over time, in the object's own frame.
+    pub deform: Option<DeformFile>,
     /// A baked impostor (its JSON sidecar, relative to the scene file) that stands in for this
     /// diffuse object in what mirrors and glass see, instead of one built for each of them.
     pub impostor: Option<String>,
@@ -214,4 +216,20 @@ pub struct AnimateFile {
     /// Velocity, units per second.
     #[serde(default)]
     pub velocity: [f32; 3],
+}
+
+/// `[object.deform]`: a twist, a bend or a wave over time, in the object's own frame.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeformFile {
+    /// `twist`, `bend` or `wave`.
+    pub kind: String,
+    /// Degrees at the top (twist, bend), or the amplitude as a fraction of the height (wave).
+    pub amount: f32,
+    /// Cycles a second.
+    #[serde(default = "one")]
+    pub hz: f32,
+    /// Wave only: wavelength as a fraction of the height.
+    #[serde(default = "one")]
+    pub wavelength: f32,
 }

@@ -8,9 +8,11 @@
 //! Invariants: a loaded scene's camera is valid at every time; paths are relative to the scene
 //! file; unknown keys are errors.
 
+pub mod deform;
 mod file;
 pub mod maze;
 
+pub use deform::{DeformKind, Deformation};
 pub use file::SceneFile;
 
 use crate::camera::{CameraError, Pinhole};
@@ -135,6 +137,8 @@ pub struct SceneObject {
     pub world_from_object: Mat4,
     /// Motion, if any.
     pub animation: Option<Animation>,
+    /// Deformation over time (object space), if any.
+    pub deform: Option<Deformation>,
     /// A baked impostor's sidecar that stands in for the object in mirrors and glass
     /// (`render --method impostor`); it must have been baked from the object as the scene
     /// places it.
@@ -400,7 +404,7 @@ impl Scene {
         let meshes = self
             .objects
             .iter()
-            .map(|o| Arc::new(o.mesh.transformed(&o.world_from_object_at(t))))
+            .map(|o| Arc::new(o.mesh_at(t).transformed(&o.world_from_object_at(t))))
             .collect();
         Ok(View {
             camera,
@@ -442,6 +446,14 @@ impl CameraSpec {
 }
 
 impl SceneObject {
+    /// The mesh in object space at time `t`: deformed, if it deforms.
+    pub fn mesh_at(&self, t: f32) -> std::borrow::Cow<'_, Mesh> {
+        match &self.deform {
+            None => std::borrow::Cow::Borrowed(self.mesh.as_ref()),
+            Some(d) => std::borrow::Cow::Owned(d.apply(&self.mesh, t)),
+        }
+    }
+
     /// Object → world at time `t`.
     pub fn world_from_object_at(&self, t: f32) -> Mat4 {
         match self.animation {
@@ -632,7 +644,42 @@ fn load_object(
             })
         }
     };
-    if o.impostor.is_some() && !matches!(surface, Surface::Diffuse(_)) {
+    let deform = match &o.deform {
+        None => None,
+        Some(d) => {
+            let kind = match d.kind.as_str() {
+                "twist" => DeformKind::Twist,
+                "bend" => DeformKind::Bend,
+                "wave" => DeformKind::Wave,
+                other => {
+                    return Err(invalid(
+                        ".deform.kind",
+                        format!("unknown deformation {other:?} (twist, bend or wave)"),
+                    ));
+                }
+            };
+            if ![d.amount, d.hz, d.wavelength].iter().all(|x| x.is_finite()) {
+                return Err(invalid(
+                    ".deform",
+                    "amount, hz and wavelength must be finite".into(),
+                ));
+            }
+            if d.wavelength <= 0.0 {
+                return Err(invalid(
+                    ".deform.wavelength",
+                    format!("{} must be positive", d.wavelength),
+                ));
+            }
+            Some(Deformation::of(&mesh, kind, d.amount, d.hz, d.wavelength))
+        }
+    };
+    if o.impostor.is_some() && (deform.is_some() || !matches!(surface, Surface::Diffuse(_))) {
+        if deform.is_some() {
+            return Err(invalid(
+                ".impostor",
+                "a deforming object cannot stand in as one baked impostor".into(),
+            ));
+        }
         return Err(invalid(
             ".impostor",
             "only a diffuse object stands in as an impostor (mirrors and glass are traced)".into(),
@@ -644,6 +691,7 @@ fn load_object(
         surface,
         world_from_object,
         animation,
+        deform,
         impostor: o.impostor.as_ref().map(|p| {
             let sidecar = dir.join(p);
             files.push(sidecar.with_extension("exr"));

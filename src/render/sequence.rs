@@ -1,0 +1,270 @@
+//! Frame sequences of animated scenes (paper 1 §6, dynamic scenes): a camera path, rigidly
+//! moving objects and deforming ones, rendered frame after frame by any method.
+//!
+//! Under the impostor methods a [`Sequence`] keeps every impostor it builds between frames. An
+//! object that moves rigidly keeps its impostors: a ray is taken into the frame the impostor
+//! was built in and its hit carried back, and the impostor's albedo is lit again for the
+//! object's new pose (the sun and its shadows do not move with it). An impostor is rebuilt when
+//! its object deforms, or when the mirror that sees it has moved, relative to the object, by
+//! more than [`REBUILD_SHIFT`] of its bounding radius from where the impostor was built for —
+//! past that, the rays come from outside the region the impostor was made to answer.
+//!
+//! Invariants: a sequence's frame at time `t` is, with nothing reused, the frame
+//! [`super::render_with`] gives at `t` (the same code builds and lights the impostors); reused
+//! impostors differ from rebuilt ones only by the motion's rounding, and by sampling when the
+//! mirror has moved less than the threshold; the frames do not depend on the thread count.
+
+use super::impostor::{
+    ImpostorInputs, Placement, ReflectorImpostors, Seen, build_unlit, lit, load_baked,
+    seen_as_impostor,
+};
+use super::shading::Shadows;
+use super::{Method, Progress, RenderError, RenderOptions, Timings};
+use crate::frame::Frame;
+use crate::impostor::{Impostor, ImpostorBuilder};
+use crate::scene::{Scene, Surface};
+use crate::trace::Bvh;
+use glam::{Mat4, Vec3};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// How far (a fraction of the mirror's bounding radius) a mirror may move relative to an object
+/// before the object's impostors for it are rebuilt.
+pub const REBUILD_SHIFT: f32 = 0.25;
+
+/// What a frame of a sequence did with the impostors.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FrameReport {
+    /// Impostors built for this frame (first frame, deformation, a mirror moved too far).
+    pub built: usize,
+    /// Impostors kept from an earlier frame.
+    pub reused: usize,
+    /// Kept impostors lit again because something in the scene moved.
+    pub relit: usize,
+}
+
+impl std::fmt::Display for FrameReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "impostors: {} built, {} reused ({} relit)",
+            self.built, self.reused, self.relit
+        )
+    }
+}
+
+/// Renders an animated scene frame after frame, keeping impostors between frames.
+pub struct Sequence<'a> {
+    scene: &'a Scene,
+    options: RenderOptions,
+    /// Per (mirror or glass object, object it sees): its impostors as last built.
+    kept: HashMap<(usize, usize), Kept>,
+    /// The baked impostors, loaded on the first frame, and each object's pose then.
+    baked: Option<Vec<Option<Baked>>>,
+    /// Every object's pose, and whether any deformed, when the lit impostors were last lit.
+    lit_at: Option<Vec<Mat4>>,
+    builder: ImpostorBuilder,
+}
+
+/// A baked impostor and its object's pose when it was loaded.
+type Baked = (Arc<Impostor>, Mat4);
+
+/// Impostors of one object for one mirror, kept between frames.
+struct Kept {
+    /// As built: albedo colours (or none, for a mirror).
+    unlit: Vec<Arc<Impostor>>,
+    /// As last lit.
+    lit: Vec<Arc<Impostor>>,
+    /// The object's pose (object → world) when they were built.
+    pose: Mat4,
+    /// The mirror's centre when they were built (world).
+    eye: Vec3,
+}
+
+impl<'a> Sequence<'a> {
+    /// A sequence of `scene`'s frames rendered as `options` say.
+    pub fn new(scene: &'a Scene, options: RenderOptions) -> Self {
+        Self {
+            scene,
+            options,
+            kept: HashMap::new(),
+            baked: None,
+            lit_at: None,
+            builder: ImpostorBuilder::new(),
+        }
+    }
+
+    /// The frame at time `t` (seconds), its timings and what it did with impostors.
+    pub fn frame(
+        &mut self,
+        t: f32,
+        progress: &dyn Progress,
+    ) -> Result<(Frame, Timings, FrameReport), RenderError> {
+        if !t.is_finite() {
+            return Err(RenderError::Time(t));
+        }
+        let scene = self.scene;
+        let mut timings = Timings::default();
+        let view = timings.time("evaluate scene", || scene.view(t))?;
+        super::check_memory(&view, self.options.method)?;
+        super::check_finite(&view)?;
+        let resolution = match self.options.method {
+            Method::Impostor(r) | Method::PinholeImpostor(r) => r,
+            _ => {
+                let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
+                let lighting = (&scene.lighting, &scene.render);
+                let frame = super::render_view(
+                    &view,
+                    lighting,
+                    self.options,
+                    &baked,
+                    progress,
+                    &mut timings,
+                )?;
+                return Ok((frame, timings, FrameReport::default()));
+            }
+        };
+        let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+        let inputs = ImpostorInputs {
+            shadows: Some(Shadows {
+                occluders: &bvh,
+                epsilon: scene.render.ray_epsilon,
+            }),
+            pinhole: matches!(self.options.method, Method::PinholeImpostor(_)),
+            refraction: self.options.refraction,
+            mirrors: self.options.mirrors,
+            ..ImpostorInputs::new(resolution)
+        };
+        crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
+        let poses: Vec<Mat4> = scene
+            .objects
+            .iter()
+            .map(|o| o.world_from_object_at(t))
+            .collect();
+        let deforms = |o: usize| scene.objects[o].deform.is_some();
+        // Anything that moved changes the light's shadows: every kept impostor is lit again.
+        let moved = self.lit_at.as_ref() != Some(&poses) || (0..poses.len()).any(deforms);
+        if self.baked.is_none() {
+            let files: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
+            let loaded = timings.time("load baked impostors", || load_baked(&view, &files))?;
+            self.baked = Some(
+                loaded
+                    .into_iter()
+                    .zip(&poses)
+                    .map(|(imp, pose)| imp.map(|i| (Arc::new(i), *pose)))
+                    .collect(),
+            );
+        }
+        let mut report = FrameReport::default();
+        let per_object = timings.time("build, keep and light impostors", || {
+            self.impostors(&view, &inputs, &poses, moved, &mut report)
+        })?;
+        self.lit_at = Some(poses);
+        let secondary = timings.time("specular BVH", || {
+            ReflectorImpostors::assemble(&view, per_object, self.options.mirrors)
+        });
+        let tracer = super::Tracer {
+            view: &view,
+            primary: &bvh,
+            secondary: &secondary,
+            lighting: &scene.lighting,
+            settings: &scene.render,
+        };
+        let frame = super::trace_frame(&tracer, self.options.refraction, progress, &mut timings)?;
+        Ok((frame, timings, report))
+    }
+
+    /// Per object of `view`, the impostors its rays meet: kept, placed and lit again where
+    /// their object moved rigidly, built where it deformed or the mirror moved too far.
+    fn impostors(
+        &mut self,
+        view: &crate::scene::View,
+        inputs: &ImpostorInputs<'_>,
+        poses: &[Mat4],
+        moved: bool,
+        report: &mut FrameReport,
+    ) -> Result<Vec<Vec<Seen>>, RenderError> {
+        let lighting = &self.scene.lighting;
+        let mut out = Vec::with_capacity(view.surfaces.len());
+        for (r, surface) in view.surfaces.iter().enumerate() {
+            let mut seen = Vec::new();
+            if matches!(surface, Surface::Diffuse(_)) {
+                out.push(seen);
+                continue;
+            }
+            let mirror = view.meshes[r].bounds();
+            let (eye, region) = (mirror.center(), mirror.radius());
+            for o in (0..view.surfaces.len()).filter(|&o| o != r) {
+                if !seen_as_impostor(view, o, inputs.mirrors) {
+                    continue;
+                }
+                let radiance = matches!(view.surfaces[o], Surface::Diffuse(_));
+                let baked = self
+                    .baked
+                    .as_ref()
+                    .and_then(|b| b.get(o).cloned().flatten());
+                // `fresh`: built (or loaded) for this frame, not kept from an earlier one.
+                let (kept, fresh) = match (baked, self.kept.remove(&(r, o))) {
+                    (Some((imp, pose)), previous) => {
+                        let fresh = previous.is_none();
+                        let lit = previous.map_or_else(Vec::new, |k| k.lit);
+                        let kept = Kept {
+                            unlit: vec![imp],
+                            lit,
+                            pose,
+                            eye,
+                        };
+                        (kept, fresh)
+                    }
+                    (None, Some(k))
+                        if self.scene.objects[o].deform.is_none()
+                            // Where the mirror is now, in the frame the impostors were built in.
+                            && k.eye.distance(
+                                k.pose.transform_point3(poses[o].inverse().transform_point3(eye)),
+                            ) <= REBUILD_SHIFT * region =>
+                    {
+                        report.reused += k.unlit.len();
+                        (k, false)
+                    }
+                    (None, _) => {
+                        let built = build_unlit(view, (r, o), inputs, &mut self.builder)?;
+                        report.built += built.len();
+                        let kept = Kept {
+                            unlit: built.into_iter().map(Arc::new).collect(),
+                            lit: Vec::new(),
+                            pose: poses[o],
+                            eye,
+                        };
+                        (kept, true)
+                    }
+                };
+                let placement = if poses[o] == kept.pose {
+                    None
+                } else {
+                    Placement::of(poses[o] * kept.pose.inverse())
+                };
+                let lit = if !radiance {
+                    kept.unlit.clone()
+                } else if fresh || moved || kept.lit.is_empty() {
+                    if !fresh {
+                        report.relit += kept.unlit.len();
+                    }
+                    kept.unlit
+                        .iter()
+                        .map(|u| Arc::new(lit(u, placement, lighting, inputs.shadows)))
+                        .collect()
+                } else {
+                    kept.lit
+                };
+                seen.extend(lit.iter().map(|impostor| Seen {
+                    impostor: impostor.clone(),
+                    placement,
+                    radiance,
+                }));
+                self.kept.insert((r, o), Kept { lit, ..kept });
+            }
+            out.push(seen);
+        }
+        Ok(out)
+    }
+}
