@@ -10,13 +10,13 @@ use trompe::eval::check::{BakedCheckSettings, CheckSettings, check_baked, check_
 use trompe::files::OutputPlan;
 use trompe::frame::{io, metrics};
 use trompe::impostor::{BakeSettings, CameraChoice, Subject, ViewCamera, bake};
-use trompe::render::{self, Method, Progress, Timings};
-use trompe::scene::Scene;
+use trompe::render::{Method, Progress, Timings};
 
 mod layers;
 mod master;
 mod octahedral;
 mod relief;
+mod render;
 mod views;
 
 pub use master::MasterCommand;
@@ -52,7 +52,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene file to an image.
-    Render(RenderArgs),
+    Render(render::RenderArgs),
     /// Compare two images: PSNR, SSIM and FLIP, and optionally a FLIP heat map.
     Compare {
         /// Reference image (.png, .exr or .hdr).
@@ -212,48 +212,6 @@ pub struct CheckArgs {
     rays: u32,
 }
 
-/// `trompe render`.
-#[derive(clap::Args, Debug)]
-pub struct RenderArgs {
-    /// Scene file (TOML; see scenes/README.md).
-    scene: PathBuf,
-    /// Output image: .png (sRGB) or .exr (linear float).
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Renderer.
-    #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
-    method: MethodArg,
-    /// How glass refracts what the eye sees through it: traced through the object, or by
-    /// Wyman's image-space approximation of its far side (trace, impostor, pinhole-impostor and
-    /// envmap methods).
-    #[arg(long, value_enum, default_value_t = RefractionArg::Exact)]
-    refraction: RefractionArg,
-    /// How mirrors see other mirrors under --method impostor and pinhole-impostor: traced
-    /// exactly, or as impostors that store their normals (paper 1's inter-reflections).
-    #[arg(long, value_enum, default_value_t = MirrorsArg::Exact)]
-    mirrors: MirrorsArg,
-    /// Impostor resolution (square), for --method impostor and pinhole-impostor.
-    #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
-          value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
-    impostor_resolution: u32,
-    /// Splat side in pixels, for --method c3rc.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=2))]
-    splat: u32,
-    /// Point spacing in scene units, for --method c3rc; default: derived per object from its
-    /// closest reflection distance.
-    #[arg(long)]
-    spacing: Option<f32>,
-    /// Time in seconds (camera path and animation); default: the scene's.
-    #[arg(long)]
-    time: Option<f32>,
-    /// Also write the depth (distance) as a float EXR.
-    #[arg(long)]
-    depth: Option<PathBuf>,
-    /// Also write the shading normals as a float EXR.
-    #[arg(long)]
-    normals: Option<PathBuf>,
-}
-
 /// `trompe impostor bake`.
 #[derive(clap::Args, Debug)]
 pub struct BakeArgs {
@@ -347,24 +305,6 @@ fn parse_vec3(text: &str) -> Result<glam::Vec3, String> {
 fn has_extension(path: &Path, ext: &str) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case(ext))
-}
-
-/// `--refraction`.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum RefractionArg {
-    /// Both interfaces traced.
-    Exact,
-    /// Wyman's image-space approximation (SIGGRAPH 2005).
-    Wyman,
-}
-
-/// `--mirrors`.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum MirrorsArg {
-    /// Mirror-to-mirror rays traced through a BVH of the mirrors and glass.
-    Exact,
-    /// Other mirrors seen as impostors storing their normals; the ray reflects on.
-    Impostor,
 }
 
 /// `--method`.
@@ -505,94 +445,11 @@ fn load_reflector(path: Option<&Path>) -> Result<(Option<trompe::Mesh>, Vec<Path
     Ok((Some(loaded.mesh), loaded.files))
 }
 
-/// Writes a rendered frame: colour, and depth and normals when asked.
-fn write_frame(
-    frame: &trompe::Frame,
-    output: &Path,
-    depth: Option<&Path>,
-    normals: Option<&Path>,
-) -> Result<()> {
-    io::write_color(output, &frame.color)?;
-    if let Some(d) = depth {
-        io::write_exr_depth(d, &frame.depth)?;
-    }
-    if let Some(n) = normals {
-        io::write_exr_normals(n, &frame.normal)?;
-    }
-    Ok(())
-}
-
 /// Reads the mask of `compare --mask`: pixels where the image is non-black.
 fn read_mask(path: Option<&Path>) -> Result<Option<trompe::Image<bool>>> {
     let Some(m) = path else { return Ok(None) };
     let img = io::read_color(m).with_context(|| format!("reading {}", m.display()))?;
     Ok(Some(img.map(|p| p.truncate().max_element() > 0.0)))
-}
-
-impl RenderArgs {
-    /// Loads the scene, renders it, writes the images; prints what it wrote.
-    fn render(self, verbose: bool) -> Result<()> {
-        // Checked before loading, then again with everything the scene reads.
-        let mut plan = OutputPlan::new();
-        plan.reads([&self.scene])
-            .writes(&self.output, &["png", "exr"]);
-        for extra in [&self.depth, &self.normals].into_iter().flatten() {
-            plan.writes(extra, &["exr"]);
-        }
-        plan.check_overwrites()?;
-        let mut timings = Timings::default();
-        let s = timings
-            .time("load scene", || Scene::load(&self.scene))
-            .context("loading the scene")?;
-        check_plan(plan.reads(s.files.iter().cloned()))?;
-        s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
-        let t = self.time.unwrap_or(s.render.time);
-        let frame = match self.method.method(self.impostor_resolution) {
-            Some(method) => {
-                let pb = bar(&format!("{method}"), s.camera.height as u64);
-                let options = render::RenderOptions::new(method)
-                    .refraction(match self.refraction {
-                        RefractionArg::Exact => render::Refraction::Exact,
-                        RefractionArg::Wyman => render::Refraction::Wyman,
-                    })
-                    .mirrors(match self.mirrors {
-                        MirrorsArg::Exact => render::Mirrors::Exact,
-                        MirrorsArg::Impostor => render::Mirrors::Impostor,
-                    });
-                let (frame, steps) =
-                    render::render_with(&s, t, options, pb.as_ref()).context("rendering")?;
-                timings.0.extend(steps.0);
-                frame
-            }
-            None => {
-                let settings = trompe::hybrid::HybridSettings {
-                    splat: self.splat,
-                    spacing: self.spacing,
-                    ..Default::default()
-                };
-                if let Some(sp) = self.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
-                    anyhow::bail!("--spacing {sp}: must be a positive number of scene units");
-                }
-                let pb = bar("c3rc", s.camera.height as u64);
-                let (frame, report) = timings
-                    .time("render", || {
-                        trompe::hybrid::render(&s, t, settings, pb.as_ref())
-                    })
-                    .context("rendering")?;
-                eprintln!("{report}");
-                frame
-            }
-        };
-        let (depth, normals) = (self.depth.as_deref(), self.normals.as_deref());
-        timings
-            .time("write", || {
-                write_frame(&frame, &self.output, depth, normals)
-            })
-            .context("writing the output")?;
-        eprintln!("wrote {}", self.output.display());
-        print_timings(verbose, &timings);
-        Ok(())
-    }
 }
 
 impl BakeArgs {

@@ -855,3 +855,47 @@ fn silent_wrong_results_are_named_errors() {
     let loaded = trompe::geom::io::load(&obj).unwrap();
     assert_eq!(loaded.mesh.triangle_count(), 1);
 }
+
+#[test]
+fn render_frames_writes_the_sequence_and_scores_it() {
+    let d = scratch("cli_frames");
+    let pattern = d.join("seq/frame_%03d.png");
+    let o = trompe(&[
+        "render",
+        "scenes/turntable.toml",
+        "-o",
+        pattern.to_str().unwrap(),
+        "--method",
+        "envmap",
+        "--frames",
+        "3",
+        "--fps",
+        "2",
+        "--compare",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for i in 0..3 {
+        assert!(d.join(format!("seq/frame_{i:03}.png")).is_file());
+    }
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        out.lines().filter(|l| l.starts_with("frame")).count(),
+        3,
+        "{out}"
+    );
+    assert!(
+        out.contains("t    1.000 s") && out.contains("FLIP"),
+        "{out}"
+    );
+    // A file name with no frame number in it is refused before any work.
+    let o = trompe(&[
+        "render",
+        "scenes/turntable.toml",
+        "-o",
+        d.join("one.png").to_str().unwrap(),
+        "--frames",
+        "2",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("%04d"), "{}", stderr(&o));
+}
