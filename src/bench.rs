@@ -22,6 +22,7 @@ pub mod hybrid;
 pub mod layers;
 pub mod master;
 pub mod octahedral;
+pub mod reflect;
 pub mod relief;
 
 use crate::camera::Pinhole;

@@ -132,6 +132,9 @@ pub enum BenchSuite {
     Octahedral,
     /// Layered projective textures (paper 4): layers of a 100k-triangle scene from two views.
     Layers,
+    /// Reflections through impostors (paper 1 §6): frame time against output and impostor
+    /// resolution, every method on every reflection scene, the reflected mesh grown 16×.
+    Reflect,
 }
 
 /// `trompe impostor …`.
@@ -627,6 +630,15 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 trompe::bench::octahedral::octahedral(&inputs, quick)
             })?;
             println!("{figures}");
+        }
+        Command::Bench {
+            suite: BenchSuite::Reflect,
+            quick,
+            ..
+        } => {
+            let inputs = trompe::eval::fixtures::Shipped::locate();
+            let tables = with_spinner("timing", || trompe::bench::reflect::tables(&inputs, quick))?;
+            println!("{tables}");
         }
         Command::Bench {
             suite: BenchSuite::C3rc,

@@ -644,3 +644,30 @@ fn two_facing_mirrors_seen_through_impostors_agree_with_tracing_on_the_second_bo
     );
     assert!(share >= 0.99, "{:.2} % agree", 100.0 * share);
 }
+
+#[test]
+fn a_rasterized_primary_pass_differs_from_the_traced_one_on_silhouettes_only() {
+    use trompe::render::{Primary, RenderOptions, render_with};
+    let s = scene("reflections.toml");
+    let t = s.render.time;
+    let options = RenderOptions::new(Method::Impostor(128));
+    let traced = render_with(&s, t, options, &()).unwrap().0;
+    let rasterized = render_with(&s, t, options.primary(Primary::Rasterized), &())
+        .unwrap()
+        .0;
+    let (w, h) = traced.color.size();
+    let differ = traced
+        .object_id
+        .pixels()
+        .iter()
+        .zip(rasterized.object_id.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    // Different surfaces on under 1 % of pixels (where coverage rules meet edges).
+    assert!(
+        differ * 100 < (w * h) as usize,
+        "{differ} pixels see another object"
+    );
+    let score = metrics::compare(&traced.color, &rasterized.color, None).unwrap();
+    assert!(score.flip < 0.01, "FLIP {}", score.flip);
+}

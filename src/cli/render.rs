@@ -32,6 +32,11 @@ pub struct RenderArgs {
     /// exactly, or as impostors that store their normals (paper 1's inter-reflections).
     #[arg(long, value_enum, default_value_t = MirrorsArg::Exact)]
     mirrors: MirrorsArg,
+    /// What finds the surfaces the eye sees, for the ray-tracing methods: a ray a pixel
+    /// through the BVH, or the rasterizer's visibility buffer (faster; differs on silhouette
+    /// pixels only).
+    #[arg(long, value_enum, default_value_t = PrimaryArg::Traced)]
+    primary: PrimaryArg,
     /// Impostor resolution (square), for --method impostor and pinhole-impostor.
     #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
           value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
@@ -74,6 +79,15 @@ pub enum RefractionArg {
     Wyman,
 }
 
+/// `--primary`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum PrimaryArg {
+    /// A ray a pixel through the BVH.
+    Traced,
+    /// The rasterizer's visibility buffer.
+    Rasterized,
+}
+
 /// `--mirrors`.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum MirrorsArg {
@@ -111,6 +125,10 @@ impl RenderArgs {
             .mirrors(match self.mirrors {
                 MirrorsArg::Exact => render::Mirrors::Exact,
                 MirrorsArg::Impostor => render::Mirrors::Impostor,
+            })
+            .primary(match self.primary {
+                PrimaryArg::Traced => render::Primary::Traced,
+                PrimaryArg::Rasterized => render::Primary::Rasterized,
             })
     }
 

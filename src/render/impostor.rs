@@ -265,6 +265,8 @@ pub struct ImpostorInputs<'a> {
     pub refraction: super::Refraction,
     /// How mirrors see the other mirrors.
     pub mirrors: Mirrors,
+    /// What finds the surfaces the eye sees.
+    pub primary: super::Primary,
 }
 
 impl ImpostorInputs<'_> {
@@ -278,6 +280,7 @@ impl ImpostorInputs<'_> {
             pinhole: false,
             refraction: super::Refraction::Exact,
             mirrors: Mirrors::Exact,
+            primary: super::Primary::Traced,
         }
     }
 }
@@ -307,7 +310,12 @@ pub fn render_impostor(
         lighting,
         settings,
     };
-    super::trace_frame(&tracer, inputs.refraction, progress, timings)
+    super::trace_frame(
+        &tracer,
+        (inputs.refraction, inputs.primary),
+        progress,
+        timings,
+    )
 }
 
 /// The baked impostors `files` names, per object id, each checked against the object as the

@@ -21,7 +21,7 @@ pub mod wyman;
 
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use impostor::{ImpostorInputs, ReflectorImpostors, placed_cameras};
-pub use raster::render_raster;
+pub use raster::{primary_hits, render_raster};
 pub use sequence::{FrameReport, Sequence};
 pub use trace::{Tracer, render_trace, shade_pixels};
 
@@ -94,6 +94,17 @@ pub enum Mirrors {
     Impostor,
 }
 
+/// What finds the surface each pixel sees.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Primary {
+    /// A ray through each pixel centre, through the BVH.
+    #[default]
+    Traced,
+    /// The rasterizer's visibility buffer (paper 1 §6 rasterizes the primary pass); it differs
+    /// from tracing on silhouette pixels only. Used by the ray-tracing methods.
+    Rasterized,
+}
+
 /// How a frame is rendered: the method and the choices it leaves open.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderOptions {
@@ -103,6 +114,8 @@ pub struct RenderOptions {
     pub refraction: Refraction,
     /// How mirrors see one another (impostor methods).
     pub mirrors: Mirrors,
+    /// What finds the surfaces the eye sees.
+    pub primary: Primary,
 }
 
 impl RenderOptions {
@@ -112,7 +125,13 @@ impl RenderOptions {
             method,
             refraction: Refraction::Exact,
             mirrors: Mirrors::Exact,
+            primary: Primary::Traced,
         }
+    }
+
+    /// The same, the surfaces the eye sees found as `primary` says.
+    pub fn primary(self, primary: Primary) -> Self {
+        Self { primary, ..self }
     }
 
     /// The same, glass refracting the eye's rays by `refraction`.
@@ -297,7 +316,7 @@ pub fn render_view(
                 lighting,
                 settings,
             };
-            trace_frame(&tracer, refraction, progress, timings)
+            trace_frame(&tracer, (refraction, options.primary), progress, timings)
         }
         Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
             let inputs = ImpostorInputs {
@@ -305,6 +324,7 @@ pub fn render_view(
                 pinhole: matches!(options.method, Method::PinholeImpostor(_)),
                 refraction,
                 mirrors: options.mirrors,
+                primary: options.primary,
                 ..ImpostorInputs::new(resolution)
             };
             render_impostor(view, lighting, settings, inputs, progress, timings)
@@ -318,7 +338,7 @@ pub fn render_view(
                 lighting,
                 settings,
             };
-            trace_frame(&tracer, refraction, progress, timings)
+            trace_frame(&tracer, (refraction, options.primary), progress, timings)
         }
     }
 }
@@ -336,20 +356,33 @@ fn check_finite(view: &View) -> Result<(), RenderError> {
     }
 }
 
-/// Traces a frame with `tracer`, the eye's refractions as `refraction` says.
+/// Traces a frame with `tracer`, the surfaces the eye sees found as `primary` says and its
+/// refractions into glass as `refraction` says.
 pub fn trace_frame<P: crate::trace::RayQuery, S: crate::trace::SecondaryQuery + ?Sized>(
     tracer: &Tracer<'_, P, S>,
-    refraction: Refraction,
+    (refraction, primary): (Refraction, Primary),
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
+    let rasterized = match primary {
+        Primary::Traced => None,
+        Primary::Rasterized => {
+            Some(timings.time("rasterize primary", || primary_hits(tracer.view))?)
+        }
+    };
+    let primary_hit = |pixel: usize, ray: &crate::geom::Ray| match &rasterized {
+        Some(hits) => hits.get(pixel).copied().flatten(),
+        None => tracer.primary.closest_hit(ray, f32::INFINITY),
+    };
     match refraction {
-        Refraction::Exact => timings.time("trace", || render_trace(tracer, progress)),
+        Refraction::Exact => timings.time("trace", || shade_pixels(tracer, progress, primary_hit)),
         Refraction::Wyman => {
             let backs = timings.time("back faces (Wyman pass 1)", || {
                 wyman::BackFaces::build(tracer.view)
             })?;
-            timings.time("trace", || wyman::render(tracer, &backs, progress))
+            timings.time("trace", || {
+                wyman::render(tracer, &backs, progress, primary_hit)
+            })
         }
     }
 }

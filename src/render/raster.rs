@@ -107,3 +107,46 @@ fn shade_fragment(
     };
     Shaded { color, normal: n }
 }
+
+/// What the camera sees at every pixel centre, by rasterization rather than by tracing (the
+/// primary pass of paper 1 §6, which rasterizes it): per pixel, row-major, the hit the
+/// primary ray would report, or `None`. It differs from the traced hits only where the
+/// rasterizer's coverage rule and the ray-triangle test disagree (silhouette pixels).
+pub fn primary_hits(view: &View) -> Result<Vec<Option<crate::trace::Hit>>, RenderError> {
+    let meshes = view.mesh_refs();
+    let (target, _) = rasterize(&view.camera, &meshes, &StoreFragment, None)?;
+    let (w, _) = target.gd.size();
+    Ok(target
+        .attributes
+        .pixels()
+        .par_iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let f = f.as_ref()?;
+            let (x, y) = (i % w as usize, i / w as usize);
+            let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            let mesh = &view.meshes[f.item.object as usize];
+            let tri = f.item.triangle as usize;
+            let [i0, i1, i2] = mesh.triangles[tri].map(|i| i as usize);
+            let b = f.bary;
+            let c = mesh.corners(tri);
+            let position = c[0] * b.x + c[1] * b.y + c[2] * b.z;
+            let uv = mesh
+                .uvs
+                .as_ref()
+                .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
+            Some(crate::trace::Hit {
+                t: (position - ray.origin).dot(ray.dir),
+                position,
+                normal: (mesh.normals[i0] * b.x + mesh.normals[i1] * b.y + mesh.normals[i2] * b.z)
+                    .normalize_or_zero(),
+                geometric_normal: mesh.face_normal(tri),
+                uv,
+                bary: Vec2::new(b.y, b.z),
+                object: f.item.object,
+                triangle: f.item.triangle,
+                radiance: None,
+            })
+        })
+        .collect())
+}

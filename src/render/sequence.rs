@@ -63,6 +63,12 @@ pub struct Sequence<'a> {
     baked: Option<Vec<Option<Baked>>>,
     /// Every object's pose, and whether any deformed, when the lit impostors were last lit.
     lit_at: Option<Vec<Mat4>>,
+    /// The answers of the last frame, kept while nothing moves or deforms.
+    answers: Option<Arc<ReflectorImpostors>>,
+    /// What the last frame did with impostors.
+    last_report: FrameReport,
+    /// The scene's BVH and every object's pose it was built at (no object deforming).
+    bvh: Option<(Vec<Mat4>, Arc<Bvh>)>,
     builder: ImpostorBuilder,
 }
 
@@ -90,6 +96,9 @@ impl<'a> Sequence<'a> {
             kept: HashMap::new(),
             baked: None,
             lit_at: None,
+            bvh: None,
+            answers: None,
+            last_report: FrameReport::default(),
             builder: ImpostorBuilder::new(),
         }
     }
@@ -108,42 +117,74 @@ impl<'a> Sequence<'a> {
         let view = timings.time("evaluate scene", || scene.view(t))?;
         super::check_memory(&view, self.options.method)?;
         super::check_finite(&view)?;
+        if self.options.method == Method::Raster {
+            let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
+            let lighting = (&scene.lighting, &scene.render);
+            let frame = super::render_view(
+                &view,
+                lighting,
+                self.options,
+                &baked,
+                progress,
+                &mut timings,
+            )?;
+            return Ok((frame, timings, FrameReport::default()));
+        }
+        let poses: Vec<Mat4> = scene
+            .objects
+            .iter()
+            .map(|o| o.world_from_object_at(t))
+            .collect();
+        let still = scene.objects.iter().all(|o| o.deform.is_none());
+        // Nothing moved since the last frame (the camera may have): its BVH stands.
+        let bvh = match &self.bvh {
+            Some((at, bvh)) if still && at == &poses => bvh.clone(),
+            _ => {
+                let bvh = Arc::new(timings.time("build BVH", || Bvh::build(view.meshes.clone())));
+                self.bvh = still.then(|| (poses.clone(), bvh.clone()));
+                bvh
+            }
+        };
+        let bvh = bvh.as_ref();
         let resolution = match self.options.method {
             Method::Impostor(r) | Method::PinholeImpostor(r) => r,
-            _ => {
-                let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
-                let lighting = (&scene.lighting, &scene.render);
-                let frame = super::render_view(
-                    &view,
-                    lighting,
-                    self.options,
-                    &baked,
+            // (The raster method returned above.)
+            Method::Trace | Method::EnvMap | Method::Raster => {
+                let exact = crate::trace::Exact(bvh);
+                let tracer = super::Tracer {
+                    view: &view,
+                    primary: bvh,
+                    secondary: if self.options.method == Method::Trace {
+                        &exact as &dyn crate::trace::SecondaryQuery
+                    } else {
+                        &crate::trace::EnvironmentOnly
+                    },
+                    lighting: &scene.lighting,
+                    settings: &scene.render,
+                };
+                let frame = super::trace_frame(
+                    &tracer,
+                    (self.options.refraction, self.options.primary),
                     progress,
                     &mut timings,
                 )?;
                 return Ok((frame, timings, FrameReport::default()));
             }
         };
-        let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
         let inputs = ImpostorInputs {
             shadows: Some(Shadows {
-                occluders: &bvh,
+                occluders: bvh,
                 epsilon: scene.render.ray_epsilon,
             }),
             pinhole: matches!(self.options.method, Method::PinholeImpostor(_)),
             refraction: self.options.refraction,
             mirrors: self.options.mirrors,
+            primary: self.options.primary,
             ..ImpostorInputs::new(resolution)
         };
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
-        let poses: Vec<Mat4> = scene
-            .objects
-            .iter()
-            .map(|o| o.world_from_object_at(t))
-            .collect();
-        let deforms = |o: usize| scene.objects[o].deform.is_some();
         // Anything that moved changes the light's shadows: every kept impostor is lit again.
-        let moved = self.lit_at.as_ref() != Some(&poses) || (0..poses.len()).any(deforms);
+        let moved = self.lit_at.as_ref() != Some(&poses) || !still;
         if self.baked.is_none() {
             let files: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
             let loaded = timings.time("load baked impostors", || load_baked(&view, &files))?;
@@ -155,22 +196,45 @@ impl<'a> Sequence<'a> {
                     .collect(),
             );
         }
-        let mut report = FrameReport::default();
-        let per_object = timings.time("build, keep and light impostors", || {
-            self.impostors(&view, &inputs, &poses, moved, &mut report)
-        })?;
+        let secondary = match &self.answers {
+            // Nothing moved or deformed: every impostor, lit as it is, and the specular BVH
+            // stand.
+            Some(answers) if !moved => {
+                self.last_report = FrameReport {
+                    built: 0,
+                    reused: self.last_report.built + self.last_report.reused,
+                    relit: 0,
+                };
+                answers.clone()
+            }
+            _ => {
+                let mut report = FrameReport::default();
+                let per_object = timings.time("build, keep and light impostors", || {
+                    self.impostors(&view, &inputs, &poses, moved, &mut report)
+                })?;
+                let answers = Arc::new(timings.time("specular BVH", || {
+                    ReflectorImpostors::assemble(&view, per_object, self.options.mirrors)
+                }));
+                self.answers = Some(answers.clone());
+                self.last_report = report;
+                answers
+            }
+        };
+        let report = self.last_report.clone();
         self.lit_at = Some(poses);
-        let secondary = timings.time("specular BVH", || {
-            ReflectorImpostors::assemble(&view, per_object, self.options.mirrors)
-        });
         let tracer = super::Tracer {
             view: &view,
-            primary: &bvh,
-            secondary: &secondary,
+            primary: bvh,
+            secondary: secondary.as_ref(),
             lighting: &scene.lighting,
             settings: &scene.render,
         };
-        let frame = super::trace_frame(&tracer, self.options.refraction, progress, &mut timings)?;
+        let frame = super::trace_frame(
+            &tracer,
+            (self.options.refraction, self.options.primary),
+            progress,
+            &mut timings,
+        )?;
         Ok((frame, timings, report))
     }
 

@@ -186,42 +186,38 @@ pub fn render<P: RayQuery, S: SecondaryQuery + ?Sized>(
     tracer: &Tracer<'_, P, S>,
     backs: &BackFaces,
     progress: &dyn Progress,
+    primary_hit: impl Fn(usize, &Ray) -> Option<crate::trace::Hit> + Sync,
 ) -> Result<Frame, RenderError> {
     let view = tracer.view;
     let eps = tracer.settings.ray_epsilon;
-    shade_pixels_with(
-        tracer,
-        progress,
-        |_, ray| tracer.primary.closest_hit(ray, f32::INFINITY),
-        |pixel, ray, hit| {
-            let Surface::Glass { ior, tint } = view.surfaces[hit.object as usize] else {
-                return tracer.shade(ray, hit, 0);
-            };
-            let v = ray.dir;
-            let (n1, ng, front) = facing(v, hit.normal, hit.geometric_normal);
-            if !front {
-                return tracer.shade(ray, hit, 0);
-            }
-            let mesh = &view.meshes[hit.object as usize];
-            let d_v = backs
-                .at(pixel, hit.object)
-                .map_or(0.0, |(t, _)| (t - hit.t).max(0.0));
-            let d_n = backs.d_n_at(mesh, hit.object, hit.triangle, hit.bary);
-            let kr = fresnel((-v.dot(n1)).max(0.0), 1.0 / ior);
-            let reflected = tracer.leaving(
-                hit.object,
-                &Ray::new(hit.position + ng * eps, reflect(v, n1)),
-                0,
-            );
-            let transmitted = exit_ray(hit.position, n1, v, ior, d_v, d_n, |p| {
-                backs.at_point(p, hit.object).map(|(_, n)| n)
-            })
-            .map_or(Vec3::ZERO, |(p2, t2)| {
-                tint * tint * tracer.leaving(hit.object, &Ray::new(p2 + t2 * eps, t2), 0)
-            });
-            kr * reflected + (1.0 - kr) * transmitted
-        },
-    )
+    shade_pixels_with(tracer, progress, primary_hit, |pixel, ray, hit| {
+        let Surface::Glass { ior, tint } = view.surfaces[hit.object as usize] else {
+            return tracer.shade(ray, hit, 0);
+        };
+        let v = ray.dir;
+        let (n1, ng, front) = facing(v, hit.normal, hit.geometric_normal);
+        if !front {
+            return tracer.shade(ray, hit, 0);
+        }
+        let mesh = &view.meshes[hit.object as usize];
+        let d_v = backs
+            .at(pixel, hit.object)
+            .map_or(0.0, |(t, _)| (t - hit.t).max(0.0));
+        let d_n = backs.d_n_at(mesh, hit.object, hit.triangle, hit.bary);
+        let kr = fresnel((-v.dot(n1)).max(0.0), 1.0 / ior);
+        let reflected = tracer.leaving(
+            hit.object,
+            &Ray::new(hit.position + ng * eps, reflect(v, n1)),
+            0,
+        );
+        let transmitted = exit_ray(hit.position, n1, v, ior, d_v, d_n, |p| {
+            backs.at_point(p, hit.object).map(|(_, n)| n)
+        })
+        .map_or(Vec3::ZERO, |(p2, t2)| {
+            tint * tint * tracer.leaving(hit.object, &Ray::new(p2 + t2 * eps, t2), 0)
+        });
+        kr * reflected + (1.0 - kr) * transmitted
+    })
 }
 
 /// The exact leaving ray for comparison: the eye ray refracted at `hit`, traced inside the
