@@ -3,11 +3,13 @@
 //! And the first of those methods, `impostor` (paper 1 §6): the tracer with the rays mirrors and
 //! glass send out answered by impostors.
 //!
-//! Both methods share one shading model ([`shading`]): Lambert with the sun plus the
-//! environment's diffuse irradiance, no shadows; mirrors and glass reflect and refract. The
+//! Every method shares one shading model ([`shading`]): Lambert with the sun (hard shadows)
+//! plus the environment's diffuse irradiance; mirrors and glass reflect and refract. The
 //! raster method has no secondary rays, so it looks mirrors and glass up in the environment map
 //! (classic environment mapping); `trace` follows the rays. On diffuse-only scenes the two differ
 //! only where the visible triangle differs (silhouette pixels), which the tests measure.
+//!
+//! [`Sequence`] plays frames of an animated scene, keeping impostors between them.
 //!
 //! Invariants: pixel `(i, j)` is shaded at its centre; the result does not depend on the thread
 //! count; colours are linear.
