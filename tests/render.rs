@@ -671,3 +671,14 @@ fn a_rasterized_primary_pass_differs_from_the_traced_one_on_silhouettes_only() {
     let score = metrics::compare(&traced.color, &rasterized.color, None).unwrap();
     assert!(score.flip < 0.01, "FLIP {}", score.flip);
 }
+
+#[test]
+fn a_scene_object_can_be_a_maze_floor_plan() {
+    let s = scene("maze.toml");
+    let maze = &s.objects[0];
+    assert_eq!(maze.name, "maze");
+    // scenes/maze.maze: 11 × 11 cells, 68 of them walls, a unit cube (12 triangles) each, and
+    // the two triangles of the floor.
+    assert_eq!(maze.mesh.triangle_count(), 68 * 12 + 2);
+    assert!(s.files.iter().any(|f| f.ends_with("maze.maze")));
+}

@@ -18,11 +18,12 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The scenes of the method table, as `scenes/` names them.
-pub const SCENES: [&str; 6] = [
+pub const SCENES: [&str; 7] = [
     "teapot-in-bunny.toml",
     "intersecting.toml",
     "teapots.toml",
     "pinhole-misses.toml",
+    "maze.toml",
     "reflections.toml",
     "room.toml",
 ];

@@ -19,7 +19,7 @@ pub(super) fn section(
         "renderers",
         "Ground-truth renderers and the impostor method",
     );
-    s.paragraph("**raster** rasterizes through the pinhole camera and shades each pixel once (mirrors and glass are looked up in the panorama); **trace** is a Whitted ray tracer through the exact BVH (mirror reflection, refraction with Fresnel). On the diffuse scene the two must agree: they share one shading model and differ only at silhouette pixels. **impostor** is paper 1's method: primary rays as **trace**, and what mirrors and glass send out answered by 512² impostors of the diffuse objects built from each one's centre — a SPOC of an object beside it, a parallel depth image of a floor, a cube map of a room around it — or by the panorama (`trompe render scenes/reflections.toml --method impostor`). Each image stands beside its FLIP error map against the trace image. The last four scenes are paper 1's: a teapot in a mirror bunny (Fig. 1), a mirror ball passing through a teapot (Fig. 2; `--frames` plays it), inter-reflecting teapots and a glass bunny (Fig. 3, 11), and a large mirror ball whose rays reach the lid and bottom a pinhole depth image misses (Fig. 6). Paper 1's Tables 1 and 2, second-order mirrors and dynamic scenes: `docs/reflections.md` and `trompe bench reflect`.");
+    s.paragraph("**raster** rasterizes through the pinhole camera and shades each pixel once (mirrors and glass are looked up in the panorama); **trace** is a Whitted ray tracer through the exact BVH (mirror reflection, refraction with Fresnel). On the diffuse scene the two must agree: they share one shading model and differ only at silhouette pixels. **impostor** is paper 1's method: primary rays as **trace**, and what mirrors and glass send out answered by 512² impostors of the diffuse objects built from each one's centre — a SPOC of an object beside it, a parallel depth image of a floor, a cube map of a room around it — or by the panorama (`trompe render scenes/reflections.toml --method impostor`). Each image stands beside its FLIP error map against the trace image. The last five scenes are paper 1's: a teapot in a mirror bunny (Fig. 1), a mirror ball passing through a teapot (Fig. 2; `--frames` plays it), inter-reflecting teapots and a glass bunny (Fig. 3, 11), a large mirror ball whose rays reach the lid and bottom a pinhole depth image misses (Fig. 6), and a mirror ball in the maze with four bunnies (Fig. 4–5). Paper 1's Tables 1 and 2, second-order mirrors and dynamic scenes: `docs/reflections.md` and `trompe bench reflect`.");
     let mut scores = Table::new([
         "scene",
         "method",
@@ -31,7 +31,7 @@ pub(super) fn section(
     ]);
     let mut steps = Table::new(["scene", "method", "steps (ms)"]);
     let mut rows = Vec::new();
-    // The shipped scenes, then paper 1's: Fig. 1, 2, 3 and 11, 6.
+    // The shipped scenes, then paper 1's: Fig. 1, 2, 3 and 11, 6, 4–5.
     for name in [
         "diffuse",
         "reflections",
@@ -40,6 +40,7 @@ pub(super) fn section(
         "intersecting",
         "teapots",
         "pinhole-misses",
+        "maze",
     ] {
         let path = inputs.scenes.join(format!("{name}.toml"));
         let scene = Scene::load(&path).map_err(Box::new)?;

@@ -65,6 +65,16 @@ pub enum SceneError {
         /// The cause.
         source: Box<MeshError>,
     },
+    /// A floor plan (`.maze`) an object names could not be read.
+    #[error("{path}: {key}: {source}")]
+    Maze {
+        /// The scene file.
+        path: PathBuf,
+        /// Which object.
+        key: String,
+        /// The cause.
+        source: Box<maze::MazeError>,
+    },
     /// An image (panorama, texture) could not be loaded.
     #[error("{path}: {key}: {source}")]
     Image {
@@ -487,6 +497,17 @@ fn load_object(
         reason,
     };
     let (mut mesh, default_name) = match (&o.mesh, &o.shape) {
+        (Some(m), None) if m.to_ascii_lowercase().ends_with(".maze") => {
+            // A floor plan: its walls and floor (paper 1's maze, Fig. 4).
+            let plan = dir.join(m);
+            let maze = maze::Maze::load(&plan).map_err(|source| SceneError::Maze {
+                path: scene.to_path_buf(),
+                key: key(".mesh"),
+                source: Box::new(source),
+            })?;
+            files.push(plan);
+            (maze.mesh(), "maze".to_string())
+        }
         (Some(m), None) => {
             let mesh_path = dir.join(m);
             let loaded = crate::geom::io::load(&mesh_path).map_err(|source| SceneError::Mesh {
