@@ -615,7 +615,7 @@ fn two_facing_mirrors_seen_through_impostors_agree_with_tracing_on_the_second_bo
             &view,
             (&s.lighting, &settings),
             options,
-            &[],
+            &Default::default(),
             &(),
             &mut Default::default(),
         )
@@ -681,4 +681,23 @@ fn a_scene_object_can_be_a_maze_floor_plan() {
     // the two triangles of the floor.
     assert_eq!(maze.mesh.triangle_count(), 68 * 12 + 2);
     assert!(s.files.iter().any(|f| f.ends_with("maze.maze")));
+}
+
+#[test]
+fn a_mirror_ball_in_the_maze_sees_it_through_its_graph_camera_and_keeps_it_as_it_rolls() {
+    use trompe::render::{RenderOptions, Sequence};
+    let mut s = scene("maze.toml");
+    (s.camera.width, s.camera.height) = (160, 120);
+    let t = s.render.time;
+    let (truth, _) = trompe::render::render_at(&s, t, Method::Trace, &()).unwrap();
+    let mut sequence = Sequence::new(&s, RenderOptions::new(Method::Impostor(256)));
+    let (frame, _, first) = sequence.frame(t, &()).unwrap();
+    // One graph-camera impostor of the maze, one SPOC a bunny.
+    assert_eq!(first.built, 5, "{first}");
+    let mask = truth.object_id.map(|id| id == 1);
+    let score = metrics::compare(&truth.color, &frame.color, Some(&mask)).unwrap();
+    assert!(score.flip < 0.02, "FLIP over the ball {}", score.flip);
+    // The ball rolls half a metre: the bunnies' SPOCs are rebuilt, the maze's is kept.
+    let (_, _, later) = sequence.frame(t + 0.5, &()).unwrap();
+    assert_eq!((later.built, later.reused), (4, 1), "{later}");
 }

@@ -22,7 +22,7 @@ use crate::camera::Pinhole;
 use crate::frame::Frame;
 use crate::geom::{Mesh, Ray};
 use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, ViewCamera};
-use crate::scene::{Lighting, RenderSettings, Surface, View};
+use crate::scene::{Lighting, MazeObject, RenderSettings, Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
 use glam::{Affine3A, Mat4, Vec3};
 use std::path::PathBuf;
@@ -256,6 +256,9 @@ pub struct ImpostorInputs<'a> {
     pub resolution: u32,
     /// Per object id, a baked impostor's sidecar.
     pub baked: &'a [Option<PathBuf>],
+    /// Per object id, the maze plan the object is made from: a mirror or glass object inside
+    /// the maze sees it through the maze's graph camera.
+    pub mazes: &'a [Option<MazeObject>],
     /// What shadows the impostors' texels as the tracer shadows what it hits (`None`: lit
     /// unshadowed).
     pub shadows: Option<Shadows<'a>>,
@@ -276,11 +279,32 @@ impl ImpostorInputs<'_> {
         ImpostorInputs {
             resolution,
             baked: &[],
+            mazes: &[],
             shadows: None,
             pinhole: false,
             refraction: super::Refraction::Exact,
             mirrors: Mirrors::Exact,
             primary: super::Primary::Traced,
+        }
+    }
+}
+
+/// What stands in for a scene's objects under the impostor methods, per object id: a baked
+/// impostor the scene names, and the maze plan an object is made from.
+#[derive(Clone, Debug, Default)]
+pub struct StandIns {
+    /// Per object id, a baked impostor's sidecar.
+    pub baked: Vec<Option<PathBuf>>,
+    /// Per object id, the maze it is made from.
+    pub mazes: Vec<Option<MazeObject>>,
+}
+
+impl StandIns {
+    /// The stand-ins `scene` names.
+    pub fn of(scene: &crate::scene::Scene) -> Self {
+        Self {
+            baked: scene.objects.iter().map(|o| o.impostor.clone()).collect(),
+            mazes: scene.objects.iter().map(|o| o.maze.clone()).collect(),
         }
     }
 }
@@ -374,6 +398,11 @@ pub(super) fn lit(
     imp
 }
 
+/// Whether `p` is in the box `b`.
+fn inside(b: crate::geom::Aabb, p: Vec3) -> bool {
+    (p.cmpge(b.min) & p.cmple(b.max)).all()
+}
+
 /// `n`, or `−n` when it faces away from `to`.
 fn toward(n: Vec3, to: Vec3) -> Vec3 {
     if n.dot(to) < 0.0 { -n } else { n }
@@ -406,14 +435,20 @@ pub(super) fn build_unlit(
     let reflector = view.meshes[r].bounds();
     let (eye, region) = (reflector.center(), reflector.radius() as f64);
     let (mesh, surface) = (&view.meshes[o], &view.surfaces[o]);
-    let cameras =
-        impostor_cameras(mesh, eye, region, inputs.resolution, outside).map_err(|reason| {
-            RenderError::Impostor {
-                object: o,
-                reflector: r,
-                reason,
-            }
-        })?;
+    let err = |reason| RenderError::Impostor {
+        object: o,
+        reflector: r,
+        reason,
+    };
+    let cameras = match inputs.mazes.get(o).and_then(Option::as_ref) {
+        // A reflector in a maze sees it through the maze's graph camera (paper 1 §5).
+        Some(m) if inside(mesh.bounds(), eye) => vec![ImpostorCamera::Graph(
+            m.maze
+                .graph_camera(inputs.resolution, &m.path)
+                .map_err(|_| err("its maze's graph camera could not be built"))?,
+        )],
+        _ => impostor_cameras(mesh, eye, region, inputs.resolution, outside).map_err(err)?,
+    };
     let diffuse = matches!(surface, Surface::Diffuse(_));
     let color = |s: &SurfaceSample| {
         if diffuse {

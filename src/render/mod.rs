@@ -22,7 +22,7 @@ mod trace;
 pub mod wyman;
 
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
-pub use impostor::{ImpostorInputs, ReflectorImpostors, placed_cameras};
+pub use impostor::{ImpostorInputs, ReflectorImpostors, StandIns, placed_cameras};
 pub use raster::{primary_hits, render_raster};
 pub use sequence::{FrameReport, Sequence};
 pub use trace::{Tracer, render_trace, shade_pixels};
@@ -255,12 +255,11 @@ pub fn render_with(
     let mut timings = Timings::default();
     let view = timings.time("evaluate scene", || scene.view(t))?;
     check_memory(&view, options.method)?;
-    let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
     let frame = render_view(
         &view,
         (&scene.lighting, &scene.render),
         options,
-        &baked,
+        &StandIns::of(scene),
         progress,
         &mut timings,
     )?;
@@ -295,13 +294,13 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), RenderError> {
     Ok(check(|| what, needed)?)
 }
 
-/// Renders an evaluated view; `baked[o]` names a baked impostor that stands in for object `o`
-/// under the impostor methods (an empty slice: none).
+/// Renders an evaluated view; `stand_ins` says what stands in for its objects under the
+/// impostor methods (baked impostors, mazes; `StandIns::default()`: nothing).
 pub fn render_view(
     view: &View,
     (lighting, settings): (&Lighting, &RenderSettings),
     options: RenderOptions,
-    baked: &[Option<std::path::PathBuf>],
+    stand_ins: &StandIns,
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
@@ -322,7 +321,8 @@ pub fn render_view(
         }
         Method::Impostor(resolution) | Method::PinholeImpostor(resolution) => {
             let inputs = ImpostorInputs {
-                baked,
+                baked: &stand_ins.baked,
+                mazes: &stand_ins.mazes,
                 pinhole: matches!(options.method, Method::PinholeImpostor(_)),
                 refraction,
                 mirrors: options.mirrors,

@@ -57,6 +57,7 @@ impl std::fmt::Display for FrameReport {
 pub struct Sequence<'a> {
     scene: &'a Scene,
     options: RenderOptions,
+    stand_ins: Arc<super::StandIns>,
     /// Per (mirror or glass object, object it sees): its impostors as last built.
     kept: HashMap<(usize, usize), Kept>,
     /// The baked impostors, loaded on the first frame, and each object's pose then.
@@ -93,6 +94,7 @@ impl<'a> Sequence<'a> {
         Self {
             scene,
             options,
+            stand_ins: Arc::new(super::StandIns::of(scene)),
             kept: HashMap::new(),
             baked: None,
             lit_at: None,
@@ -113,18 +115,18 @@ impl<'a> Sequence<'a> {
             return Err(RenderError::Time(t));
         }
         let scene = self.scene;
+        let stand_ins = self.stand_ins.clone();
         let mut timings = Timings::default();
         let view = timings.time("evaluate scene", || scene.view(t))?;
         super::check_memory(&view, self.options.method)?;
         super::check_finite(&view)?;
         if self.options.method == Method::Raster {
-            let baked: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
             let lighting = (&scene.lighting, &scene.render);
             let frame = super::render_view(
                 &view,
                 lighting,
                 self.options,
-                &baked,
+                &self.stand_ins,
                 progress,
                 &mut timings,
             )?;
@@ -180,14 +182,15 @@ impl<'a> Sequence<'a> {
             refraction: self.options.refraction,
             mirrors: self.options.mirrors,
             primary: self.options.primary,
+            mazes: &stand_ins.mazes,
             ..ImpostorInputs::new(resolution)
         };
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
         // Anything that moved changes the light's shadows: every kept impostor is lit again.
         let moved = self.lit_at.as_ref() != Some(&poses) || !still;
         if self.baked.is_none() {
-            let files: Vec<_> = scene.objects.iter().map(|o| o.impostor.clone()).collect();
-            let loaded = timings.time("load baked impostors", || load_baked(&view, &files))?;
+            let files = &self.stand_ins.baked;
+            let loaded = timings.time("load baked impostors", || load_baked(&view, files))?;
             self.baked = Some(
                 loaded
                     .into_iter()
@@ -282,10 +285,12 @@ impl<'a> Sequence<'a> {
                     }
                     (None, Some(k))
                         if self.scene.objects[o].deform.is_none()
+                            // A maze's graph camera does not depend on where the mirror is.
+                            && (self.scene.objects[o].maze.is_some()
                             // Where the mirror is now, in the frame the impostors were built in.
-                            && k.eye.distance(
+                            || k.eye.distance(
                                 k.pose.transform_point3(poses[o].inverse().transform_point3(eye)),
-                            ) <= REBUILD_SHIFT * region =>
+                            ) <= REBUILD_SHIFT * region) =>
                     {
                         report.reused += k.unlit.len();
                         (k, false)

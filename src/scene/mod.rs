@@ -149,10 +149,22 @@ pub struct SceneObject {
     pub animation: Option<Animation>,
     /// Deformation over time (object space), if any.
     pub deform: Option<Deformation>,
+    /// The floor plan the mesh was made from, when it is a maze (paper 1 §5): the impostor
+    /// methods see it through the maze's graph camera.
+    pub maze: Option<MazeObject>,
     /// A baked impostor's sidecar that stands in for the object in mirrors and glass
     /// (`render --method impostor`); it must have been baked from the object as the scene
     /// places it.
     pub impostor: Option<PathBuf>,
+}
+
+/// A maze an object is made from: the plan and its file (named in errors).
+#[derive(Clone, Debug)]
+pub struct MazeObject {
+    /// The floor plan.
+    pub maze: Arc<maze::Maze>,
+    /// Its file.
+    pub path: PathBuf,
 }
 
 /// A camera keyframe.
@@ -496,6 +508,7 @@ fn load_object(
         key: key(k),
         reason,
     };
+    let mut maze_object = None;
     let (mut mesh, default_name) = match (&o.mesh, &o.shape) {
         (Some(m), None) if m.to_ascii_lowercase().ends_with(".maze") => {
             // A floor plan: its walls and floor (paper 1's maze, Fig. 4).
@@ -505,8 +518,13 @@ fn load_object(
                 key: key(".mesh"),
                 source: Box::new(source),
             })?;
+            let mesh = maze.mesh();
+            maze_object = Some(MazeObject {
+                maze: Arc::new(maze),
+                path: plan.clone(),
+            });
             files.push(plan);
-            (maze.mesh(), "maze".to_string())
+            (mesh, "maze".to_string())
         }
         (Some(m), None) => {
             let mesh_path = dir.join(m);
@@ -665,6 +683,18 @@ fn load_object(
             })
         }
     };
+    if maze_object.is_some()
+        && (o.fit.is_some()
+            || o.subdivide.is_some()
+            || world_from_object != Mat4::IDENTITY
+            || o.animate.is_some()
+            || o.deform.is_some())
+    {
+        return Err(invalid(
+            ".mesh",
+            "a maze stands where its plan puts it (one metre a cell from the origin): give it no fit, subdivide, translate, rotate, scale, animate or deform".into(),
+        ));
+    }
     let deform = match &o.deform {
         None => None,
         Some(d) => {
@@ -713,6 +743,7 @@ fn load_object(
         world_from_object,
         animation,
         deform,
+        maze: maze_object,
         impostor: o.impostor.as_ref().map(|p| {
             let sidecar = dir.join(p);
             files.push(sidecar.with_extension("exr"));
