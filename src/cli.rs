@@ -637,7 +637,14 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             ..
         } => {
             let inputs = trompe::eval::fixtures::Shipped::locate();
-            let tables = with_spinner("timing", || trompe::bench::reflect::tables(&inputs, quick))?;
+            let selection = if quick {
+                trompe::bench::reflect::Selection::quick()
+            } else {
+                trompe::bench::reflect::Selection::full()
+            };
+            let tables = with_spinner("timing", || {
+                trompe::bench::reflect::tables(&inputs, &selection)
+            })?;
             println!("{tables}");
         }
         Command::Bench {

@@ -134,9 +134,60 @@ fn kept_frame(
     Ok((times[runs / 2], last))
 }
 
-/// The tables, on the shipped scenes under `inputs`.
-pub fn tables(inputs: &Shipped, quick: bool) -> Result<ReflectTables, BenchError> {
-    let runs = if quick { 3 } else { 7 };
+/// Which rows the tables hold.
+#[derive(Clone, Debug)]
+pub struct Selection {
+    /// Table 1's output resolutions.
+    pub sizes: Vec<(u32, u32)>,
+    /// Table 2's impostor sides.
+    pub sides: Vec<u32>,
+    /// The method table's scenes.
+    pub scenes: Vec<&'static str>,
+    /// Subdivision levels of the reflected bunny in the growth table.
+    pub levels: Vec<u32>,
+    /// Frames timed for each median.
+    pub runs: usize,
+}
+
+impl Selection {
+    /// Every row: what `trompe bench reflect` prints.
+    pub fn full() -> Self {
+        Self {
+            sizes: vec![(640, 480), (800, 600), (1024, 768), (1280, 1024)],
+            sides: vec![128, 256, 512, 1024],
+            scenes: SCENES.to_vec(),
+            levels: vec![0, 2],
+            runs: 7,
+        }
+    }
+
+    /// A row of each table: `--quick`.
+    pub fn quick() -> Self {
+        Self {
+            sizes: vec![(640, 480)],
+            sides: vec![256],
+            scenes: SCENES[..2].to_vec(),
+            levels: vec![0],
+            runs: 3,
+        }
+    }
+
+    /// The paper's two tables alone, at their ends (the demo report, which renders every
+    /// scene by every method itself).
+    pub fn paper_tables() -> Self {
+        Self {
+            sizes: vec![(640, 480), (1280, 1024)],
+            sides: vec![128, 256, 512, 1024],
+            scenes: Vec::new(),
+            levels: Vec::new(),
+            runs: 3,
+        }
+    }
+}
+
+/// The tables `selection` asks for, on the shipped scenes under `inputs`.
+pub fn tables(inputs: &Shipped, selection: &Selection) -> Result<ReflectTables, BenchError> {
+    let runs = selection.runs.max(1);
     let load = |name: &str| Scene::load(&inputs.scenes.join(name)).map_err(Box::new);
     let mut out = ReflectTables {
         heading: format!(
@@ -149,12 +200,7 @@ pub fn tables(inputs: &Shipped, quick: bool) -> Result<ReflectTables, BenchError
     let t = base.render.time;
 
     // Table 1: output resolution.
-    let sizes: &[(u32, u32)] = if quick {
-        &[(640, 480)]
-    } else {
-        &[(640, 480), (800, 600), (1024, 768), (1280, 1024)]
-    };
-    for &size in sizes {
+    for &size in &selection.sizes {
         let mut scene = base.clone();
         (scene.camera.width, scene.camera.height) = size;
         let mut sequence = Sequence::new(&scene, RenderOptions::new(Method::Impostor(512)));
@@ -179,12 +225,7 @@ pub fn tables(inputs: &Shipped, quick: bool) -> Result<ReflectTables, BenchError
 
     // Table 2: impostor resolution, at 640 × 480.
     let (truth, _, _) = Sequence::new(&base, RenderOptions::new(Method::Trace)).frame(t, &())?;
-    let sides: &[u32] = if quick {
-        &[256]
-    } else {
-        &[128, 256, 512, 1024]
-    };
-    for &side in sides {
+    for &side in &selection.sides {
         let mut sequence = Sequence::new(&base, RenderOptions::new(Method::Impostor(side)));
         let (frame, first, _) = sequence.frame(t, &())?;
         let (kept, _) = kept_frame(&mut sequence, t, runs)?;
@@ -213,8 +254,7 @@ pub fn tables(inputs: &Shipped, quick: bool) -> Result<ReflectTables, BenchError
         ),
         ("envmap", RenderOptions::new(Method::EnvMap)),
     ];
-    let scenes: &[&str] = if quick { &SCENES[..2] } else { &SCENES };
-    for name in scenes {
+    for name in &selection.scenes {
         let scene = load(name)?;
         let t = scene.render.time;
         let mut frames = Vec::new();
@@ -241,8 +281,7 @@ pub fn tables(inputs: &Shipped, quick: bool) -> Result<ReflectTables, BenchError
     // The secondary pass as the reflected mesh grows: the bunny of `c3rc-bunny.toml` as
     // shipped and subdivided twice (16× the triangles).
     let c3rc = load("c3rc-bunny.toml")?;
-    let levels: &[u32] = if quick { &[0] } else { &[0, 2] };
-    for &level in levels {
+    for &level in &selection.levels {
         let mut scene = c3rc.clone();
         let Some(bunny) = scene
             .objects

@@ -118,6 +118,7 @@ pub(super) fn section(
     s.table(scores);
     s.heading("Per-step timings");
     s.table(steps);
+    paper_tables(&mut s, inputs)?;
 
     s.heading("Shipped models");
     let mut models = Table::new([
@@ -160,4 +161,55 @@ pub(super) fn section(
     ]);
     s.table(t);
     Ok((s, rows))
+}
+
+/// Paper 1's Tables 1 and 2 on `teapot-in-bunny.toml`: frame time against output resolution
+/// and against impostor resolution (`trompe bench reflect` prints every row).
+fn paper_tables(s: &mut Section, inputs: &DemoInputs) -> Result<(), ReportError> {
+    use crate::bench::reflect::{Selection, tables};
+    let t =
+        tables(inputs, &Selection::paper_tables()).map_err(|e| ReportError::Bench(Box::new(e)))?;
+    let ms = |d: std::time::Duration| format!("{:.1}", d.as_secs_f64() * 1e3);
+    s.heading(
+        "Paper 1, Table 1: frame time against output resolution (teapot-in-bunny, 512² impostors)",
+    );
+    s.paragraph("The first frame builds the impostors; later frames of a sequence keep them (nothing deforms), with the primary pass traced or rasterized; `trace` is the exact frame with its BVH kept. Goal: 30 frames/s at 640×480.");
+    let mut one = Table::new([
+        "pixels",
+        "first frame (ms)",
+        "later frame (ms)",
+        "rasterized primary (ms)",
+        "frames/s",
+        "trace (ms)",
+    ]);
+    for r in &t.by_output {
+        one.row([
+            format!("{}×{}", r.size.0, r.size.1),
+            ms(r.first),
+            ms(r.kept),
+            ms(r.rasterized),
+            format!("{:.1}", 1.0 / r.rasterized.as_secs_f64().max(1e-9)),
+            ms(r.trace),
+        ]);
+    }
+    s.table(one);
+    s.heading("Paper 1, Table 2: frame time against impostor resolution (640×480)");
+    let mut two = Table::new([
+        "texels a side",
+        "build and light (ms)",
+        "later frame (ms)",
+        "longest ray projection (texels)",
+        "FLIP vs trace",
+    ]);
+    for r in &t.by_impostor {
+        two.row([
+            r.side.to_string(),
+            ms(r.build),
+            ms(r.kept),
+            r.max_projection.to_string(),
+            format!("{:.4}", r.flip),
+        ]);
+    }
+    s.table(two);
+    Ok(())
 }

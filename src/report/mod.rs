@@ -64,6 +64,9 @@ pub enum ReportError {
     /// A camera of a shipped scene is invalid.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
+    /// A timed workload failed.
+    #[error(transparent)]
+    Bench(Box<crate::bench::BenchError>),
     /// The output directory holds files `trompe demo` did not write.
     #[error(
         "{dir}: not empty and not a demo report's directory (it holds {files}); give an empty or new directory"
