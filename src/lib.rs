@@ -81,6 +81,7 @@ pub mod relief;
 pub mod render;
 pub mod scene;
 pub mod trace;
+pub mod viewer;
 pub mod views;
 
 /// The workloads of `trompe bench` and `cargo bench`: for the command line and the benches,

@@ -111,13 +111,27 @@ impl<'a> Sequence<'a> {
         t: f32,
         progress: &dyn Progress,
     ) -> Result<(Frame, Timings, FrameReport), RenderError> {
+        self.frame_from(t, None, progress)
+    }
+
+    /// [`Sequence::frame`] seen through `camera` instead of the scene's (an interactive
+    /// viewer's), when given.
+    pub fn frame_from(
+        &mut self,
+        t: f32,
+        camera: Option<crate::camera::Pinhole>,
+        progress: &dyn Progress,
+    ) -> Result<(Frame, Timings, FrameReport), RenderError> {
         if !t.is_finite() {
             return Err(RenderError::Time(t));
         }
         let scene = self.scene;
         let stand_ins = self.stand_ins.clone();
         let mut timings = Timings::default();
-        let view = timings.time("evaluate scene", || scene.view(t))?;
+        let mut view = timings.time("evaluate scene", || scene.view(t))?;
+        if let Some(camera) = camera {
+            view.camera = camera;
+        }
         super::check_memory(&view, self.options.method)?;
         super::check_finite(&view)?;
         if self.options.method == Method::Raster {

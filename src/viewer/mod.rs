@@ -1,0 +1,457 @@
+//! The interactive viewer's state (beyond the papers; paper 3 §4 is about keeping frames
+//! flowing): a camera flown or orbited by input, a clock, and the methods of
+//! [`crate::render`] to switch between — each a [`Sequence`] that keeps its impostors between
+//! frames. A window is a thin shell over it (the `trompe view` command); the same state, fed a
+//! [`script`], renders headless frames, so the viewer is tested without a display.
+//!
+//! Invariants: the viewer adds no rendering method of its own; a frame depends only on the
+//! inputs given and the time steps taken (never on the wall clock or the thread count).
+
+pub mod hud;
+pub mod script;
+
+use crate::camera::Pinhole;
+use crate::frame::{Image, Rgba, metrics};
+use crate::render::{Method, Primary, RenderError, RenderOptions, Sequence, Timings};
+use crate::scene::Scene;
+use glam::{Vec3, Vec4};
+use std::time::Instant;
+use thiserror::Error;
+
+/// A control.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Key {
+    /// Move along the view direction (fly), or closer to the target (orbit).
+    Forward,
+    /// The opposite.
+    Back,
+    /// Move left (fly), or turn around the target (orbit).
+    Left,
+    /// The opposite.
+    Right,
+    /// Move up.
+    Up,
+    /// Move down.
+    Down,
+    /// Switch to method `n` of [`Viewer::methods`].
+    Method(usize),
+    /// Toggle fly and orbit.
+    Orbit,
+    /// Pause or resume the animation.
+    Pause,
+    /// Cycle the split screen: off, exact left and method right, FLIP heat map.
+    Split,
+    /// Ask the shell to save a screenshot.
+    Screenshot,
+    /// Ask the shell to save the camera as a scene `[camera]` block.
+    SaveCamera,
+    /// Toggle the help overlay.
+    Help,
+}
+
+/// An input event.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Input {
+    /// A key went down (held keys move the camera every step).
+    Down(Key),
+    /// A key came up.
+    Up(Key),
+    /// The mouse moved by this many pixels (looks around, or orbits).
+    Look(f32, f32),
+    /// The wheel turned by this many notches (speed up or down).
+    Scroll(f32),
+}
+
+/// What a key asks the shell to do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Request {
+    /// Save the last frame.
+    Screenshot,
+    /// Save the camera block.
+    SaveCamera,
+}
+
+/// The split screen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Split {
+    /// The chosen method alone.
+    #[default]
+    Off,
+    /// Left half exact (`trace`), right half the chosen method.
+    Halves,
+    /// The FLIP error of the chosen method against `trace`, as a heat map.
+    Flip,
+}
+
+/// Errors from the viewer.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ViewerError {
+    /// A frame could not be rendered.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// The camera became degenerate.
+    #[error(transparent)]
+    Camera(#[from] crate::camera::CameraError),
+    /// A frame could not be made or compared.
+    #[error(transparent)]
+    Frame(#[from] crate::frame::FrameError),
+}
+
+/// Radians a pixel of mouse motion turns the camera.
+pub const LOOK_PER_PIXEL: f32 = 0.003;
+/// Factor a wheel notch multiplies the speed by.
+pub const SPEED_PER_NOTCH: f32 = 1.2;
+
+/// A camera flown or orbited around a target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewCamera {
+    /// Eye.
+    pub eye: Vec3,
+    /// Radians about +y; 0 looks along −z.
+    pub yaw: f32,
+    /// Radians above the horizon.
+    pub pitch: f32,
+    /// What orbit mode turns around.
+    pub target: Vec3,
+    /// Orbiting (else flying).
+    pub orbit: bool,
+    /// Full vertical field of view, degrees.
+    pub fov_y: f64,
+    /// Near-plane distance.
+    pub near: f64,
+}
+
+impl ViewCamera {
+    /// Looking from `eye` at `target`, with the near plane at `near`.
+    pub fn looking_at(eye: Vec3, target: Vec3, fov_y: f64, near: f64) -> Self {
+        let d = (target - eye).try_normalize().unwrap_or(Vec3::NEG_Z);
+        Self {
+            eye,
+            yaw: d.x.atan2(-d.z),
+            pitch: d.y.clamp(-1.0, 1.0).asin(),
+            target,
+            orbit: false,
+            fov_y,
+            near,
+        }
+    }
+
+    /// The unit view direction.
+    pub fn direction(&self) -> Vec3 {
+        let (sy, cy) = self.yaw.sin_cos();
+        let (sp, cp) = self.pitch.sin_cos();
+        Vec3::new(sy * cp, sp, -cy * cp)
+    }
+
+    /// The pinhole of `w × h` pixels.
+    pub fn pinhole(&self, (w, h): (u32, u32)) -> Result<Pinhole, crate::camera::CameraError> {
+        Ok(Pinhole::look_at(
+            self.eye,
+            self.eye + self.direction(),
+            Vec3::Y,
+            self.fov_y,
+            w,
+            h,
+        )?
+        .with_near(self.near))
+    }
+
+    fn turn(&mut self, dx: f32, dy: f32) {
+        let limit = 89f32.to_radians();
+        self.yaw += dx * LOOK_PER_PIXEL;
+        self.pitch = (self.pitch - dy * LOOK_PER_PIXEL).clamp(-limit, limit);
+        if self.orbit {
+            let distance = self.eye.distance(self.target);
+            self.eye = self.target - self.direction() * distance;
+        }
+    }
+}
+
+/// One frame the viewer made.
+pub struct ViewFrame {
+    /// Linear colour, the size asked for.
+    pub image: Image<Rgba>,
+    /// The steps of the chosen method's frame.
+    pub timings: Timings,
+    /// Wall time of the whole frame, ms (split screens included).
+    pub ms: f64,
+    /// The overlay's lines.
+    pub hud: Vec<String>,
+}
+
+/// The viewer: camera, clock, methods and their sequences.
+pub struct Viewer<'a> {
+    camera: ViewCamera,
+    held: Vec<Key>,
+    /// Scene units a second.
+    speed: f32,
+    time: f32,
+    paused: bool,
+    methods: Vec<(&'static str, RenderOptions)>,
+    sequences: Vec<Sequence<'a>>,
+    /// `trace`, for the split screen.
+    exact: Sequence<'a>,
+    current: usize,
+    split: Split,
+    help: bool,
+}
+
+impl<'a> Viewer<'a> {
+    /// A viewer of `scene` from its camera at its time; impostors of `impostor_resolution²`.
+    pub fn new(scene: &'a Scene, impostor_resolution: u32) -> Self {
+        let c = &scene.camera;
+        let start = scene.camera.at(scene.render.time).ok();
+        let (eye, target) = match start {
+            Some(p) => (
+                p.position().as_vec3(),
+                p.position().as_vec3() + p.forward().as_vec3(),
+            ),
+            None => (c.position, c.look_at),
+        };
+        let target = if c.path.is_empty() { c.look_at } else { target };
+        let r = impostor_resolution;
+        let fast = |m| RenderOptions::new(m).primary(Primary::Rasterized);
+        let methods = vec![
+            ("trace", RenderOptions::new(Method::Trace)),
+            ("impostor", fast(Method::Impostor(r))),
+            ("pinhole-impostor", fast(Method::PinholeImpostor(r))),
+            ("envmap", fast(Method::EnvMap)),
+            ("raster", RenderOptions::new(Method::Raster)),
+        ];
+        let sequences = methods
+            .iter()
+            .map(|(_, o)| Sequence::new(scene, *o))
+            .collect();
+        Self {
+            camera: ViewCamera::looking_at(eye, target, c.fov_y, c.near),
+            held: Vec::new(),
+            speed: (0.5 * eye.distance(target)).max(1e-3),
+            time: scene.render.time,
+            paused: false,
+            methods,
+            sequences,
+            exact: Sequence::new(scene, RenderOptions::new(Method::Trace)),
+            current: 1,
+            split: Split::Off,
+            help: false,
+        }
+    }
+
+    /// The methods the number keys switch between, in order (key 1 is the first).
+    pub fn methods(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.methods.iter().map(|(n, _)| *n)
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &ViewCamera {
+        &self.camera
+    }
+
+    /// Scene time, seconds.
+    pub fn time(&self) -> f32 {
+        self.time
+    }
+
+    /// Scene units a second the camera moves.
+    pub fn speed(&self) -> f32 {
+        self.speed
+    }
+
+    /// The split-screen mode.
+    pub fn split(&self) -> Split {
+        self.split
+    }
+
+    /// Takes one input; returns what it asks the shell to do, if anything.
+    pub fn input(&mut self, input: Input) -> Option<Request> {
+        match input {
+            Input::Down(key) => return self.press(key),
+            Input::Up(key) => self.held.retain(|k| *k != key),
+            Input::Look(dx, dy) => self.camera.turn(dx, dy),
+            Input::Scroll(notches) => {
+                self.speed = (self.speed * SPEED_PER_NOTCH.powf(notches)).clamp(1e-4, 1e6)
+            }
+        }
+        None
+    }
+
+    fn press(&mut self, key: Key) -> Option<Request> {
+        match key {
+            Key::Method(n) if n < self.methods.len() => self.current = n,
+            Key::Method(_) => {}
+            Key::Orbit => {
+                self.camera.orbit = !self.camera.orbit;
+                if self.camera.orbit {
+                    // Orbit what the camera looks at, at the current distance along the view.
+                    let distance = self.camera.eye.distance(self.camera.target).max(1e-3);
+                    self.camera.target = self.camera.eye + self.camera.direction() * distance;
+                }
+            }
+            Key::Pause => self.paused = !self.paused,
+            Key::Split => {
+                self.split = match self.split {
+                    Split::Off => Split::Halves,
+                    Split::Halves => Split::Flip,
+                    Split::Flip => Split::Off,
+                }
+            }
+            Key::Help => self.help = !self.help,
+            Key::Screenshot => return Some(Request::Screenshot),
+            Key::SaveCamera => return Some(Request::SaveCamera),
+            movement => {
+                if !self.held.contains(&movement) {
+                    self.held.push(movement);
+                }
+            }
+        }
+        None
+    }
+
+    /// Advances `dt` seconds: held keys move the camera, the clock runs unless paused.
+    pub fn step(&mut self, dt: f32) {
+        let dt = if dt.is_finite() { dt.max(0.0) } else { 0.0 };
+        if !self.paused {
+            self.time += dt;
+        }
+        let held = |k| self.held.contains(&k);
+        let axis = |plus, minus| f32::from(u8::from(held(plus))) - f32::from(u8::from(held(minus)));
+        let (forward, right, up) = (
+            axis(Key::Forward, Key::Back),
+            axis(Key::Right, Key::Left),
+            axis(Key::Up, Key::Down),
+        );
+        let c = &mut self.camera;
+        if c.orbit {
+            // Around the target at a fixed distance; forward and back change the distance.
+            let distance = (c.eye.distance(c.target) - forward * self.speed * dt).max(1e-3);
+            let turn = self.speed * dt / c.eye.distance(c.target).max(1e-3);
+            c.yaw -= right * turn;
+            c.pitch = (c.pitch + up * turn).clamp(-89f32.to_radians(), 89f32.to_radians());
+            c.eye = c.target - c.direction() * distance;
+        } else {
+            let d = c.direction();
+            let side = d.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
+            let motion = d * forward + side * right + Vec3::Y * up;
+            c.eye += motion * (self.speed * dt);
+        }
+    }
+
+    /// The frame of `size` pixels, rendered at `scale` of it (1 for full resolution; less
+    /// while the camera moves) and enlarged to `size`.
+    pub fn frame(&mut self, size: (u32, u32), scale: f32) -> Result<ViewFrame, ViewerError> {
+        let start = Instant::now();
+        let scale = scale.clamp(0.05, 1.0);
+        let small = (
+            ((size.0 as f32 * scale).round() as u32).max(1),
+            ((size.1 as f32 * scale).round() as u32).max(1),
+        );
+        let camera = self.camera.pinhole(small)?;
+        let (frame, timings, report) =
+            self.sequences[self.current].frame_from(self.time, Some(camera.clone()), &())?;
+        let image = match self.split {
+            Split::Off => frame.color,
+            Split::Halves | Split::Flip => {
+                let (exact, _, _) = self.exact.frame_from(self.time, Some(camera), &())?;
+                if self.split == Split::Flip {
+                    metrics::heat_map(&metrics::flip_map(&exact.color, &frame.color)?)
+                } else {
+                    let (w, h) = exact.color.size();
+                    let mut halves = Image::new(w, h, Vec4::ZERO)?;
+                    for y in 0..h {
+                        for x in 0..w {
+                            let from = if x < w / 2 {
+                                &exact.color
+                            } else {
+                                &frame.color
+                            };
+                            halves.set(x, y, from.get(x, y));
+                        }
+                    }
+                    halves
+                }
+            }
+        };
+        let image = enlarge(&image, size)?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let (name, options) = self.methods[self.current];
+        let mut hud = vec![
+            format!(
+                "{name}{}  {ms:.0} ms ({:.1} fps)  {}x{} of {}x{}",
+                options
+                    .method
+                    .impostor_resolution()
+                    .map_or(String::new(), |r| format!(" {r}^2")),
+                1e3 / ms.max(1e-9),
+                small.0,
+                small.1,
+                size.0,
+                size.1
+            ),
+            format!(
+                "{:.1} M pixels/s  t {:.2} s{}  {}",
+                (small.0 * small.1) as f64 / ms.max(1e-9) / 1e3,
+                self.time,
+                if self.paused { " (paused)" } else { "" },
+                report
+            ),
+        ];
+        hud.extend(
+            timings
+                .0
+                .iter()
+                .map(|(step, d)| format!("  {step} {:.1} ms", d.as_secs_f64() * 1e3)),
+        );
+        if self.split != Split::Off {
+            hud.push(format!("split: {:?} (trace against {name})", self.split));
+        }
+        if self.help {
+            hud.extend(HELP.iter().map(|s| s.to_string()));
+        }
+        Ok(ViewFrame {
+            image,
+            timings,
+            ms,
+            hud,
+        })
+    }
+
+    /// The camera as a scene-file `[camera]` block that reproduces the view at `size`.
+    pub fn camera_block(&self, size: (u32, u32)) -> String {
+        let c = &self.camera;
+        let at = c.eye + c.direction();
+        format!(
+            "[camera]\nposition = [{:?}, {:?}, {:?}]\nlook_at = [{:?}, {:?}, {:?}]\nfov_y = {:?}\nresolution = [{}, {}]\nnear = {:?}\n",
+            c.eye.x, c.eye.y, c.eye.z, at.x, at.y, at.z, c.fov_y, size.0, size.1, c.near
+        )
+    }
+}
+
+/// The help overlay.
+pub const HELP: [&str; 8] = [
+    "WASD move, Q/E down/up, mouse look, wheel speed",
+    "Tab fly / orbit the point looked at",
+    "1 trace  2 impostor  3 pinhole-impostor  4 envmap  5 raster",
+    "V split: off / trace | method / FLIP heat map",
+    "P pause the animation",
+    "F12 screenshot  C save the camera block",
+    "H this help  Esc quit",
+    "",
+];
+
+/// `image` enlarged to `size` by nearest neighbour (itself when the sizes agree).
+fn enlarge(image: &Image<Rgba>, size: (u32, u32)) -> Result<Image<Rgba>, ViewerError> {
+    let (w, h) = image.size();
+    if (w, h) == size {
+        return Ok(image.clone());
+    }
+    let mut out = Image::new(size.0, size.1, Vec4::ZERO)?;
+    for y in 0..size.1 {
+        let sy = (y as u64 * h as u64 / size.1 as u64) as u32;
+        for x in 0..size.0 {
+            let sx = (x as u64 * w as u64 / size.0 as u64) as u32;
+            out.set(x, y, image.get(sx, sy));
+        }
+    }
+    Ok(out)
+}
