@@ -185,3 +185,35 @@ fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
         score.flip
     );
 }
+
+#[test]
+fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
+    let dir = scratch("viewer-bad");
+    let keys = dir.join("keys.txt");
+    std::fs::write(&keys, "0 down W\n0.5 jump\n").unwrap();
+    let out = dir.join("out");
+    let run = |out: &Path| {
+        trompe(&[
+            "view",
+            "scenes/teapot-in-bunny.toml",
+            "--frames",
+            "1",
+            "--script",
+            keys.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = run(&out);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("line 2"), "{}", stderr(&o));
+    // A folder of someone else's files is not written into.
+    let foreign = dir.join("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("mine.png"), b"x").unwrap();
+    std::fs::write(&keys, "0 down W\n").unwrap();
+    let o = run(&foreign);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("not a viewer's"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(foreign.join("mine.png")).unwrap(), b"x");
+}

@@ -2,7 +2,7 @@
 //! softbuffer to show a CPU frame — no GPU) over `trompe::viewer::Viewer`; or, with `--frames`,
 //! headless: a script's inputs replayed at fixed time steps and every frame written.
 
-use super::check_plan;
+use super::{check_plan, refuse_foreign_folder};
 use anyhow::{Context, Result, bail};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -18,6 +18,9 @@ use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
+
+/// The file that marks a folder as a viewer's output (so a later run may write into it).
+const MARKER: &str = "trompe-view.txt";
 
 /// `trompe view`.
 #[derive(clap::Args, Debug)]
@@ -40,7 +43,8 @@ pub struct ViewArgs {
     /// Time steps a second, headless.
     #[arg(long, default_value_t = 30.0)]
     fps: f32,
-    /// Where frames (headless), screenshots and saved cameras go.
+    /// Where frames (headless), screenshots and saved cameras go: an empty or new folder, or
+    /// one the viewer wrote before.
     #[arg(short, long, default_value = "out/view")]
     output: PathBuf,
     /// Window: close after this many seconds (for scripted runs).
@@ -85,8 +89,12 @@ impl ViewArgs {
         plan.reads(scene.files.iter().cloned());
         plan.reads(self.script.iter().cloned());
         check_plan(&plan)?;
+        refuse_foreign_folder(&self.output, MARKER, "a viewer's frames and screenshots")?;
         std::fs::create_dir_all(&self.output)
             .with_context(|| format!("creating {}", self.output.display()))?;
+        let marker = self.output.join(MARKER);
+        std::fs::write(&marker, format!("trompe view {}\n", self.scene.display()))
+            .with_context(|| format!("writing {}", marker.display()))?;
         let viewer = Viewer::new(&scene, self.impostor_resolution);
         match self.frames {
             Some(frames) => headless(viewer, &script, frames, self.fps, size, &self.output),

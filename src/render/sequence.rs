@@ -167,23 +167,13 @@ impl<'a> Sequence<'a> {
             // (The raster method returned above.)
             Method::Trace | Method::EnvMap | Method::Raster => {
                 let exact = crate::trace::Exact(bvh);
-                let tracer = super::Tracer {
-                    view: &view,
-                    primary: bvh,
-                    secondary: if self.options.method == Method::Trace {
-                        &exact as &dyn crate::trace::SecondaryQuery
+                let secondary: &dyn crate::trace::SecondaryQuery =
+                    if self.options.method == Method::Trace {
+                        &exact
                     } else {
                         &crate::trace::EnvironmentOnly
-                    },
-                    lighting: &scene.lighting,
-                    settings: &scene.render,
-                };
-                let frame = super::trace_frame(
-                    &tracer,
-                    (self.options.refraction, self.options.primary),
-                    progress,
-                    &mut timings,
-                )?;
+                    };
+                let frame = self.trace(&view, bvh, secondary, progress, &mut timings)?;
                 return Ok((frame, timings, FrameReport::default()));
             }
         };
@@ -239,20 +229,29 @@ impl<'a> Sequence<'a> {
         };
         let report = self.last_report.clone();
         self.lit_at = Some(poses);
-        let tracer = super::Tracer {
-            view: &view,
-            primary: bvh,
-            secondary: secondary.as_ref(),
-            lighting: &scene.lighting,
-            settings: &scene.render,
-        };
-        let frame = super::trace_frame(
-            &tracer,
-            (self.options.refraction, self.options.primary),
-            progress,
-            &mut timings,
-        )?;
+        let frame = self.trace(&view, bvh, secondary.as_ref(), progress, &mut timings)?;
         Ok((frame, timings, report))
+    }
+
+    /// Traces `view` through `bvh`, the rays mirrors and glass send out answered by
+    /// `secondary`, as the options say.
+    fn trace(
+        &self,
+        view: &crate::scene::View,
+        bvh: &Bvh,
+        secondary: &dyn crate::trace::SecondaryQuery,
+        progress: &dyn Progress,
+        timings: &mut Timings,
+    ) -> Result<Frame, RenderError> {
+        let tracer = super::Tracer {
+            view,
+            primary: bvh,
+            secondary,
+            lighting: &self.scene.lighting,
+            settings: &self.scene.render,
+        };
+        let choices = (self.options.refraction, self.options.primary);
+        super::trace_frame(&tracer, choices, progress, timings)
     }
 
     /// Per object of `view`, the impostors its rays meet: kept, placed and lit again where
