@@ -217,3 +217,32 @@ fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
     assert!(stderr(&o).contains("not a viewer's"), "{}", stderr(&o));
     assert_eq!(std::fs::read(foreign.join("mine.png")).unwrap(), b"x");
 }
+
+#[test]
+fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_away() {
+    let s = scene("c3rc-bunny.toml");
+    let mut viewer = Viewer::new(&s, 64);
+    assert_eq!(viewer.methods().last(), Some("c3rc"));
+    // The second object, the bunny.
+    viewer.input(Input::Down(Key::NextObject));
+    viewer.input(Input::Down(Key::NextObject));
+    let bunny = &s.objects[1];
+    let centre = bunny
+        .world_from_object_at(s.render.time)
+        .transform_point3(bunny.mesh.bounds().center());
+    let c = *viewer.camera();
+    assert!(c.orbit && c.target.distance(centre) < 1e-5);
+    assert!(c.direction().dot((centre - c.eye).normalize()) > 0.9999);
+    viewer.input(Input::Down(Key::Right));
+    viewer.step(0.5);
+    let d = viewer.camera().eye.distance(centre);
+    assert!((d - c.eye.distance(centre)).abs() < 1e-4 * d);
+    // Key 6: paper 2's hybrid reflections, against trace (key 1) from the same camera.
+    viewer.input(Input::Down(Key::Method(5)));
+    let hybrid = viewer.frame(SIZE, 1.0).unwrap();
+    assert!(hybrid.hud[0].starts_with("c3rc"), "{}", hybrid.hud[0]);
+    viewer.input(Input::Down(Key::Method(0)));
+    let traced = viewer.frame(SIZE, 1.0).unwrap();
+    let score = metrics::compare(&traced.image, &hybrid.image, None).unwrap();
+    assert!(score.flip < 0.05, "c3rc against trace: FLIP {}", score.flip);
+}

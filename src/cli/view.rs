@@ -179,6 +179,8 @@ fn key_of(code: KeyCode) -> Option<trompe::viewer::Key> {
         KeyCode::Digit3 => "3",
         KeyCode::Digit4 => "4",
         KeyCode::Digit5 => "5",
+        KeyCode::Digit6 => "6",
+        KeyCode::KeyO => "O",
         _ => return None,
     };
     script::key(name)

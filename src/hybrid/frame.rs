@@ -154,10 +154,25 @@ pub fn render_frame(
     t: f32,
     progress: &dyn Progress,
 ) -> Result<HybridFrame, RenderError> {
+    render_frame_from(clouds, scene, t, None, progress)
+}
+
+/// [`render_frame`] seen through `camera` instead of the scene's, when given (an interactive
+/// viewer's).
+pub fn render_frame_from(
+    clouds: &HybridReflections,
+    scene: &Scene,
+    t: f32,
+    camera: Option<crate::camera::Pinhole>,
+    progress: &dyn Progress,
+) -> Result<HybridFrame, RenderError> {
     if !t.is_finite() {
         return Err(RenderError::Time(t));
     }
-    let view = scene.view(t)?;
+    let mut view = scene.view(t)?;
+    if let Some(camera) = camera {
+        view.camera = camera;
+    }
     crate::render::check_memory(&view, crate::render::Method::Trace)?;
     let (w, h) = view.camera.resolution();
     crate::memory::check(

@@ -21,7 +21,7 @@ pub mod frame;
 pub mod kdtree;
 pub mod points;
 
-pub use frame::{FrameStats, HybridFrame, render_frame};
+pub use frame::{FrameStats, HybridFrame, render_frame, render_frame_from};
 pub use kdtree::{KdTree, TreeSettings, TreeStats};
 pub use points::PointSet;
 

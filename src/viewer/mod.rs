@@ -37,6 +37,8 @@ pub enum Key {
     Method(usize),
     /// Toggle fly and orbit.
     Orbit,
+    /// Orbit the next object of the scene (in the scene file's order).
+    NextObject,
     /// Pause or resume the animation.
     Pause,
     /// Cycle the split screen: off, exact left and method right, FLIP heat map.
@@ -182,6 +184,7 @@ pub struct ViewFrame {
 
 /// The viewer: camera, clock, methods and their sequences.
 pub struct Viewer<'a> {
+    scene: &'a Scene,
     camera: ViewCamera,
     held: Vec<Key>,
     /// Scene units a second.
@@ -192,6 +195,10 @@ pub struct Viewer<'a> {
     sequences: Vec<Sequence<'a>>,
     /// `trace`, for the split screen.
     exact: Sequence<'a>,
+    /// Paper 2's hybrid method (the last method), its points sampled on first use.
+    hybrid: Option<crate::hybrid::HybridReflections>,
+    /// The object orbited, if one was chosen.
+    selected: Option<usize>,
     current: usize,
     split: Split,
     help: bool,
@@ -224,6 +231,7 @@ impl<'a> Viewer<'a> {
             .map(|(_, o)| Sequence::new(scene, *o))
             .collect();
         Self {
+            scene,
             camera: ViewCamera::looking_at(eye, target, c.fov_y, c.near),
             held: Vec::new(),
             speed: (0.5 * eye.distance(target)).max(1e-3),
@@ -232,6 +240,8 @@ impl<'a> Viewer<'a> {
             methods,
             sequences,
             exact: Sequence::new(scene, RenderOptions::new(Method::Trace)),
+            hybrid: None,
+            selected: None,
             current: 1,
             split: Split::Off,
             help: false,
@@ -240,7 +250,7 @@ impl<'a> Viewer<'a> {
 
     /// The methods the number keys switch between, in order (key 1 is the first).
     pub fn methods(&self) -> impl Iterator<Item = &'static str> + '_ {
-        self.methods.iter().map(|(n, _)| *n)
+        self.methods.iter().map(|(n, _)| *n).chain(["c3rc"])
     }
 
     /// The camera.
@@ -278,7 +288,8 @@ impl<'a> Viewer<'a> {
 
     fn press(&mut self, key: Key) -> Option<Request> {
         match key {
-            Key::Method(n) if n < self.methods.len() => self.current = n,
+            // The last number is the hybrid method's.
+            Key::Method(n) if n <= self.methods.len() => self.current = n,
             Key::Method(_) => {}
             Key::Orbit => {
                 self.camera.orbit = !self.camera.orbit;
@@ -288,6 +299,22 @@ impl<'a> Viewer<'a> {
                     self.camera.target = self.camera.eye + self.camera.direction() * distance;
                 }
             }
+            Key::NextObject if !self.scene.objects.is_empty() => {
+                let next = self
+                    .selected
+                    .map_or(0, |i| (i + 1) % self.scene.objects.len());
+                self.selected = Some(next);
+                let o = &self.scene.objects[next];
+                let centre = o
+                    .world_from_object_at(self.time)
+                    .transform_point3(o.mesh.bounds().center());
+                let c = &mut self.camera;
+                let distance = c.eye.distance(centre).max(1e-3);
+                let keep = ViewCamera::looking_at(c.eye, centre, c.fov_y, c.near);
+                (c.yaw, c.pitch, c.target, c.orbit) = (keep.yaw, keep.pitch, centre, true);
+                c.eye = centre - c.direction() * distance;
+            }
+            Key::NextObject => {}
             Key::Pause => self.paused = !self.paused,
             Key::Split => {
                 self.split = match self.split {
@@ -347,8 +374,33 @@ impl<'a> Viewer<'a> {
             ((size.1 as f32 * scale).round() as u32).max(1),
         );
         let camera = self.camera.pinhole(small)?;
-        let (frame, timings, report) =
-            self.sequences[self.current].frame_from(self.time, Some(camera.clone()), &())?;
+        let (frame, timings, report) = match self.sequences.get_mut(self.current) {
+            Some(sequence) => {
+                let (f, t, r) = sequence.frame_from(self.time, Some(camera.clone()), &())?;
+                (f, t, r.to_string())
+            }
+            None => {
+                let mut timings = Timings::default();
+                let clouds = match self.hybrid.take() {
+                    Some(clouds) => clouds,
+                    None => timings.time("sample points, build trees", || {
+                        let settings = crate::hybrid::HybridSettings::default();
+                        crate::hybrid::HybridReflections::prepare(self.scene, settings)
+                    })?,
+                };
+                let f = timings.time("c3rc frame", || {
+                    let camera = Some(camera.clone());
+                    crate::hybrid::render_frame_from(&clouds, self.scene, self.time, camera, &())
+                });
+                self.hybrid = Some(clouds);
+                let f = f?;
+                (
+                    f.frame,
+                    timings,
+                    format!("{} points seen", f.stats.points_seen),
+                )
+            }
+        };
         let image = match self.split {
             Split::Off => frame.color,
             Split::Halves | Split::Flip => {
@@ -374,14 +426,14 @@ impl<'a> Viewer<'a> {
         };
         let image = enlarge(&image, size)?;
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        let (name, options) = self.methods[self.current];
+        let (name, resolution) = match self.methods.get(self.current) {
+            Some((name, options)) => (*name, options.method.impostor_resolution()),
+            None => ("c3rc", None),
+        };
         let mut hud = vec![
             format!(
                 "{name}{}  {ms:.0} ms ({:.1} fps)  {}x{} of {}x{}",
-                options
-                    .method
-                    .impostor_resolution()
-                    .map_or(String::new(), |r| format!(" {r}^2")),
+                resolution.map_or(String::new(), |r| format!(" {r}^2")),
                 1e3 / ms.max(1e-9),
                 small.0,
                 small.1,
@@ -430,8 +482,8 @@ impl<'a> Viewer<'a> {
 /// The help overlay.
 pub const HELP: [&str; 8] = [
     "WASD move, Q/E down/up, mouse look, wheel speed",
-    "Tab fly / orbit the point looked at",
-    "1 trace  2 impostor  3 pinhole-impostor  4 envmap  5 raster",
+    "Tab fly / orbit the point looked at, O orbit the next object",
+    "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster 6 c3rc",
     "V split: off / trace | method / FLIP heat map",
     "P pause the animation",
     "F12 screenshot  C save the camera block",

@@ -11,7 +11,8 @@
 //! ```
 //!
 //! Events: `down KEY`, `up KEY`, `tap KEY` (down then up), `look DX DY` (mouse pixels),
-//! `scroll NOTCHES`. Keys: `W A S D Q E` (move), `1`–`9` (methods), `Tab` (orbit), `P` (pause),
+//! `scroll NOTCHES`. Keys: `W A S D Q E` (move), `1`–`9` (methods), `Tab` (orbit), `O` (orbit
+//! the next object), `P` (pause),
 //! `V` (split), `F12` (screenshot), `C` (save camera), `H` (help).
 //!
 //! Invariants: events are kept in time order (stable for equal times); every line is either
@@ -52,6 +53,7 @@ pub fn key(name: &str) -> Option<Key> {
         "E" => Key::Up,
         "Q" => Key::Down,
         "TAB" => Key::Orbit,
+        "O" => Key::NextObject,
         "P" => Key::Pause,
         "V" => Key::Split,
         "F12" => Key::Screenshot,
