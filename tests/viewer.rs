@@ -222,7 +222,7 @@ fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
 fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_away() {
     let s = scene("c3rc-bunny.toml");
     let mut viewer = Viewer::new(&s, 64);
-    assert_eq!(viewer.methods().last(), Some("c3rc"));
+    assert_eq!(viewer.methods().nth(5), Some("c3rc"));
     // The second object, the bunny.
     viewer.input(Input::Down(Key::NextObject));
     viewer.input(Input::Down(Key::NextObject));
@@ -245,4 +245,38 @@ fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_a
     let traced = viewer.frame(SIZE, 1.0).unwrap();
     let score = metrics::compare(&traced.image, &hybrid.image, None).unwrap();
     assert!(score.flip < 0.05, "c3rc against trace: FLIP {}", score.flip);
+}
+
+#[test]
+fn the_layered_method_is_built_on_first_use_and_comes_close_to_tracing() {
+    let s = scene("street.toml");
+    let mut viewer = Viewer::new(&s, 64);
+    assert_eq!(viewer.methods().last(), Some("layered"));
+    viewer.input(Input::Down(Key::Method(0)));
+    let traced = viewer.frame(SIZE, 1.0).unwrap();
+    viewer.input(Input::Down(Key::Method(6)));
+    let layered = viewer.frame(SIZE, 1.0).unwrap();
+    assert!(
+        layered
+            .timings
+            .0
+            .iter()
+            .any(|(step, _)| *step == "build layers"),
+        "built on first use"
+    );
+    let again = viewer.frame(SIZE, 1.0).unwrap();
+    assert!(
+        again
+            .timings
+            .0
+            .iter()
+            .all(|(step, _)| *step != "build layers")
+    );
+    assert!(again.image == layered.image);
+    let score = metrics::compare(&traced.image, &layered.image, None).unwrap();
+    assert!(
+        score.flip < 0.1,
+        "layered against trace: FLIP {}",
+        score.flip
+    );
 }

@@ -98,7 +98,16 @@ pub enum ViewerError {
     /// A frame could not be made or compared.
     #[error(transparent)]
     Frame(#[from] crate::frame::FrameError),
+    /// The layered method's photographs could not be captured.
+    #[error(transparent)]
+    Capture(#[from] crate::views::capture::CaptureError),
+    /// The layered method's layers could not be built.
+    #[error(transparent)]
+    Layers(#[from] Box<crate::layers::LayersError>),
 }
+
+/// Photographs the layered method captures of the scene on first use, on a ring around it.
+pub const LAYERED_VIEWS: usize = 6;
 
 /// Radians a pixel of mouse motion turns the camera.
 pub const LOOK_PER_PIXEL: f32 = 0.003;
@@ -195,8 +204,11 @@ pub struct Viewer<'a> {
     sequences: Vec<Sequence<'a>>,
     /// `trace`, for the split screen.
     exact: Sequence<'a>,
-    /// Paper 2's hybrid method (the last method), its points sampled on first use.
+    /// Paper 2's hybrid method, its points sampled on first use.
     hybrid: Option<crate::hybrid::HybridReflections>,
+    /// Paper 4's layered projective textures, built on first use from photographs of the
+    /// scene at time 0.
+    layered: Option<crate::layers::LayerSet>,
     /// The object orbited, if one was chosen.
     selected: Option<usize>,
     current: usize,
@@ -241,6 +253,7 @@ impl<'a> Viewer<'a> {
             sequences,
             exact: Sequence::new(scene, RenderOptions::new(Method::Trace)),
             hybrid: None,
+            layered: None,
             selected: None,
             current: 1,
             split: Split::Off,
@@ -250,7 +263,7 @@ impl<'a> Viewer<'a> {
 
     /// The methods the number keys switch between, in order (key 1 is the first).
     pub fn methods(&self) -> impl Iterator<Item = &'static str> + '_ {
-        self.methods.iter().map(|(n, _)| *n).chain(["c3rc"])
+        self.methods.iter().map(|(n, _)| *n).chain(EXTRA)
     }
 
     /// The camera.
@@ -288,8 +301,8 @@ impl<'a> Viewer<'a> {
 
     fn press(&mut self, key: Key) -> Option<Request> {
         match key {
-            // The last number is the hybrid method's.
-            Key::Method(n) if n <= self.methods.len() => self.current = n,
+            // After the sequences' numbers, the hybrid and layered methods'.
+            Key::Method(n) if n < self.methods.len() + EXTRA.len() => self.current = n,
             Key::Method(_) => {}
             Key::Orbit => {
                 self.camera.orbit = !self.camera.orbit;
@@ -379,27 +392,8 @@ impl<'a> Viewer<'a> {
                 let (f, t, r) = sequence.frame_from(self.time, Some(camera.clone()), &())?;
                 (f, t, r.to_string())
             }
-            None => {
-                let mut timings = Timings::default();
-                let clouds = match self.hybrid.take() {
-                    Some(clouds) => clouds,
-                    None => timings.time("sample points, build trees", || {
-                        let settings = crate::hybrid::HybridSettings::default();
-                        crate::hybrid::HybridReflections::prepare(self.scene, settings)
-                    })?,
-                };
-                let f = timings.time("c3rc frame", || {
-                    let camera = Some(camera.clone());
-                    crate::hybrid::render_frame_from(&clouds, self.scene, self.time, camera, &())
-                });
-                self.hybrid = Some(clouds);
-                let f = f?;
-                (
-                    f.frame,
-                    timings,
-                    format!("{} points seen", f.stats.points_seen),
-                )
-            }
+            None if self.current == self.methods.len() => self.hybrid_frame(&camera)?,
+            None => self.layered_frame(&camera, small)?,
         };
         let image = match self.split {
             Split::Off => frame.color,
@@ -428,7 +422,7 @@ impl<'a> Viewer<'a> {
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let (name, resolution) = match self.methods.get(self.current) {
             Some((name, options)) => (*name, options.method.impostor_resolution()),
-            None => ("c3rc", None),
+            None => (EXTRA[self.current - self.methods.len()], None),
         };
         let mut hud = vec![
             format!(
@@ -468,6 +462,78 @@ impl<'a> Viewer<'a> {
         })
     }
 
+    /// Paper 2's hybrid frame through `camera`, its points sampled on first use.
+    fn hybrid_frame(
+        &mut self,
+        camera: &Pinhole,
+    ) -> Result<(crate::frame::Frame, Timings, String), ViewerError> {
+        let mut timings = Timings::default();
+        let clouds = match self.hybrid.take() {
+            Some(clouds) => clouds,
+            None => timings.time("sample points, build trees", || {
+                let settings = crate::hybrid::HybridSettings::default();
+                crate::hybrid::HybridReflections::prepare(self.scene, settings)
+            })?,
+        };
+        let f = timings.time("c3rc frame", || {
+            let camera = Some(camera.clone());
+            crate::hybrid::render_frame_from(&clouds, self.scene, self.time, camera, &())
+        });
+        self.hybrid = Some(clouds);
+        let f = f?;
+        let report = format!("{} points seen", f.stats.points_seen);
+        Ok((f.frame, timings, report))
+    }
+
+    /// Paper 4's layered frame through `camera`, the layers built on first use from
+    /// [`LAYERED_VIEWS`] photographs of the scene at time 0; the panorama where no layer is.
+    fn layered_frame(
+        &mut self,
+        camera: &Pinhole,
+        size: (u32, u32),
+    ) -> Result<(crate::frame::Frame, Timings, String), ViewerError> {
+        let mut timings = Timings::default();
+        let set = match self.layered.take() {
+            Some(set) => set,
+            None => {
+                let settings = crate::views::capture::CaptureSettings {
+                    count: LAYERED_VIEWS,
+                    size: (640, 480),
+                    ..Default::default()
+                };
+                let views = timings.time("photograph the scene", || {
+                    crate::views::capture::capture_of(self.scene.clone(), &settings, &())
+                })?;
+                let (meshes, names) = crate::layers::scene_objects(self.scene)?;
+                timings
+                    .time("build layers", || {
+                        crate::layers::build(meshes, names, &views.views, &Default::default(), &())
+                    })
+                    .map_err(Box::new)?
+            }
+        };
+        let blend = timings.time("layered frame", || {
+            crate::layers::render::render(camera, &set, &Default::default())
+        });
+        self.layered = Some(set);
+        let blend = blend?;
+        let mut frame = crate::frame::Frame::new(size.0, size.1)?;
+        let env = &self.scene.lighting.environment;
+        for y in 0..size.1 {
+            for x in 0..size.0 {
+                let c = blend.image.get(x, y);
+                let ray = camera.ray(glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let behind = env.radiance(ray.dir);
+                let a = c.w.clamp(0.0, 1.0);
+                frame
+                    .color
+                    .set(x, y, (c.truncate() * a + behind * (1.0 - a)).extend(1.0));
+            }
+        }
+        let report = format!("{} holes of {} pixels", blend.holes, blend.covered);
+        Ok((frame, timings, report))
+    }
+
     /// The camera as a scene-file `[camera]` block that reproduces the view at `size`.
     pub fn camera_block(&self, size: (u32, u32)) -> String {
         let c = &self.camera;
@@ -479,11 +545,14 @@ impl<'a> Viewer<'a> {
     }
 }
 
+/// The methods after the sequences', in key order.
+const EXTRA: [&str; 2] = ["c3rc", "layered"];
+
 /// The help overlay.
 pub const HELP: [&str; 8] = [
     "WASD move, Q/E down/up, mouse look, wheel speed",
     "Tab fly / orbit the point looked at, O orbit the next object",
-    "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster 6 c3rc",
+    "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster 6 c3rc 7 layered",
     "V split: off / trace | method / FLIP heat map",
     "P pause the animation",
     "F12 screenshot  C save the camera block",
