@@ -116,7 +116,7 @@ pub const SPEED_PER_NOTCH: f32 = 1.2;
 
 /// A camera flown or orbited around a target.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ViewCamera {
+pub struct FlyCamera {
     /// Eye.
     pub eye: Vec3,
     /// Radians about +y; 0 looks along −z.
@@ -133,7 +133,7 @@ pub struct ViewCamera {
     pub near: f64,
 }
 
-impl ViewCamera {
+impl FlyCamera {
     /// Looking from `eye` at `target`, with the near plane at `near`.
     pub fn looking_at(eye: Vec3, target: Vec3, fov_y: f64, near: f64) -> Self {
         let d = (target - eye).try_normalize().unwrap_or(Vec3::NEG_Z);
@@ -194,7 +194,7 @@ pub struct ViewFrame {
 /// The viewer: camera, clock, methods and their sequences.
 pub struct Viewer<'a> {
     scene: &'a Scene,
-    camera: ViewCamera,
+    camera: FlyCamera,
     held: Vec<Key>,
     /// Scene units a second.
     speed: f32,
@@ -244,7 +244,7 @@ impl<'a> Viewer<'a> {
             .collect();
         Self {
             scene,
-            camera: ViewCamera::looking_at(eye, target, c.fov_y, c.near),
+            camera: FlyCamera::looking_at(eye, target, c.fov_y, c.near),
             held: Vec::new(),
             speed: (0.5 * eye.distance(target)).max(1e-3),
             time: scene.render.time,
@@ -267,7 +267,7 @@ impl<'a> Viewer<'a> {
     }
 
     /// The camera.
-    pub fn camera(&self) -> &ViewCamera {
+    pub fn camera(&self) -> &FlyCamera {
         &self.camera
     }
 
@@ -323,7 +323,7 @@ impl<'a> Viewer<'a> {
                     .transform_point3(o.mesh.bounds().center());
                 let c = &mut self.camera;
                 let distance = c.eye.distance(centre).max(1e-3);
-                let keep = ViewCamera::looking_at(c.eye, centre, c.fov_y, c.near);
+                let keep = FlyCamera::looking_at(c.eye, centre, c.fov_y, c.near);
                 (c.yaw, c.pitch, c.target, c.orbit) = (keep.yaw, keep.pitch, centre, true);
                 c.eye = centre - c.direction() * distance;
             }
