@@ -62,7 +62,7 @@ pub struct Sequence<'a> {
     kept: HashMap<(usize, usize), Kept>,
     /// The baked impostors, loaded on the first frame, and each object's pose then.
     baked: Option<Vec<Option<Baked>>>,
-    /// Every object's pose, and whether any deformed, when the lit impostors were last lit.
+    /// Every object's pose when the kept impostors were last lit.
     lit_at: Option<Vec<Mat4>>,
     /// The answers of the last frame, kept while nothing moves or deforms.
     answers: Option<Arc<ReflectorImpostors>>,
