@@ -251,7 +251,7 @@ fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_a
 fn the_layered_method_is_built_on_first_use_and_comes_close_to_tracing() {
     let s = scene("street.toml");
     let mut viewer = Viewer::new(&s, 64);
-    assert_eq!(viewer.methods().last(), Some("layered"));
+    assert_eq!(viewer.methods().nth(6), Some("layered"));
     viewer.input(Input::Down(Key::Method(0)));
     let traced = viewer.frame(SIZE, 1.0).unwrap();
     viewer.input(Input::Down(Key::Method(6)));
@@ -277,6 +277,85 @@ fn the_layered_method_is_built_on_first_use_and_comes_close_to_tracing() {
     assert!(
         score.flip < 0.1,
         "layered against trace: FLIP {}",
+        score.flip
+    );
+}
+
+#[test]
+fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_state() {
+    let s = scene("teapot-in-bunny.toml");
+    let script = Script::parse("0 tap 8\n0.1 down D\n0.5 up D\n", Path::new("keys")).unwrap();
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut viewer = Viewer::new(&s, 64);
+                let dt = 1.0 / 30.0;
+                let mut frames = Vec::new();
+                for i in 0..20 {
+                    for input in script.between(i as f32 * dt, (i + 1) as f32 * dt) {
+                        viewer.input(input);
+                    }
+                    frames.push(viewer.frame(SIZE, 1.0).unwrap());
+                    viewer.step(dt);
+                }
+                viewer.input(Input::Down(Key::Method(0)));
+                (frames, viewer.frame(SIZE, 1.0).unwrap())
+            })
+    };
+    assert_eq!(Viewer::new(&s, 64).methods().nth(7), Some("relief"));
+    let (frames, traced) = run(2);
+    let (one, _) = run(1);
+    assert!(
+        frames.iter().zip(&one).all(|(a, b)| a.image == b.image),
+        "1 and 2 threads differ"
+    );
+    let state = |f: &trompe::viewer::ViewFrame, object: &str| {
+        f.hud
+            .iter()
+            .find(|l| l.trim_start().starts_with(&format!("{object}:")))
+            .cloned()
+            .unwrap_or_else(|| panic!("no {object} line in {:?}", f.hud))
+    };
+    // Started on first use: no impostor yet, so the objects are rasterized while the
+    // shader thread makes them.
+    let first = &frames[0];
+    assert!(first.hud[0].starts_with("relief"), "{}", first.hud[0]);
+    assert!(
+        first
+            .timings
+            .0
+            .iter()
+            .any(|(s, _)| *s == "start the relief pipeline")
+    );
+    assert!(frames[1..].iter().all(|f| {
+        f.timings
+            .0
+            .iter()
+            .all(|(s, _)| *s != "start the relief pipeline")
+    }));
+    assert!(state(first, "bunny").contains("fallback + regenerating"));
+    // Then low-resolution impostors, then full ones, warped as the camera moves, each with
+    // the heuristic's predicted share against its limit.
+    assert!(frames.iter().any(|f| state(f, "bunny").contains("64^2")));
+    let last = frames.last().unwrap();
+    for object in ["bunny", "teapot"] {
+        let line = state(last, object);
+        assert!(
+            (line.contains("warping") || line.contains("valid")) && line.contains("256^2"),
+            "{line}"
+        );
+        assert!(
+            line.contains("predicted") && line.contains("of limit"),
+            "{line}"
+        );
+    }
+    let score = metrics::compare(&traced.image, &last.image, None).unwrap();
+    assert!(
+        score.flip < 0.12,
+        "relief against trace: FLIP {}",
         score.flip
     );
 }

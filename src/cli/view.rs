@@ -98,7 +98,7 @@ impl ViewArgs {
         let viewer = Viewer::new(&scene, self.impostor_resolution);
         match self.frames {
             Some(frames) => headless(viewer, &script, frames, self.fps, size, &self.output),
-            None => window(viewer, script, size, &self.output, self.quit_after),
+            None => window(viewer.live(), script, size, &self.output, self.quit_after),
         }
     }
 }
@@ -180,6 +180,8 @@ fn key_of(code: KeyCode) -> Option<trompe::viewer::Key> {
         KeyCode::Digit4 => "4",
         KeyCode::Digit5 => "5",
         KeyCode::Digit6 => "6",
+        KeyCode::Digit7 => "7",
+        KeyCode::Digit8 => "8",
         KeyCode::KeyO => "O",
         _ => return None,
     };

@@ -134,6 +134,8 @@ pub struct ObjectFrame {
     pub regenerated: bool,
     /// A cached impostor came back into use this frame.
     pub cache_hit: bool,
+    /// A new impostor of the object is being made (a request is in flight after this frame).
+    pub regenerating: bool,
     /// Resolution of the impostor shown (0 in fallback).
     pub resolution: u32,
 }
@@ -558,6 +560,7 @@ impl Pipeline {
             ratio,
             regenerated: regenerated && !cache_hit,
             cache_hit,
+            regenerating: self.slots[i].pending.is_some(),
             resolution,
         }
     }

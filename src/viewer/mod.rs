@@ -1,17 +1,22 @@
 //! The interactive viewer's state (beyond the papers; paper 3 §4 is about keeping frames
-//! flowing): a camera flown or orbited by input, a clock, and the methods of
-//! [`crate::render`] to switch between — each a [`Sequence`] that keeps its impostors between
-//! frames. A window is a thin shell over it (the `trompe view` command); the same state, fed a
-//! [`script`], renders headless frames, so the viewer is tested without a display.
+//! flowing): a camera flown or orbited by input, a clock, and the methods to switch between —
+//! those of [`crate::render`], each a [`Sequence`] that keeps its impostors between frames;
+//! paper 2's hybrid reflections, paper 4's layers and paper 3's relief pipeline, each made on
+//! first use. A window is a thin shell over it (the `trompe view` command); the same state, fed
+//! a [`script`], renders headless frames, so the viewer is tested without a display.
 //!
 //! Invariants: the viewer adds no rendering method of its own; a frame depends only on the
-//! inputs given and the time steps taken (never on the wall clock or the thread count).
+//! inputs given and the time steps taken (never on the wall clock or the thread count), except
+//! for the relief method of a [`Viewer::live`] viewer, which shows impostors when its thread
+//! has made them.
 
 pub mod hud;
 pub mod script;
 
 use crate::camera::Pinhole;
 use crate::frame::{Image, Rgba, metrics};
+use crate::relief::pipeline::ObjectFrame;
+use crate::relief::{Pipeline, PipelineSettings, SoftwareShader};
 use crate::render::{Method, Primary, RenderError, RenderOptions, Sequence, Timings};
 use crate::scene::Scene;
 use glam::{Vec3, Vec4};
@@ -104,10 +109,17 @@ pub enum ViewerError {
     /// The layered method's layers could not be built.
     #[error(transparent)]
     Layers(#[from] Box<crate::layers::LayersError>),
+    /// The relief pipeline failed.
+    #[error(transparent)]
+    Relief(#[from] crate::relief::ReliefError),
 }
 
 /// Photographs the layered method captures of the scene on first use, on a ring around it.
 pub const LAYERED_VIEWS: usize = 6;
+
+/// Frames after its request that the relief method uses a new impostor, unless the viewer is
+/// [`Viewer::live`] (the frame waits for it if need be, so the same inputs give the same frames).
+pub const RELIEF_LATENCY: u32 = 2;
 
 /// Radians a pixel of mouse motion turns the camera.
 pub const LOOK_PER_PIXEL: f32 = 0.003;
@@ -209,6 +221,12 @@ pub struct Viewer<'a> {
     /// Paper 4's layered projective textures, built on first use from photographs of the
     /// scene at time 0.
     layered: Option<crate::layers::LayerSet>,
+    /// Paper 3's relief pipeline over every object, started on first use over the scene as it
+    /// stands then (relief impostors are of a still scene: its time is kept).
+    relief: Option<(Pipeline, f32)>,
+    /// The relief method uses impostors as soon as they are made (else [`RELIEF_LATENCY`]
+    /// frames after their request).
+    live: bool,
     /// The object orbited, if one was chosen.
     selected: Option<usize>,
     current: usize,
@@ -254,11 +272,21 @@ impl<'a> Viewer<'a> {
             exact: Sequence::new(scene, RenderOptions::new(Method::Trace)),
             hybrid: None,
             layered: None,
+            relief: None,
+            live: false,
             selected: None,
             current: 1,
             split: Split::Off,
             help: false,
         }
+    }
+
+    /// Lets the relief method use each impostor as soon as its rendering thread makes it, as an
+    /// interactive window wants; by default it uses it [`RELIEF_LATENCY`] frames after the
+    /// request, waiting if need be, so that a frame depends only on the inputs.
+    pub fn live(mut self) -> Self {
+        self.live = true;
+        self
     }
 
     /// The methods the number keys switch between, in order (key 1 is the first).
@@ -387,13 +415,17 @@ impl<'a> Viewer<'a> {
             ((size.1 as f32 * scale).round() as u32).max(1),
         );
         let camera = self.camera.pinhole(small)?;
-        let (frame, timings, report) = match self.sequences.get_mut(self.current) {
+        let extra = self.current.checked_sub(self.methods.len());
+        let (frame, timings, report, state) = match self.sequences.get_mut(self.current) {
             Some(sequence) => {
                 let (f, t, r) = sequence.frame_from(self.time, Some(camera.clone()), &())?;
-                (f, t, r.to_string())
+                (f, t, r.to_string(), Vec::new())
             }
-            None if self.current == self.methods.len() => self.hybrid_frame(&camera)?,
-            None => self.layered_frame(&camera, small)?,
+            None => match extra.and_then(|i| EXTRA.get(i)) {
+                Some(&"c3rc") => self.hybrid_frame(&camera)?,
+                Some(&"layered") => self.layered_frame(&camera, small)?,
+                _ => self.relief_frame(&camera)?,
+            },
         };
         let image = match self.split {
             Split::Off => frame.color,
@@ -448,6 +480,7 @@ impl<'a> Viewer<'a> {
                 .iter()
                 .map(|(step, d)| format!("  {step} {:.1} ms", d.as_secs_f64() * 1e3)),
         );
+        hud.extend(state);
         if self.split != Split::Off {
             hud.push(format!("split: {:?} (trace against {name})", self.split));
         }
@@ -463,10 +496,7 @@ impl<'a> Viewer<'a> {
     }
 
     /// Paper 2's hybrid frame through `camera`, its points sampled on first use.
-    fn hybrid_frame(
-        &mut self,
-        camera: &Pinhole,
-    ) -> Result<(crate::frame::Frame, Timings, String), ViewerError> {
+    fn hybrid_frame(&mut self, camera: &Pinhole) -> Result<MethodFrame, ViewerError> {
         let mut timings = Timings::default();
         let clouds = match self.hybrid.take() {
             Some(clouds) => clouds,
@@ -482,7 +512,7 @@ impl<'a> Viewer<'a> {
         self.hybrid = Some(clouds);
         let f = f?;
         let report = format!("{} points seen", f.stats.points_seen);
-        Ok((f.frame, timings, report))
+        Ok((f.frame, timings, report, Vec::new()))
     }
 
     /// Paper 4's layered frame through `camera`, the layers built on first use from
@@ -491,7 +521,7 @@ impl<'a> Viewer<'a> {
         &mut self,
         camera: &Pinhole,
         size: (u32, u32),
-    ) -> Result<(crate::frame::Frame, Timings, String), ViewerError> {
+    ) -> Result<MethodFrame, ViewerError> {
         let mut timings = Timings::default();
         let set = match self.layered.take() {
             Some(set) => set,
@@ -531,7 +561,50 @@ impl<'a> Viewer<'a> {
             }
         }
         let report = format!("{} holes of {} pixels", blend.holes, blend.covered);
-        Ok((frame, timings, report))
+        Ok((frame, timings, report, Vec::new()))
+    }
+
+    /// Paper 3's relief frame through `camera`: every object a relief impostor warped to the
+    /// eye, made by the pipeline's software-shader thread, started on first use over the scene
+    /// at the time then. The HUD lines give each object's pipeline state and validity.
+    fn relief_frame(&mut self, camera: &Pinhole) -> Result<MethodFrame, ViewerError> {
+        let mut timings = Timings::default();
+        let (mut pipeline, time) = match self.relief.take() {
+            Some(relief) => relief,
+            None => {
+                let view = self.scene.view(self.time)?;
+                let shader = SoftwareShader::new(&view, &self.scene.lighting, &self.scene.render);
+                let objects: Vec<usize> = (0..view.meshes.len()).collect();
+                let settings = PipelineSettings {
+                    deterministic: (!self.live).then_some(RELIEF_LATENCY),
+                    ..Default::default()
+                };
+                let pipeline = timings.time("start the relief pipeline", || {
+                    Pipeline::new(shader, &objects, settings)
+                })?;
+                (pipeline, self.time)
+            }
+        };
+        let out = pipeline.frame(camera);
+        let threshold = pipeline.settings().threshold;
+        let regenerations = pipeline.regenerations;
+        self.relief = Some((pipeline, time));
+        let mut out = out?;
+        timings.0.append(&mut out.timings.0);
+        let lines = out
+            .objects
+            .iter()
+            .map(|o| {
+                let name = self
+                    .scene
+                    .objects
+                    .get(o.object)
+                    .map_or("?", |s| s.name.as_str());
+                pipeline_line(name, o, threshold)
+            })
+            .collect();
+        let report = format!("still scene at t {time:.2} s, {regenerations} impostors made");
+        Ok((out.frame, timings, report, lines))
     }
 
     /// The camera as a scene-file `[camera]` block that reproduces the view at `size`.
@@ -545,14 +618,45 @@ impl<'a> Viewer<'a> {
     }
 }
 
+/// A method's frame: the frame, its steps, a one-line report, and lines of pipeline state.
+type MethodFrame = (crate::frame::Frame, Timings, String, Vec<String>);
+
+/// One relief object's line in the HUD: its pipeline state (valid, warping, stale or
+/// fallback, and whether a new impostor is being made), the impostor's resolution, and the
+/// validity measure — the interpolated share of the pre-warp the critical-point heuristic
+/// predicts, against the threshold past which the impostor is obsolete.
+pub fn pipeline_line(name: &str, o: &ObjectFrame, threshold: f64) -> String {
+    let mut line = format!("  {name}: {}", o.state);
+    if o.regenerating {
+        line.push_str(" + regenerating");
+    }
+    if o.resolution > 0 {
+        line.push_str(&format!(" {}^2", o.resolution));
+    }
+    if o.predicted.is_finite() {
+        line.push_str(&format!(
+            "  predicted {:.3} of limit {threshold:.3}",
+            o.predicted
+        ));
+    }
+    if let Some(ratio) = o.ratio {
+        line.push_str(&format!("  interpolated {ratio:.3}"));
+    }
+    if o.cache_hit {
+        line.push_str("  from cache");
+    }
+    line
+}
+
 /// The methods after the sequences', in key order.
-const EXTRA: [&str; 2] = ["c3rc", "layered"];
+const EXTRA: [&str; 3] = ["c3rc", "layered", "relief"];
 
 /// The help overlay.
-pub const HELP: [&str; 8] = [
+pub const HELP: [&str; 9] = [
     "WASD move, Q/E down/up, mouse look, wheel speed",
     "Tab fly / orbit the point looked at, O orbit the next object",
-    "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster 6 c3rc 7 layered",
+    "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster",
+    "6 c3rc 7 layered 8 relief",
     "V split: off / trace | method / FLIP heat map",
     "P pause the animation",
     "F12 screenshot  C save the camera block",
