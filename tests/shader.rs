@@ -72,6 +72,9 @@ fn pick(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 "#;
 
+/// Three frames and their weights, as the shader picks them.
+type Picked = [((u32, u32), f32); 3];
+
 /// The shader's `frames_around` run on a Vulkan device for `directions`, with `frames` a side
 /// and coverage code `coverage`: per direction, the three frames and their weights. `None`
 /// when no Vulkan device is found.
@@ -79,7 +82,7 @@ fn shader_frames_around(
     directions: &[[f32; 3]],
     frames: u32,
     coverage: u32,
-) -> Option<Vec<[((u32, u32), f32); 3]>> {
+) -> Option<Vec<Picked>> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
         backends: wgpu::Backends::VULKAN,
         ..wgpu::InstanceDescriptor::new_without_display_handle()
