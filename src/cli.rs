@@ -151,8 +151,9 @@ pub enum ImpostorCommand {
     Check(CheckArgs),
     /// Join the manifests of a sharded octahedral batch into one.
     MergeManifests(octahedral::MergeArgs),
-    /// Write a baked octahedral impostor as a glTF 2.0 binary (a card with the atlas and its
-    /// layout) that engines load without trompe.
+    /// Write a baked impostor as a glTF 2.0 binary that engines load without trompe: an
+    /// octahedral atlas as a card with the atlas and its layout; any other as its surface, a
+    /// textured mesh, with its camera.
     Export(octahedral::ExportArgs),
 }
 
@@ -253,7 +254,9 @@ pub struct BakeArgs {
     /// With --octahedral: the upper hemisphere only (hemi-octahedral).
     #[arg(long)]
     hemi: bool,
-    /// With --octahedral: also write NAME.glb, a glTF 2.0 card with the atlas and its layout.
+    /// Also write NAME.glb, a glTF 2.0 file engines load: for an octahedral atlas, a card with
+    /// the atlas and its layout; for any other impostor, its surface as a textured mesh, with its
+    /// camera.
     #[arg(long)]
     glb: bool,
     /// With --octahedral and a batch: bake only shard K of N of the sorted inputs ("K/N").
@@ -481,6 +484,10 @@ impl BakeArgs {
             .writes(&self.output, &["json"])
             .writes(self.output.with_extension("exr"), &["exr"])
             .writes(self.output.with_extension("png"), &["png"]);
+        let glb = self.output.with_extension("glb");
+        if self.glb {
+            plan.writes(&glb, &["glb"]);
+        }
         plan.check_overwrites()?;
         let subject = load_subject(&input)?;
         check_plan(plan.reads(subject.files()))?;
@@ -495,6 +502,11 @@ impl BakeArgs {
         let report = with_spinner("baking the impostor", || {
             bake(&subject, &settings, &self.output)
         })?;
+        if self.glb {
+            trompe::impostor::gltf::export(&self.output, &glb)
+                .with_context(|| format!("writing {}", glb.display()))?;
+            eprintln!("wrote {}", glb.display());
+        }
         Ok(report)
     }
 }

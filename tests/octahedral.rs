@@ -175,7 +175,7 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(gltf::Gltf::open(&glb).is_ok());
-    // A sidecar of another kind of impostor is refused by name.
+    // Any other kind of impostor exports as its surface, a textured mesh with its camera.
     let spoc = d.join("spoc.json");
     let o = trompe(&[
         "impostor",
@@ -187,15 +187,30 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
         spoc.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let spoc_glb = d.join("spoc.glb");
+    let o = trompe(&[
+        "impostor",
+        "export",
+        spoc.to_str().unwrap(),
+        "-o",
+        spoc_glb.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (doc, _, images) = gltf::import(&spoc_glb).unwrap();
+    assert_eq!((images[0].width, images[0].height), (32, 32));
+    assert!(doc.meshes().count() == 1);
+    // A JSON file that is no impostor's sidecar is refused, naming its format.
+    let other = d.join("other.json");
+    std::fs::write(&other, r#"{ "format": "something-else" }"#).unwrap();
     fails_cleanly(
         &trompe(&[
             "impostor",
             "export",
-            spoc.to_str().unwrap(),
+            other.to_str().unwrap(),
             "-o",
-            d.join("spoc.glb").to_str().unwrap(),
+            d.join("other.glb").to_str().unwrap(),
         ]),
-        "spoc.json",
+        "something-else",
     );
     fails_cleanly(
         &trompe(&[

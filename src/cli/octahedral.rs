@@ -3,14 +3,14 @@
 //! call `trompe::octahedral`, print its report.
 
 use super::{BakeArgs, OutputPlan, check_plan, has_extension, with_spinner};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
 /// `trompe impostor export`.
 #[derive(clap::Args, Debug)]
 pub struct ExportArgs {
-    /// The impostor's sidecar (NAME.json, from `impostor bake --octahedral`).
+    /// The impostor's sidecar (NAME.json, from `impostor bake`, octahedral or not).
     input: PathBuf,
     /// The .glb to write.
     #[arg(short, long)]
@@ -19,15 +19,45 @@ pub struct ExportArgs {
 
 impl ExportArgs {
     pub(super) fn export(self) -> Result<()> {
+        let text = std::fs::read_to_string(&self.input)
+            .with_context(|| format!("reading {}", self.input.display()))?;
+        #[derive(serde::Deserialize)]
+        struct Format {
+            format: String,
+        }
+        let format = serde_json::from_str::<Format>(&text)
+            .with_context(|| {
+                format!(
+                    "{}: not an impostor's sidecar (NAME.json)",
+                    self.input.display()
+                )
+            })?
+            .format;
+        let octahedral = format == trompe::octahedral::file::FORMAT;
+        if !octahedral && format != trompe::impostor::file::FORMAT {
+            bail!(
+                "{}: format {format:?} is not an impostor trompe exports (expected {:?} or {:?})",
+                self.input.display(),
+                trompe::impostor::file::FORMAT,
+                trompe::octahedral::file::FORMAT
+            );
+        }
         let mut plan = OutputPlan::new();
-        plan.creating_folders()
-            .reads(trompe::octahedral::file::files(&self.input))
-            .writes(&self.output, &["glb"]);
+        plan.creating_folders().writes(&self.output, &["glb"]);
+        if octahedral {
+            plan.reads(trompe::octahedral::file::files(&self.input));
+        } else {
+            plan.reads([self.input.clone(), self.input.with_extension("exr")]);
+        }
         plan.check_overwrites()?;
         plan.make_folders()
             .context("creating the output's folder")?;
-        trompe::octahedral::gltf::export(&self.input, &self.output)
-            .with_context(|| format!("exporting {}", self.input.display()))?;
+        let exported = if octahedral {
+            trompe::octahedral::gltf::export(&self.input, &self.output).map_err(anyhow::Error::from)
+        } else {
+            trompe::impostor::gltf::export(&self.input, &self.output).map_err(anyhow::Error::from)
+        };
+        exported.with_context(|| format!("exporting {}", self.input.display()))?;
         eprintln!("wrote {}", self.output.display());
         Ok(())
     }

@@ -21,6 +21,7 @@ mod billboard;
 mod build;
 pub mod file;
 mod front;
+pub mod gltf;
 mod planes;
 mod pyramid;
 mod settings;
