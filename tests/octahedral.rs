@@ -157,7 +157,13 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
         json.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    for f in ["duck.json", "duck.png", "duck-normal.exr", "duck-depth.exr"] {
+    for f in [
+        "duck.json",
+        "duck.png",
+        "duck-normal.exr",
+        "duck-depth.exr",
+        "duck-orm.png",
+    ] {
         assert!(d.join(f).is_file(), "{f}");
     }
     let sidecar: trompe::octahedral::file::Sidecar =
@@ -287,4 +293,63 @@ fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
         d.join("partial.json").to_str().unwrap(),
     ]);
     fails_cleanly(&o, "shards");
+}
+
+#[test]
+fn the_orm_map_holds_traced_occlusion_and_the_materials_roughness_and_metalness() {
+    use trompe::geom::{icosphere, plane};
+    use trompe::octahedral::bake::vertex_occlusion;
+    // A ball of radius ½ resting on a 3 × 3 floor.
+    let mut scene = plane(30);
+    for p in &mut scene.positions {
+        *p *= 3.0;
+    }
+    let mut ball = icosphere(3);
+    for p in &mut ball.positions {
+        *p += Vec3::new(0.0, 0.5, 0.0);
+    }
+    scene.append(&ball);
+    let ao = vertex_occlusion(&scene, 2.0);
+    let at = |q: Vec3| {
+        let v = (0..scene.positions.len())
+            .min_by(|&a, &b| {
+                (scene.positions[a] - q)
+                    .length()
+                    .total_cmp(&(scene.positions[b] - q).length())
+            })
+            .unwrap();
+        ao[v]
+    };
+    // Under the ball every upward ray meets it; at the floor's corner almost none does; nothing
+    // occludes the top of a convex ball.
+    assert!(at(Vec3::ZERO) < 0.1, "contact {}", at(Vec3::ZERO));
+    assert!(at(Vec3::new(1.5, 0.0, 1.5)) > 0.9);
+    assert_eq!(at(Vec3::new(0.0, 1.0, 0.0)), 1.0);
+    let lone = icosphere(2);
+    assert!(vertex_occlusion(&lone, 1.0).iter().all(|&o| o == 1.0));
+
+    // Roughness and metalness come from the material, or from the scene's surface.
+    let mut metal = icosphere(2);
+    metal.materials[0].roughness = 0.3;
+    metal.materials[0].metallic = 0.7;
+    let atlas = bake(&metal, &Surface::Diffuse(None), settings(4, 16, 0)).unwrap();
+    let covered: Vec<Vec3> = (0..atlas.side() * atlas.side())
+        .map(|k| (k % atlas.side(), k / atlas.side()))
+        .filter(|&(x, y)| atlas.color.get(x, y).w > 0.0)
+        .map(|(x, y)| atlas.orm.get(x, y))
+        .collect();
+    assert!(covered.len() > 100);
+    for o in &covered {
+        assert!(
+            (*o - Vec3::new(1.0, 0.3, 0.7)).abs().max_element() < 1e-5,
+            "{o}"
+        );
+    }
+    let mirror = Surface::Mirror { tint: Vec3::ONE };
+    let atlas = bake(&metal, &mirror, settings(4, 16, 0)).unwrap();
+    let o = atlas.orm.get(24, 24);
+    assert!(
+        (o - Vec3::new(1.0, 0.0, 1.0)).abs().max_element() < 1e-5,
+        "{o}"
+    );
 }

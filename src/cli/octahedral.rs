@@ -220,7 +220,8 @@ impl BakeArgs {
             .writes(&files[0], &["json"])
             .writes(&files[1], &["png"])
             .writes(&files[2], &["exr"])
-            .writes(&files[3], &["exr"]);
+            .writes(&files[3], &["exr"])
+            .writes(&files[4], &["png"]);
         if self.glb {
             plan.writes(&glb, &["glb"]);
         }

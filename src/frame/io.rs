@@ -51,6 +51,35 @@ pub fn encode_png(image: &Image<Rgba>, path: &Path) -> Result<Vec<u8>, FrameErro
     Ok(encoded)
 }
 
+/// An image of data in `[0, 1]` (not colour: occlusion, roughness …) as an 8-bit RGB PNG, stored
+/// linearly, as glTF's data textures are.
+pub fn encode_png_data(image: &Image<Vec3>, path: &Path) -> Result<Vec<u8>, FrameError> {
+    use image::ImageEncoder as _;
+    let pixels: Vec<u8> = image
+        .pixels()
+        .iter()
+        .flat_map(|p| {
+            p.to_array()
+                .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        })
+        .collect();
+    let mut encoded = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut encoded)
+        .write_image(
+            &pixels,
+            image.width(),
+            image.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| codec(path, e))?;
+    Ok(encoded)
+}
+
+/// Writes an image of data in `[0, 1]` as a linear 8-bit RGB PNG ([`encode_png_data`]).
+pub fn write_png_data(path: &Path, image: &Image<Vec3>) -> Result<(), FrameError> {
+    publish(path, &encode_png_data(image, path)?)
+}
+
 /// Replaces `path` whole with `bytes`.
 fn publish(path: &Path, bytes: &[u8]) -> Result<(), FrameError> {
     crate::files::write_atomically(path, bytes).map_err(|source| FrameError::Io {
@@ -68,8 +97,23 @@ pub fn read_png(path: &Path) -> Result<Image<Rgba>, FrameError> {
     decode_srgb_image(&bytes, path)
 }
 
-/// Decodes an encoded 8/16-bit image held in memory (`path` only names it in errors).
+/// Decodes an encoded 8/16-bit colour image held in memory, its sRGB values to linear (`path`
+/// only names it in errors).
 pub fn decode_srgb_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, FrameError> {
+    decode_image(bytes, path, true)
+}
+
+/// Decodes an encoded 8/16-bit image of data (not colour: normals, roughness …) as it is
+/// stored, scaled to `[0, 1]`.
+pub fn decode_linear_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, FrameError> {
+    decode_image(bytes, path, false)
+}
+
+fn decode_image(bytes: &[u8], path: &Path, srgb: bool) -> Result<Image<Rgba>, FrameError> {
+    let decode = |v: u8| {
+        let v = v as f32 / 255.0;
+        if srgb { srgb_to_linear(v) } else { v }
+    };
     let reader = || {
         image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
@@ -84,9 +128,9 @@ pub fn decode_srgb_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, Frame
         .pixels()
         .map(|p| {
             Vec4::new(
-                srgb_to_linear(p[0] as f32 / 255.0),
-                srgb_to_linear(p[1] as f32 / 255.0),
-                srgb_to_linear(p[2] as f32 / 255.0),
+                decode(p[0]),
+                decode(p[1]),
+                decode(p[2]),
                 p[3] as f32 / 255.0,
             )
         })

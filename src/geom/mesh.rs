@@ -20,6 +20,14 @@ pub struct Material {
     pub base_color: Vec3,
     /// Base-colour texture, sampled at the mesh UVs.
     pub texture: Option<Texture>,
+    /// Metalness, 0 (dielectric) to 1 (metal); multiplies the blue channel of
+    /// `metallic_roughness` (glTF's `metallicFactor`).
+    pub metallic: f32,
+    /// Perceptual roughness, 0 (smooth) to 1; multiplies its green channel (glTF's
+    /// `roughnessFactor`).
+    pub roughness: f32,
+    /// glTF's metallic-roughness texture, linear (green roughness, blue metalness).
+    pub metallic_roughness: Option<Texture>,
 }
 
 impl Default for Material {
@@ -28,6 +36,9 @@ impl Default for Material {
             name: "default".into(),
             base_color: Vec3::splat(0.8),
             texture: None,
+            metallic: 0.0,
+            roughness: 1.0,
+            metallic_roughness: None,
         }
     }
 }

@@ -1,6 +1,9 @@
 //! Baking an octahedral atlas: one orthographic frame per grid direction, framed on the object's
 //! bounding sphere and rasterized by trompe's rasterizer, holding base colour with coverage, the
-//! object-space normal and the depth behind the frame's front plane; then every channel dilated
+//! object-space normal, the depth behind the frame's front plane and an ORM map (ambient
+//! occlusion traced through the exact BVH at every vertex — [`AO_RAYS`] cosine-distributed rays
+//! reaching one bounding radius — then interpolated; roughness and metalness from the material);
+//! then every channel dilated
 //! into the empty texels around the object, frame by frame, so bilinear filtering and mip-maps
 //! never pull background into the silhouette.
 //!
@@ -16,7 +19,8 @@ use crate::geom::Mesh;
 use crate::raster::{StoreFragment, rasterize};
 use crate::render::shading::albedo;
 use crate::scene::Surface;
-use glam::{DVec3, Vec3, Vec4};
+use crate::trace::{Bvh, RayQuery};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// Bytes a texel of the atlas costs while it is baked: colour, normal and depth, and the
@@ -61,6 +65,75 @@ pub struct OctahedralAtlas {
     pub normal: Image<Vec3>,
     /// Depth behind the front plane over the sphere's diameter, `[0, 1]`.
     pub depth: Image<f32>,
+    /// Linear occlusion (1: nothing occludes), roughness and metalness — glTF's ORM packing.
+    pub orm: Image<Vec3>,
+}
+
+/// Ambient-occlusion rays traced from every vertex.
+pub const AO_RAYS: u32 = 32;
+
+/// Per vertex of `mesh`, the share of [`AO_RAYS`] cosine-distributed rays over its normal that
+/// leave without meeting the mesh within `reach` (1: open sky, 0: fully occluded). The
+/// directions are a fixed spiral turned by an angle hashed from the vertex index, so the result
+/// is deterministic.
+pub fn vertex_occlusion(mesh: &Mesh, reach: f32) -> Vec<f32> {
+    let bvh = Bvh::build(vec![std::sync::Arc::new(mesh.clone())]);
+    let epsilon = 1e-4 * reach;
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..mesh.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            let (p, n) = (mesh.positions[v], mesh.normals[v]);
+            let Some(n) = n.try_normalize() else {
+                return 1.0;
+            };
+            let t = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+            let (a, b) = {
+                let a = t.cross(n).normalize();
+                (a, n.cross(a))
+            };
+            let turn = (v as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+            let turn = turn as f32 / (1u64 << 24) as f32 * std::f32::consts::TAU;
+            let open = (0..AO_RAYS)
+                .filter(|&k| {
+                    // Cosine-distributed: uniform on the disc, lifted to the hemisphere.
+                    let r2 = (k as f32 + 0.5) / AO_RAYS as f32;
+                    let phi = k as f32 * golden + turn;
+                    let r = r2.sqrt();
+                    let d = a * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - r2).sqrt();
+                    let ray = crate::geom::Ray::new(p + n * epsilon, d);
+                    !bvh.any_hit(&ray, reach)
+                })
+                .count();
+            open as f32 / AO_RAYS as f32
+        })
+        .collect()
+}
+
+/// Roughness and metalness of `mesh`'s triangle `tri` at texture coordinates `uv`, as `surface`
+/// makes it: a scene's mirror is a smooth metal, its glass a smooth dielectric, a colour it
+/// gives a rough dielectric; else the mesh's material (factors times its texture).
+pub fn roughness_metalness(mesh: &Mesh, surface: &Surface, tri: usize, uv: Vec2) -> (f32, f32) {
+    match surface {
+        Surface::Mirror { .. } => (0.0, 1.0),
+        Surface::Glass { .. } => (0.0, 0.0),
+        Surface::Diffuse(Some(_)) => (1.0, 0.0),
+        Surface::Diffuse(None) => {
+            let m = mesh
+                .face_material
+                .get(tri)
+                .and_then(|&i| mesh.materials.get(i as usize));
+            let Some(m) = m else {
+                return (1.0, 0.0);
+            };
+            let (mut r, mut k) = (m.roughness, m.metallic);
+            if let Some(t) = &m.metallic_roughness {
+                let c = t.sample_uv(uv, crate::frame::Wrap::Repeat);
+                (r, k) = (r * c.y, k * c.z);
+            }
+            (r, k)
+        }
+    }
 }
 
 impl OctahedralAtlas {
@@ -131,13 +204,13 @@ pub fn bake(
         || format!("an octahedral atlas of {side} × {side}"),
         crate::memory::times(side64 * side64, BYTES_PER_TEXEL),
     )?;
-    let frames: Vec<(Vec<Rgba>, Vec<Vec3>, Vec<f32>)> = (0..n * n)
+    let occlusion = vertex_occlusion(mesh, radius);
+    let frames: Vec<FrameTexels> = (0..n * n)
         .into_par_iter()
         .map(|k| {
             let (i, j) = (k % n, k / n);
             bake_frame(
-                mesh,
-                surface,
+                (mesh, surface, &occlusion),
                 &settings,
                 centre.as_dvec3(),
                 f64::from(radius),
@@ -149,7 +222,8 @@ pub fn bake(
     let mut color = Image::new(side, side, Vec4::ZERO)?;
     let mut normal = Image::new(side, side, Vec3::ZERO)?;
     let mut depth = Image::new(side, side, 1.0f32)?;
-    for (k, (c, nm, d)) in frames.into_iter().enumerate() {
+    let mut orm = Image::new(side, side, Vec3::new(1.0, 1.0, 0.0))?;
+    for (k, (c, nm, d, o)) in frames.into_iter().enumerate() {
         let (i, j) = (k as u32 % n, k as u32 / n);
         for y in 0..s {
             for x in 0..s {
@@ -158,6 +232,7 @@ pub fn bake(
                 color.set(ax, ay, c[t]);
                 normal.set(ax, ay, nm[t]);
                 depth.set(ax, ay, d[t]);
+                orm.set(ax, ay, o[t]);
             }
         }
     }
@@ -168,14 +243,15 @@ pub fn bake(
         color,
         normal,
         depth,
+        orm,
     })
 }
 
-type FrameTexels = (Vec<Rgba>, Vec<Vec3>, Vec<f32>);
+/// One frame's colour, normal, depth and ORM texels.
+type FrameTexels = (Vec<Rgba>, Vec<Vec3>, Vec<f32>, Vec<Vec3>);
 
 fn bake_frame(
-    mesh: &Mesh,
-    surface: &Surface,
+    (mesh, surface, occlusion): (&Mesh, &Surface, &[f32]),
     settings: &BakeSettings,
     centre: DVec3,
     radius: f64,
@@ -190,6 +266,7 @@ fn bake_frame(
     let mut color = vec![Vec4::ZERO; s * s];
     let mut normal = vec![Vec3::ZERO; s * s];
     let mut depth = vec![1.0f32; s * s];
+    let mut orm = vec![Vec3::new(1.0, 1.0, 0.0); s * s];
     for (t, f) in target.attributes.pixels().iter().enumerate() {
         let Some(f) = f else { continue };
         let tri = f.item.triangle as usize;
@@ -206,16 +283,29 @@ fn bake_frame(
             None => glam::Vec2::ZERO,
         };
         color[t] = albedo(mesh, surface, tri as u32, uv).extend(1.0);
+        let ao: f32 = (0..3).map(|k| occlusion[idx[k] as usize] * b[k]).sum();
+        let (rough, metal) = roughness_metalness(mesh, surface, tri, uv);
+        orm[t] = Vec3::new(ao, rough, metal);
         normal[t] = nm;
         depth[t] = (((front - p.as_dvec3()).dot(d)) / (2.0 * radius)).clamp(0.0, 1.0) as f32;
     }
-    dilate(&mut color, &mut normal, &mut depth, s, settings.dilation);
-    Ok((color, normal, depth))
+    dilate(
+        &mut color,
+        (&mut normal, &mut depth, &mut orm),
+        s,
+        settings.dilation,
+    );
+    Ok((color, normal, depth, orm))
 }
 
 /// Grows every channel `radius` texels into the uncovered texels of one `s × s` frame: each
 /// round, an uncovered texel with covered (or already grown) 8-neighbours takes their mean.
-pub fn dilate(color: &mut [Rgba], normal: &mut [Vec3], depth: &mut [f32], s: usize, radius: u32) {
+pub fn dilate(
+    color: &mut [Rgba],
+    (normal, depth, orm): (&mut [Vec3], &mut [f32], &mut [Vec3]),
+    s: usize,
+    radius: u32,
+) {
     let mut filled: Vec<bool> = color.iter().map(|c| c.w > 0.0).collect();
     for _ in 0..radius {
         let mut grown = Vec::new();
@@ -226,6 +316,7 @@ pub fn dilate(color: &mut [Rgba], normal: &mut [Vec3], depth: &mut [f32], s: usi
                     continue;
                 }
                 let (mut c, mut nm, mut dp, mut count) = (Vec3::ZERO, Vec3::ZERO, 0.0f32, 0);
+                let mut o = Vec3::ZERO;
                 for dy in -1i64..=1 {
                     for dx in -1i64..=1 {
                         let (nx, ny) = (x as i64 + dx, y as i64 + dy);
@@ -237,23 +328,25 @@ pub fn dilate(color: &mut [Rgba], normal: &mut [Vec3], depth: &mut [f32], s: usi
                             c += color[u].truncate();
                             nm += normal[u];
                             dp += depth[u];
+                            o += orm[u];
                             count += 1;
                         }
                     }
                 }
                 if count > 0 {
                     let k = count as f32;
-                    grown.push((t, c / k, nm.normalize_or_zero(), dp / k));
+                    grown.push((t, c / k, nm.normalize_or_zero(), dp / k, o / k));
                 }
             }
         }
         if grown.is_empty() {
             break;
         }
-        for (t, c, nm, dp) in grown {
+        for (t, c, nm, dp, o) in grown {
             color[t] = c.extend(0.0);
             normal[t] = nm;
             depth[t] = dp;
+            orm[t] = o;
             filled[t] = true;
         }
     }

@@ -1,12 +1,14 @@
 //! An octahedral atlas on disk: `NAME.json` (the layout, below), `NAME.png` (base colour, sRGB,
-//! alpha = coverage), `NAME-normal.exr` (object-space unit normals, float) and `NAME-depth.exr`
-//! (depth behind each frame's front plane over the bounding sphere's diameter, float). The JSON
+//! alpha = coverage), `NAME-normal.exr` (object-space unit normals, float), `NAME-depth.exr`
+//! (depth behind each frame's front plane over the bounding sphere's diameter, float) and
+//! `NAME-orm.png` (linear 8-bit: red ambient occlusion, green roughness, blue metalness — glTF's
+//! packing). The JSON
 //! says everything a shader needs to read the maps: the grid (`n` frames a side, `sphere` or
 //! `hemisphere`), the frame size, the bounding sphere in the object's own space, and the maps'
 //! file names; the mapping is docs/conventions.md §8's.
 //!
 //! Invariants: written through [`crate::files::write_atomically`]-backed writers; nothing but
-//! the four files is written.
+//! the five files is written.
 
 use super::bake::OctahedralAtlas;
 use super::mapping::Grid;
@@ -23,7 +25,7 @@ pub const FORMAT: &str = "trompe-octahedral-impostor";
 pub struct Sidecar {
     /// Always `"trompe-octahedral-impostor"`.
     pub format: String,
-    /// Layout version (1).
+    /// Layout version: 2 (1 had no ORM map).
     pub version: u32,
     /// Frames a side and the directions covered.
     pub grid: Grid,
@@ -41,7 +43,13 @@ pub struct Sidecar {
     pub normal: String,
     /// Depth over the sphere's diameter from each frame's front plane (OpenEXR, float).
     pub depth: String,
+    /// Occlusion, roughness, metalness (PNG, linear); absent in version 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orm: Option<String>,
 }
+
+/// The layout version this build writes.
+pub const VERSION: u32 = 2;
 
 /// Errors writing an atlas.
 #[derive(Debug, Error)]
@@ -63,8 +71,8 @@ pub enum OctahedralFileError {
     NotAFile(PathBuf),
 }
 
-/// The four files of an atlas whose sidecar is `json`.
-pub fn files(json: &Path) -> [PathBuf; 4] {
+/// The five files of an atlas whose sidecar is `json`.
+pub fn files(json: &Path) -> [PathBuf; 5] {
     let stem = json
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -75,18 +83,20 @@ pub fn files(json: &Path) -> [PathBuf; 4] {
         dir.join(format!("{stem}.png")),
         dir.join(format!("{stem}-normal.exr")),
         dir.join(format!("{stem}-depth.exr")),
+        dir.join(format!("{stem}-orm.png")),
     ]
 }
 
-/// Writes `atlas` as `json` and its three maps beside it.
+/// Writes `atlas` as `json` and its four maps beside it.
 pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralFileError> {
     if json.file_stem().is_none() {
         return Err(OctahedralFileError::NotAFile(json.to_path_buf()));
     }
-    let [_, color, normal, depth] = files(json);
+    let [_, color, normal, depth, orm] = files(json);
     io::write_png(&color, &atlas.color)?;
     io::write_exr_normals(&normal, &atlas.normal)?;
     io::write_exr_depth(&depth, &atlas.depth)?;
+    io::write_png_data(&orm, &atlas.orm)?;
     let name = |p: &Path| {
         p.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -94,7 +104,7 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
     };
     let sidecar = Sidecar {
         format: FORMAT.into(),
-        version: 1,
+        version: VERSION,
         grid: atlas.settings.grid,
         frame_size: atlas.settings.frame_size,
         dilation: atlas.settings.dilation,
@@ -103,6 +113,7 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
         color: name(&color),
         normal: name(&normal),
         depth: name(&depth),
+        orm: Some(name(&orm)),
     };
     let text = serde_json::to_string_pretty(&sidecar).map_err(|e| OctahedralFileError::Io {
         path: json.to_path_buf(),
@@ -123,11 +134,11 @@ pub struct OctahedralReport {
     /// The sidecar written.
     pub sidecar: Sidecar,
     /// Its path and the maps'.
-    pub files: [PathBuf; 4],
+    pub files: [PathBuf; 5],
     /// Time to bake.
     pub bake_time: Duration,
     /// Bytes of each file written.
-    pub bytes: [u64; 4],
+    pub bytes: [u64; 5],
     /// Distance (in object units) from which one atlas texel covers one pixel of a 1080-row,
     /// 60° view: where a renderer can switch from the mesh to the impostor.
     pub switch_distance: f32,
@@ -138,7 +149,7 @@ impl OctahedralReport {
     pub fn new(
         atlas: &OctahedralAtlas,
         sidecar: Sidecar,
-        files: [PathBuf; 4],
+        files: [PathBuf; 5],
         bake_time: Duration,
     ) -> Self {
         let bytes = files

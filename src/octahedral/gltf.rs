@@ -1,8 +1,9 @@
 //! An octahedral atlas as a glTF 2.0 binary that engines load without trompe (Godot, Unity's
 //! glTFast, Bevy, three.js): a camera-facing card — a quad of the bounding sphere's diameter in
 //! the object's `xy` plane, facing `+z`, centred on the sphere, which the engine turns toward
-//! the camera — whose material's base colour is the colour atlas, embedded as PNG, alpha-masked;
-//! and the layout in the material's `extras.trompe_octahedral`, the sidecar's fields (grid,
+//! the camera — whose material's base colour is the colour atlas, embedded as PNG, alpha-masked,
+//! its occlusion and metallic-roughness textures the ORM atlas (embedded PNG, linear); and the
+//! layout in the material's `extras.trompe_octahedral`, the sidecar's fields (grid,
 //! frame size, sphere, the normal and depth maps' OpenEXR file names beside the file, which glTF
 //! cannot hold as images) — the schema of docs/conventions.md §8.
 //!
@@ -12,8 +13,13 @@
 use super::file::Sidecar;
 use std::path::Path;
 
-/// The GLB of the atlas described by `sidecar`, with `color_png` the colour atlas's PNG bytes.
-pub fn glb(sidecar: &Sidecar, color_png: &[u8]) -> Result<Vec<u8>, ::gltf::Error> {
+/// The GLB of the atlas described by `sidecar`, with `color_png` the colour atlas's PNG bytes
+/// and `orm_png` the ORM atlas's, if it has one.
+pub fn glb(
+    sidecar: &Sidecar,
+    color_png: &[u8],
+    orm_png: Option<&[u8]>,
+) -> Result<Vec<u8>, ::gltf::Error> {
     let [cx, cy, cz] = sidecar.centre;
     let r = sidecar.radius;
     let positions = [
@@ -42,6 +48,11 @@ pub fn glb(sidecar: &Sidecar, color_png: &[u8]) -> Result<Vec<u8>, ::gltf::Error
     let image_at = bin.len().next_multiple_of(4);
     bin.resize(image_at, 0);
     bin.extend_from_slice(color_png);
+    let orm_at = bin.len().next_multiple_of(4);
+    if let Some(orm) = orm_png {
+        bin.resize(orm_at, 0);
+        bin.extend_from_slice(orm);
+    }
     let length = bin.len();
     let layout = serde_json::to_value(sidecar).unwrap_or(serde_json::Value::Null);
     let doc = serde_json::json!({
@@ -83,6 +94,26 @@ pub fn glb(sidecar: &Sidecar, color_png: &[u8]) -> Result<Vec<u8>, ::gltf::Error
             { "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" }
         ]
     });
+    let mut doc = doc;
+    if let Some(orm) = orm_png {
+        // Factors of 1 leave the map's own roughness and metalness.
+        let material = &mut doc["materials"][0];
+        material["pbrMetallicRoughness"]["metallicRoughnessTexture"] =
+            serde_json::json!({ "index": 1 });
+        material["pbrMetallicRoughness"]["metallicFactor"] = 1.0.into();
+        material["occlusionTexture"] = serde_json::json!({ "index": 1 });
+        if let Some(a) = doc["textures"].as_array_mut() {
+            a.push(serde_json::json!({ "source": 1, "sampler": 0 }));
+        }
+        if let Some(a) = doc["images"].as_array_mut() {
+            a.push(serde_json::json!({ "bufferView": 5, "mimeType": "image/png" }));
+        }
+        if let Some(a) = doc["bufferViews"].as_array_mut() {
+            a.push(
+                serde_json::json!({ "buffer": 0, "byteOffset": orm_at, "byteLength": orm.len() }),
+            );
+        }
+    }
     let json = serde_json::to_vec(&doc).map_err(|e| ::gltf::Error::Io(std::io::Error::other(e)))?;
     crate::geom::io::glb_bytes(json, bin)
 }
@@ -114,7 +145,14 @@ pub fn export(sidecar_path: &Path, out: &Path) -> Result<(), super::file::Octahe
     let dir = sidecar_path.parent().unwrap_or(Path::new(""));
     let color = dir.join(&sidecar.color);
     let png = std::fs::read(&color).map_err(io(&color))?;
-    let bytes = glb(&sidecar, &png).map_err(|e| E::Io {
+    let orm = match &sidecar.orm {
+        Some(name) => {
+            let path = dir.join(name);
+            Some(std::fs::read(&path).map_err(io(&path))?)
+        }
+        None => None,
+    };
+    let bytes = glb(&sidecar, &png, orm.as_deref()).map_err(|e| E::Io {
         path: out.to_path_buf(),
         source: std::io::Error::other(e.to_string()),
     })?;
@@ -144,8 +182,14 @@ mod tests {
         let glb_path = dir.join("ball.glb");
         export(&json, &glb_path).unwrap();
         let (doc, buffers, images) = ::gltf::import(&glb_path).unwrap();
-        assert_eq!(images.len(), 1);
+        // The colour atlas, then the ORM atlas (occlusion and metallic-roughness).
+        assert_eq!(images.len(), 2);
         assert_eq!((images[0].width, images[0].height), (64, 64));
+        assert_eq!((images[1].width, images[1].height), (64, 64));
+        let material = doc.materials().next().unwrap();
+        assert_eq!(material.occlusion_texture().unwrap().texture().index(), 1);
+        let pbr = material.pbr_metallic_roughness();
+        assert_eq!(pbr.metallic_roughness_texture().unwrap().texture().index(), 1);
         let bytes = std::fs::read(&glb_path).unwrap();
         let chunk = ::gltf::binary::Glb::from_slice(&bytes).unwrap().json;
         let json: serde_json::Value = serde_json::from_slice(&chunk).unwrap();

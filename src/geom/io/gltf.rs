@@ -521,7 +521,8 @@ struct Flatten<'a> {
     /// before its pixels are allocated.
     document: &'a gltf::Document,
     base: &'a Path,
-    textures: HashMap<usize, crate::geom::Texture>,
+    /// Decoded images by index and whether they hold colour (sRGB) or data (linear).
+    textures: HashMap<(usize, bool), crate::geom::Texture>,
     materials: HashMap<Option<usize>, u32>,
     mesh: Mesh,
     normals_present: bool,
@@ -701,21 +702,29 @@ impl Flatten<'_> {
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _] = pbr.base_color_factor();
         let texture = match pbr.base_color_texture() {
-            Some(info) => Some(self.texture(info.texture().source().index())?),
+            Some(info) => Some(self.texture(info.texture().source().index(), true)?),
+            None => None,
+        };
+        let metallic_roughness = match pbr.metallic_roughness_texture() {
+            Some(info) => Some(self.texture(info.texture().source().index(), false)?),
             None => None,
         };
         self.mesh.materials.push(Material {
             name: m.name().unwrap_or("default").to_string(),
             base_color: Vec3::new(r, g, b),
             texture,
+            metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+            roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+            metallic_roughness,
         });
         let i = self.mesh.materials.len() as u32 - 1;
         self.materials.insert(m.index(), i);
         Ok(i)
     }
 
-    fn texture(&mut self, image: usize) -> Result<crate::geom::Texture, MeshError> {
-        if let Some(t) = self.textures.get(&image) {
+    /// Image `image`, decoded as colour (sRGB to linear) or as data.
+    fn texture(&mut self, image: usize, color: bool) -> Result<crate::geom::Texture, MeshError> {
+        if let Some(t) = self.textures.get(&(image, color)) {
             return Ok(t.clone());
         }
         let element = format!("image {image}");
@@ -745,15 +754,18 @@ impl Flatten<'_> {
                 None => read_file(&self.base.join(percent_decoded(uri)))?,
             },
         };
-        let img = crate::frame::io::decode_srgb_image(&bytes, self.path).map_err(|source| {
-            MeshError::Texture {
-                path: self.path.to_path_buf(),
-                texture: element.clone(),
-                source,
-            }
+        let decode = if color {
+            crate::frame::io::decode_srgb_image
+        } else {
+            crate::frame::io::decode_linear_image
+        };
+        let img = decode(&bytes, self.path).map_err(|source| MeshError::Texture {
+            path: self.path.to_path_buf(),
+            texture: element.clone(),
+            source,
         })?;
         let t = Arc::new(img);
-        self.textures.insert(image, t.clone());
+        self.textures.insert((image, color), t.clone());
         Ok(t)
     }
 }

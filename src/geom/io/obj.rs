@@ -279,6 +279,20 @@ fn load_mtl(
                     m.base_color = kd;
                 }
             }
+            // The PBR extension of MTL (Blender and others write it).
+            "Pr" | "Pm" => {
+                let v = tokens
+                    .next()
+                    .and_then(|t| t.parse::<f32>().ok())
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| at.malformed(format!("{keyword} needs a number")))?;
+                if let Some(m) = current.and_then(|i| materials.get_mut(i)) {
+                    match keyword {
+                        "Pr" => m.roughness = v.clamp(0.0, 1.0),
+                        _ => m.metallic = v.clamp(0.0, 1.0),
+                    }
+                }
+            }
             "map_Kd" => {
                 // Options (-s, -o …) precede the file name; the name is the last token.
                 let name = tokens
