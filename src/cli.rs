@@ -336,11 +336,15 @@ pub enum MethodArg {
     /// Exact primary rays; first reflections splatted from points of the diffuse objects through
     /// continuous 3-ray cameras (paper 2).
     C3rc,
+    /// Every object drawn from its octahedral atlas (--octahedral frames a side, --frame-size
+    /// texels each), as engines draw distant objects: relit with its normals, unshadowed;
+    /// mirrors reflect the environment.
+    Octahedral,
 }
 
 impl MethodArg {
-    /// The renderer, with the impostor resolution for `Impostor`; `None` for the hybrid method,
-    /// which has its own entry point.
+    /// The renderer, with the impostor resolution for `Impostor`; `None` for the hybrid and
+    /// octahedral methods, which have their own entry points.
     fn method(self, impostor_resolution: u32) -> Option<Method> {
         match self {
             MethodArg::Raster => Some(Method::Raster),
@@ -348,7 +352,7 @@ impl MethodArg {
             MethodArg::Impostor => Some(Method::Impostor(impostor_resolution)),
             MethodArg::PinholeImpostor => Some(Method::PinholeImpostor(impostor_resolution)),
             MethodArg::Envmap => Some(Method::EnvMap),
-            MethodArg::C3rc => None,
+            MethodArg::C3rc | MethodArg::Octahedral => None,
         }
     }
 }

@@ -41,6 +41,12 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = render::DEFAULT_IMPOSTOR_RESOLUTION,
           value_parser = clap::value_parser!(u32).range(1..=MAX_IMPOSTOR_SIDE))]
     impostor_resolution: u32,
+    /// Frames a side of each object's atlas, for --method octahedral.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=64))]
+    octahedral: u32,
+    /// Texels a side of each atlas frame, for --method octahedral.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=1024))]
+    frame_size: u32,
     /// Splat side in pixels, for --method c3rc.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=2))]
     splat: u32,
@@ -161,6 +167,19 @@ impl RenderArgs {
                 timings.0.extend(steps.0);
                 frame
             }
+            None if matches!(self.method, MethodArg::Octahedral) => {
+                let settings = trompe::octahedral::BakeSettings {
+                    grid: trompe::octahedral::Grid {
+                        n: self.octahedral,
+                        coverage: trompe::octahedral::Coverage::Sphere,
+                    },
+                    frame_size: self.frame_size,
+                    dilation: 4,
+                };
+                let pb = bar("octahedral", s.camera.height as u64);
+                trompe::octahedral::scene::render(&s, t, settings, pb.as_ref(), &mut timings)
+                    .context("rendering")?
+            }
             None => {
                 let settings = trompe::hybrid::HybridSettings {
                     splat: self.splat,
@@ -203,7 +222,12 @@ impl RenderArgs {
             bail!("--depth and --normals write one frame: leave them out with --frames");
         }
         let Some(method) = self.method.method(self.impostor_resolution) else {
-            bail!("--frames: --method c3rc renders one frame at a time; give --time instead");
+            bail!(
+                "--frames: --method {} renders one frame at a time; give --time instead",
+                self.method
+                    .to_possible_value()
+                    .map_or("c3rc".into(), |v| v.get_name().to_string())
+            );
         };
         let paths: Vec<PathBuf> = (0..frames)
             .map(|i| frame_path(&self.output, i))

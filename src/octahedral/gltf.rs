@@ -189,7 +189,10 @@ mod tests {
         let material = doc.materials().next().unwrap();
         assert_eq!(material.occlusion_texture().unwrap().texture().index(), 1);
         let pbr = material.pbr_metallic_roughness();
-        assert_eq!(pbr.metallic_roughness_texture().unwrap().texture().index(), 1);
+        assert_eq!(
+            pbr.metallic_roughness_texture().unwrap().texture().index(),
+            1
+        );
         let bytes = std::fs::read(&glb_path).unwrap();
         let chunk = ::gltf::binary::Glb::from_slice(&bytes).unwrap().json;
         let json: serde_json::Value = serde_json::from_slice(&chunk).unwrap();

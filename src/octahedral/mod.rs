@@ -14,6 +14,7 @@ pub mod file;
 pub mod gltf;
 pub mod mapping;
 pub mod render;
+pub mod scene;
 pub mod turntable;
 
 pub use bake::{BakeError, BakeSettings, OctahedralAtlas, bake};

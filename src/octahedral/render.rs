@@ -27,6 +27,21 @@ struct Sample {
     color: Vec3,
     normal: Vec3,
     alpha: f32,
+    /// Ray parameter of the point found, times coverage.
+    t: f64,
+}
+
+/// The three frames' lookups along one ray, blended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Blended {
+    /// Base colour.
+    pub albedo: Vec3,
+    /// Unit normal (toward the ray's origin when the maps hold none).
+    pub normal: Vec3,
+    /// Coverage, `[0, 1]`.
+    pub alpha: f32,
+    /// Ray parameter of the surface found.
+    pub t: f64,
 }
 
 impl OctahedralAtlas {
@@ -48,39 +63,17 @@ impl OctahedralAtlas {
         lighting: &Lighting,
         parallax: u32,
     ) -> Image<Rgba> {
-        let centre = self.centre.as_dvec3();
-        let r = f64::from(self.radius);
         let frames = self.settings.grid.frames_around(view);
         let pixels: Vec<Rgba> = (0..h as usize * w as usize)
             .into_par_iter()
             .map(|k| {
                 let (x, y) = (k % w as usize, k / w as usize);
                 let ray = ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                let (o, dir) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
                 let env = lighting.environment.radiance(ray.dir);
-                // Only rays through the bounding sphere can meet the object.
-                let oc = o - centre;
-                let b = oc.dot(dir);
-                if b * b - (oc.length_squared() - r * r) < 0.0 {
+                let Some(b) = self.blend(&frames, ray, parallax) else {
                     return env.extend(1.0);
-                }
-                let mut acc = Sample::default();
-                for &((i, j), weight) in &frames {
-                    if weight <= 0.0 {
-                        continue;
-                    }
-                    if let Some(s) = self.lookup(i, j, o, dir, parallax) {
-                        acc.color += s.color * weight as f32;
-                        acc.normal += s.normal * weight as f32;
-                        acc.alpha += s.alpha * weight as f32;
-                    }
-                }
-                if acc.alpha <= 1e-6 {
-                    return env.extend(1.0);
-                }
-                let a = acc.alpha.min(1.0);
-                let albedo = acc.color / acc.alpha;
-                let n = acc.normal.normalize_or(-ray.dir);
+                };
+                let (a, albedo, n) = (b.alpha, b.albedo, b.normal);
                 // An atlas holds no occluders: relit unshadowed, as an engine's shader does.
                 (lambert(albedo, n, lighting, |_| true) * a + env * (1.0 - a)).extend(1.0)
             })
@@ -89,6 +82,47 @@ impl OctahedralAtlas {
             Ok(img) => img,
             Err(_) => unreachable!("the camera's resolution is a valid image size"),
         }
+    }
+
+    /// `frames` (from [`crate::octahedral::Grid::frames_around`]) looked up along `ray`,
+    /// `parallax` steps each, and blended by their weights; `None` where the ray misses the
+    /// bounding sphere or finds no coverage.
+    pub fn blend(
+        &self,
+        frames: &[((u32, u32), f64); 3],
+        ray: Ray,
+        parallax: u32,
+    ) -> Option<Blended> {
+        let (o, dir) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        let centre = self.centre.as_dvec3();
+        let r = f64::from(self.radius);
+        // Only rays through the bounding sphere can meet the object.
+        let oc = o - centre;
+        let b = oc.dot(dir);
+        if b * b - (oc.length_squared() - r * r) < 0.0 {
+            return None;
+        }
+        let mut acc = Sample::default();
+        for &((i, j), weight) in frames {
+            if weight <= 0.0 {
+                continue;
+            }
+            if let Some(s) = self.lookup(i, j, o, dir, parallax) {
+                acc.color += s.color * weight as f32;
+                acc.normal += s.normal * weight as f32;
+                acc.alpha += s.alpha * weight as f32;
+                acc.t += s.t * weight;
+            }
+        }
+        if acc.alpha <= 1e-6 {
+            return None;
+        }
+        Some(Blended {
+            albedo: acc.color / acc.alpha,
+            normal: acc.normal.normalize_or(-ray.dir),
+            alpha: acc.alpha.min(1.0),
+            t: acc.t / f64::from(acc.alpha),
+        })
     }
 
     /// Frame `(i, j)` along the ray `o + t·dir`, parallax-corrected `steps` times.
@@ -101,10 +135,8 @@ impl OctahedralAtlas {
         let centre = self.centre.as_dvec3();
         let r = f64::from(self.radius);
         // The ray against the plane at signed offset `off` from the centre along `d`.
-        let at = |off: f64| {
-            let t = (centre + d * off - o).dot(d) / facing;
-            o + dir * t
-        };
+        let along = |off: f64| (centre + d * off - o).dot(d) / facing;
+        let at = |off: f64| o + dir * along(off);
         let (right, up) = frame_basis(d);
         let s = f64::from(self.settings.frame_size);
         let texel = |p: DVec3| {
@@ -115,9 +147,11 @@ impl OctahedralAtlas {
             )
         };
         let mut uv = texel(at(0.0));
+        let mut t = along(0.0);
         for _ in 0..steps {
             let depth = f64::from(self.bilinear(&self.depth, i, j, uv));
-            uv = texel(at(r - 2.0 * r * depth));
+            t = along(r - 2.0 * r * depth);
+            uv = texel(o + dir * t);
         }
         if uv.x < -1.0 || uv.y < -1.0 || uv.x > s + 1.0 || uv.y > s + 1.0 {
             return None;
@@ -128,6 +162,7 @@ impl OctahedralAtlas {
             color: c.truncate() * c.w,
             normal: n * c.w,
             alpha: c.w,
+            t: t * f64::from(c.w),
         })
     }
 
