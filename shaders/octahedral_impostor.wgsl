@@ -26,7 +26,9 @@ struct Impostor {
     frames: u32,
     frame_size: u32,
     coverage: u32,
-    _pad: u32,
+    // 0 for orthographic frames; else pinhole frames, the eye this many radii from the centre
+    // (the sidecar's `projection`).
+    distance: f32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -125,6 +127,21 @@ fn atlas_uv(frame: vec2<u32>, t: vec2<f32>) -> vec2<f32> {
     return (vec2<f32>(frame) * fs + inside) / side;
 }
 
+// Frame texel coordinates of world point p in the frame looking along -d (mapping.rs
+// `frame_basis`; render.rs `frame_texel`): orthographic, or through the frame's pinhole.
+fn frame_texel(p: vec3<f32>, d: vec3<f32>, right: vec3<f32>, up: vec3<f32>) -> vec2<f32> {
+    let r = impostor.radius;
+    let fs = f32(impostor.frame_size);
+    var q = p - impostor.centre;
+    var scale = r;
+    if (impostor.distance > 0.0) {
+        q = p - (impostor.centre + d * (r * impostor.distance));
+        let z = max(-dot(q, d), 1e-12 * r);
+        scale = z / sqrt(max(impostor.distance * impostor.distance - 1.0, 1e-12));
+    }
+    return vec2<f32>((dot(q, right) / scale + 1.0) * 0.5 * fs, (1.0 - dot(q, up) / scale) * 0.5 * fs);
+}
+
 struct Lookup {
     color: vec4<f32>,
     normal: vec3<f32>,
@@ -137,18 +154,15 @@ fn lookup(frame: vec2<u32>, o: vec3<f32>, dir: vec3<f32>) -> Lookup {
     let right = frame_right(d);
     let up = cross(d, right);
     let r = impostor.radius;
-    let fs = f32(impostor.frame_size);
     let facing = min(dot(dir, d), -1e-6);
     var offset = 0.0;
     var p = o + dir * (dot(impostor.centre + d * offset - o, d) / facing);
-    var t = vec2<f32>((dot(p - impostor.centre, right) / r + 1.0) * 0.5 * fs,
-                      (1.0 - dot(p - impostor.centre, up) / r) * 0.5 * fs);
+    var t = frame_texel(p, d, right, up);
     for (var k = 0u; k < PARALLAX_STEPS; k = k + 1u) {
         let depth = textureSampleLevel(atlas_depth, atlas_sampler, atlas_uv(frame, t), 0.0).r;
         offset = r - 2.0 * r * depth;
         p = o + dir * (dot(impostor.centre + d * offset - o, d) / facing);
-        t = vec2<f32>((dot(p - impostor.centre, right) / r + 1.0) * 0.5 * fs,
-                      (1.0 - dot(p - impostor.centre, up) / r) * 0.5 * fs);
+        t = frame_texel(p, d, right, up);
     }
     var out: Lookup;
     out.color = textureSampleLevel(atlas_color, atlas_sampler, atlas_uv(frame, t), 0.0);

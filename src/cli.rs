@@ -254,6 +254,10 @@ pub struct BakeArgs {
     /// With --octahedral: the upper hemisphere only (hemi-octahedral).
     #[arg(long)]
     hemi: bool,
+    /// With --octahedral: pinhole frames, the eye this many bounding radii from the centre
+    /// (more than 1), instead of orthographic ones.
+    #[arg(long)]
+    perspective: Option<f32>,
     /// Also write NAME.glb, a glTF 2.0 file engines load: for an octahedral atlas, a card with
     /// the atlas and its layout; for any other impostor, its surface as a textured mesh, with its
     /// camera.

@@ -7,7 +7,7 @@ use std::path::Path;
 use trompe::frame::envmap::EnvMap;
 use trompe::frame::metrics;
 use trompe::glam::Vec3;
-use trompe::octahedral::{BakeSettings, Coverage, Grid, bake, turntable};
+use trompe::octahedral::{BakeSettings, Coverage, FrameProjection, Grid, bake, turntable};
 use trompe::scene::{Light, Lighting, Surface};
 
 fn duck() -> trompe::geom::Mesh {
@@ -33,39 +33,51 @@ fn settings(n: u32, frame_size: u32, dilation: u32) -> BakeSettings {
         },
         frame_size,
         dilation,
+        projection: Default::default(),
     }
 }
 
 #[test]
 fn a_frame_is_reproduced_from_its_own_direction() {
     let mesh = duck();
-    let atlas = bake(&mesh, &Surface::Diffuse(None), settings(8, 96, 4)).unwrap();
     let light = lighting();
-    for (i, j) in [(3, 4), (0, 0), (7, 2), (5, 5)] {
-        let camera = atlas.frame_camera(i, j);
-        let d = atlas.settings.grid.direction(i, j);
-        let s = atlas.settings.frame_size;
-        let rendered = atlas.render_rays((s, s), d, |uv| camera.ray(uv), &light, 4);
-        // The frame itself, lit as the renderer lights it.
-        let mut expected = rendered.clone();
-        for y in 0..s {
-            for x in 0..s {
-                let c = atlas.color.get(i * s + x, j * s + y);
-                let n = atlas.normal.get(i * s + x, j * s + y);
-                let ray = camera.ray(trompe::glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                let env = light.environment.radiance(ray.dir);
-                let lit = if c.w > 0.0 {
-                    trompe::render::shading::lambert(c.truncate(), n, &light, |_| true) * c.w
-                        + env * (1.0 - c.w)
-                } else {
-                    env
-                };
-                expected.set(x, y, lit.extend(1.0));
+    let pinhole = FrameProjection::Pinhole { distance: 2.5 };
+    for projection in [FrameProjection::Orthographic, pinhole] {
+        let atlas = bake(
+            &mesh,
+            &Surface::Diffuse(None),
+            BakeSettings {
+                projection,
+                ..settings(8, 96, 4)
+            },
+        )
+        .unwrap();
+        for (i, j) in [(3, 4), (0, 0), (7, 2), (5, 5)] {
+            let camera = atlas.frame_camera(i, j);
+            let d = atlas.settings.grid.direction(i, j);
+            let s = atlas.settings.frame_size;
+            let rendered = atlas.render_rays((s, s), d, |uv| camera.ray(uv), &light, 4);
+            // The frame itself, lit as the renderer lights it.
+            let mut expected = rendered.clone();
+            for y in 0..s {
+                for x in 0..s {
+                    let c = atlas.color.get(i * s + x, j * s + y);
+                    let n = atlas.normal.get(i * s + x, j * s + y);
+                    let ray = camera.ray(trompe::glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                    let env = light.environment.radiance(ray.dir);
+                    let lit = if c.w > 0.0 {
+                        trompe::render::shading::lambert(c.truncate(), n, &light, |_| true) * c.w
+                            + env * (1.0 - c.w)
+                    } else {
+                        env
+                    };
+                    expected.set(x, y, lit.extend(1.0));
+                }
             }
+            let psnr = metrics::psnr(&expected, &rendered, None).unwrap();
+            println!("{projection:?} frame ({i}, {j}): PSNR {psnr:.1} dB");
+            assert!(psnr >= 45.0, "{projection:?} frame ({i}, {j}): {psnr} dB");
         }
-        let psnr = metrics::psnr(&expected, &rendered, None).unwrap();
-        println!("frame ({i}, {j}): PSNR {psnr:.1} dB");
-        assert!(psnr >= 45.0, "frame ({i}, {j}): {psnr} dB");
     }
 }
 
@@ -128,6 +140,16 @@ fn a_turntable_of_the_duck_is_close_to_exact_and_parallax_helps() {
     );
     assert!(with <= 0.05, "{with}");
     assert!(with < without, "{with} vs {without}");
+    // Pinhole frames from the turntable's own distance (4 radii).
+    let pinhole = BakeSettings {
+        projection: FrameProjection::Pinhole { distance: 4.0 },
+        ..settings(16, 96, 4)
+    };
+    let atlas = bake(&mesh, &Surface::Diffuse(None), pinhole).unwrap();
+    let views = turntable(&atlas, &mesh, &Surface::Diffuse(None), &lighting(), 16, 160).unwrap();
+    let perspective = views.iter().map(|v| v.flip).sum::<f64>() / n;
+    println!("Duck 16 × 16, pinhole frames at 4 radii: mean FLIP {perspective:.4}");
+    assert!(perspective <= 0.05, "{perspective}");
 }
 
 #[test]

@@ -51,23 +51,20 @@ fn the_shader_constants_are_the_rust_codes() {
     assert!(src.contains("const COVERAGE_HEMISPHERE: u32 = 1u;"));
 }
 
-/// A compute entry over the shader's own `frames_around`, appended to its source: each
-/// direction in, its three frames and weights out (nine floats).
+/// A compute entry over the shader's own `frames_around`: each direction in, its three frames
+/// and weights out (nine floats).
 const PICK: &str = r#"
-@group(0) @binding(6) var<storage, read> directions: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> picked: array<f32>;
-
 @compute @workgroup_size(64)
-fn pick(@builtin(global_invocation_id) id: vec3<u32>) {
+fn run(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.x;
-    if (k >= arrayLength(&directions)) {
+    if (k >= arrayLength(&inputs)) {
         return;
     }
-    let f = frames_around(directions[k].xyz);
+    let f = frames_around(inputs[k].xyz);
     for (var m = 0u; m < 3u; m = m + 1u) {
-        picked[k * 9u + 2u * m] = f32(f.cells[m].x);
-        picked[k * 9u + 2u * m + 1u] = f32(f.cells[m].y);
-        picked[k * 9u + 6u + m] = f.weights[m];
+        outputs[k * 9u + 2u * m] = f32(f.cells[m].x);
+        outputs[k * 9u + 2u * m + 1u] = f32(f.cells[m].y);
+        outputs[k * 9u + 6u + m] = f.weights[m];
     }
 }
 "#;
@@ -75,39 +72,31 @@ fn pick(@builtin(global_invocation_id) id: vec3<u32>) {
 /// Three frames and their weights, as the shader picks them.
 type Picked = [((u32, u32), f32); 3];
 
-/// The shader's `frames_around` run on a Vulkan device for `directions`, with `frames` a side
-/// and coverage code `coverage`: per direction, the three frames and their weights. `None`
-/// when no Vulkan device is found.
-fn shader_frames_around(
-    directions: &[[f32; 3]],
-    frames: u32,
-    coverage: u32,
-) -> Option<Vec<Picked>> {
+/// The shader with `entry` (a compute entry point named `run`, reading `inputs` and writing
+/// `outputs`) appended, run on a Vulkan device over `input` (four floats an item), with the
+/// `Impostor` uniform `uniform`; `per_item` floats out an item. `None` when no Vulkan device
+/// is found.
+fn run_on_device(entry: &str, uniform: &[u8], input: &[f32], per_item: usize) -> Option<Vec<f32>> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
         backends: wgpu::Backends::VULKAN,
         ..wgpu::InstanceDescriptor::new_without_display_handle()
     });
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        force_fallback_adapter: false,
-        ..Default::default()
-    }))
-    .ok()?;
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).ok()?;
     eprintln!("running the shader on {}", adapter.get_info().name);
     let (device, queue) =
         pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default())).unwrap();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("octahedral_impostor.wgsl + pick"),
-        source: wgpu::ShaderSource::Wgsl((source() + PICK).into()),
+        label: Some("octahedral_impostor.wgsl + a compute entry"),
+        source: wgpu::ShaderSource::Wgsl((source() + IO + entry).into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,
         layout: None,
         module: &module,
-        entry_point: Some("pick"),
+        entry_point: Some("run"),
         compilation_options: Default::default(),
         cache: None,
     });
-    let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
     let buffer = |size: usize, usage| {
         device.create_buffer(&wgpu::BufferDescriptor {
             label: None,
@@ -117,62 +106,172 @@ fn shader_frames_around(
         })
     };
     use wgpu::BufferUsages as U;
-    // struct Impostor: centre, radius, frames, frame_size, coverage, padding.
-    let mut uniform = bytes(&[0.0, 0.0, 0.0, 1.0]);
-    for u in [frames, 128, coverage, 0] {
-        uniform.extend(u.to_le_bytes());
-    }
     let impostor = buffer(uniform.len(), U::UNIFORM | U::COPY_DST);
-    queue.write_buffer(&impostor, 0, &uniform);
-    let input: Vec<f32> = directions
-        .iter()
-        .flat_map(|d| [d[0], d[1], d[2], 0.0])
-        .collect();
-    let dirs = buffer(input.len() * 4, U::STORAGE | U::COPY_DST);
-    queue.write_buffer(&dirs, 0, &bytes(&input));
-    let out_size = directions.len() * 9 * 4;
+    queue.write_buffer(&impostor, 0, uniform);
+    let items = input.len() / 4;
+    let inputs = buffer(input.len() * 4, U::STORAGE | U::COPY_DST);
+    queue.write_buffer(&inputs, 0, &bytes(input));
+    let out_size = items * per_item * 4;
     let out = buffer(out_size, U::STORAGE | U::COPY_SRC);
     let read = buffer(out_size, U::MAP_READ | U::COPY_DST);
+    let entries =
+        [(1, &impostor), (6, &inputs), (7, &out)].map(|(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        });
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
         layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: impostor.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 6,
-                resource: dirs.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 7,
-                resource: out.as_entire_binding(),
-            },
-        ],
+        entries: &entries,
     });
     let mut encoder = device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((directions.len() as u32).div_ceil(64), 1, 1);
+        pass.dispatch_workgroups((items as u32).div_ceil(64), 1, 1);
     }
     encoder.copy_buffer_to_buffer(&out, 0, &read, 0, out_size as u64);
     queue.submit([encoder.finish()]);
     read.map_async(wgpu::MapMode::Read, .., |r| r.unwrap());
     device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
     let view = read.get_mapped_range(..).unwrap();
-    let floats: Vec<f32> = view
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    Some(
+        view.chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect(),
+    )
+}
+
+/// The bindings a compute entry reads and writes, beside the shader's own.
+const IO: &str = r#"
+@group(0) @binding(6) var<storage, read> inputs: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> outputs: array<f32>;
+"#;
+
+fn bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// The `Impostor` uniform: centre, radius, frames, frame size, coverage, pinhole distance.
+fn uniform(
+    centre: [f32; 3],
+    radius: f32,
+    (frames, frame_size, coverage): (u32, u32, u32),
+    distance: f32,
+) -> Vec<u8> {
+    let mut u = bytes(&[centre[0], centre[1], centre[2], radius]);
+    for v in [frames, frame_size, coverage] {
+        u.extend(v.to_le_bytes());
+    }
+    u.extend(distance.to_le_bytes());
+    u
+}
+
+/// The shader's `frames_around` run on a Vulkan device for `directions`, with `frames` a side
+/// and coverage code `coverage`: per direction, the three frames and their weights.
+fn shader_frames_around(
+    directions: &[[f32; 3]],
+    frames: u32,
+    coverage: u32,
+) -> Option<Vec<Picked>> {
+    let input: Vec<f32> = directions
+        .iter()
+        .flat_map(|d| [d[0], d[1], d[2], 0.0])
         .collect();
+    let u = uniform([0.0; 3], 1.0, (frames, 128, coverage), 0.0);
+    let floats = run_on_device(PICK, &u, &input, 9)?;
     Some(
         floats
             .chunks_exact(9)
             .map(|p| std::array::from_fn(|m| ((p[2 * m] as u32, p[2 * m + 1] as u32), p[6 + m])))
             .collect(),
     )
+}
+
+/// Skips a test (or fails it where CI requires a device) when no Vulkan device is found.
+fn no_device() {
+    if std::env::var_os("TROMPE_REQUIRE_VULKAN").is_some() {
+        panic!("no Vulkan device, and TROMPE_REQUIRE_VULKAN is set (.ci/run sets it)");
+    }
+    eprintln!("skipped: no Vulkan device (Mesa's lavapipe runs it on the CPU)");
+}
+
+/// A compute entry over the shader's `frame_texel`: each input `(x, y, z, frame)` (frame as
+/// `i + j·n`) to its texel coordinates in that frame.
+const TEXEL: &str = r#"
+@compute @workgroup_size(64)
+fn run(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = id.x;
+    if (k >= arrayLength(&inputs)) {
+        return;
+    }
+    let f = u32(inputs[k].w);
+    let frame = vec2<u32>(f % impostor.frames, f / impostor.frames);
+    let d = frame_direction(frame);
+    let right = frame_right(d);
+    let up = cross(d, right);
+    let t = frame_texel(inputs[k].xyz, d, right, up);
+    outputs[k * 2u] = t.x;
+    outputs[k * 2u + 1u] = t.y;
+}
+"#;
+
+#[test]
+fn the_shaders_frame_texels_are_the_cpu_references_for_both_projections() {
+    use glam::DVec3;
+    use trompe::octahedral::render::frame_texel;
+    use trompe::octahedral::{BakeSettings, Coverage, FrameProjection, Grid};
+    let (centre, radius) = ([0.3f32, -0.2, 0.5], 1.5f32);
+    let mut seed = 5u64;
+    let mut next = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let n = 12;
+    // Points inside the bounding sphere, each with a frame.
+    let items: Vec<([f32; 3], u32)> = (0..10_000)
+        .map(|_| {
+            let p = DVec3::new(next(), next(), next()) * 2.0 - DVec3::ONE;
+            let p = glam::Vec3::from(centre) + (p * 0.57 * f64::from(radius)).as_vec3();
+            (p.to_array(), (next() * f64::from(n * n)) as u32 % (n * n))
+        })
+        .collect();
+    let input: Vec<f32> = items
+        .iter()
+        .flat_map(|(p, f)| [p[0], p[1], p[2], *f as f32])
+        .collect();
+    for (projection, distance) in [
+        (FrameProjection::Orthographic, 0.0),
+        (FrameProjection::Pinhole { distance: 3.0 }, 3.0),
+    ] {
+        let settings = BakeSettings {
+            grid: Grid {
+                n,
+                coverage: Coverage::Sphere,
+            },
+            frame_size: 96,
+            dilation: 0,
+            projection,
+        };
+        let u = uniform(centre, radius, (n, 96, 0), distance);
+        let Some(shader) = run_on_device(TEXEL, &u, &input, 2) else {
+            return no_device();
+        };
+        let sphere = (glam::Vec3::from(centre).as_dvec3(), f64::from(radius));
+        let mut worst = 0.0f64;
+        for (k, (p, f)) in items.iter().enumerate() {
+            let p = glam::Vec3::from(*p).as_dvec3();
+            let cpu = frame_texel(&settings, sphere, (f % n, f / n), p);
+            let gpu = glam::DVec2::new(shader[2 * k].into(), shader[2 * k + 1].into());
+            worst = worst.max((cpu - gpu).length());
+        }
+        eprintln!("{projection:?}: largest texel difference {worst:.2e}");
+        // f32 against f64, over a 96-texel frame.
+        assert!(worst < 1e-3, "{projection:?}: {worst} texels apart");
+    }
 }
 
 #[test]
@@ -198,11 +297,7 @@ fn the_shaders_frame_selection_is_the_cpu_references_on_ten_thousand_directions(
     for (coverage, code) in [(Coverage::Sphere, 0), (Coverage::Hemisphere, 1)] {
         for n in [8, 16, 31] {
             let Some(shader) = shader_frames_around(&single, n, code) else {
-                if std::env::var_os("TROMPE_REQUIRE_VULKAN").is_some() {
-                    panic!("no Vulkan device, and TROMPE_REQUIRE_VULKAN is set (.ci/run sets it)");
-                }
-                eprintln!("skipped: no Vulkan device (Mesa's lavapipe runs it on the CPU)");
-                return;
+                return no_device();
             };
             let grid = Grid { n, coverage };
             let mut on_an_edge = 0;

@@ -6,7 +6,7 @@
 use super::BenchError;
 use crate::eval::fixtures::Shipped;
 use crate::frame::envmap::EnvMap;
-use crate::octahedral::{BakeSettings, Coverage, Grid, bake, turntable};
+use crate::octahedral::{BakeSettings, Coverage, FrameCamera, Grid, bake, turntable};
 use crate::raster::{NoAttributes, rasterize};
 use crate::scene::{Light, Lighting, Surface};
 use glam::Vec3;
@@ -57,6 +57,7 @@ fn settings(n: u32, side: u32) -> BakeSettings {
         },
         frame_size: side / n,
         dilation: 4,
+        projection: Default::default(),
     }
 }
 
@@ -77,8 +78,11 @@ pub fn octahedral(inputs: &Shipped, quick: bool) -> Result<OctahedralFigures, Be
         (0..256u32)
             .into_par_iter()
             .map(|k| {
-                let camera = atlas.frame_camera(k % 16, k / 16);
-                rasterize(&camera, &[&mesh], &NoAttributes, ()).map(|_| ())
+                match atlas.frame_camera(k % 16, k / 16) {
+                    FrameCamera::Orthographic(c) => rasterize(&c, &[&mesh], &NoAttributes, ()),
+                    FrameCamera::Pinhole(c) => rasterize(&c, &[&mesh], &NoAttributes, ()),
+                }
+                .map(|_| ())
             })
             .collect::<Result<Vec<()>, _>>()?;
         bakes.push(BakeRow {

@@ -127,6 +127,10 @@ impl BakeArgs {
             },
             frame_size,
             dilation: 4,
+            projection: match self.perspective {
+                Some(distance) => trompe::octahedral::FrameProjection::Pinhole { distance },
+                None => trompe::octahedral::FrameProjection::Orthographic,
+            },
         })
     }
 

@@ -175,6 +175,7 @@ impl RenderArgs {
                     },
                     frame_size: self.frame_size,
                     dilation: 4,
+                    projection: Default::default(),
                 };
                 let pb = bar("octahedral", s.camera.height as u64);
                 trompe::octahedral::scene::render(&s, t, settings, pb.as_ref(), &mut timings)

@@ -13,7 +13,7 @@
 //! dilation never changes a covered texel and never crosses a frame's border.
 
 use super::mapping::{Grid, frame_basis};
-use crate::camera::Orthographic;
+use crate::camera::{Orthographic, Pinhole};
 use crate::frame::{Image, Rgba};
 use crate::geom::Mesh;
 use crate::raster::{StoreFragment, rasterize};
@@ -36,6 +36,52 @@ pub struct BakeSettings {
     pub frame_size: u32,
     /// Texels of dilation around the object in every frame.
     pub dilation: u32,
+    /// How each frame sees the object.
+    pub projection: FrameProjection,
+}
+
+/// How an atlas frame sees the object.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum FrameProjection {
+    /// Parallel rays along the frame's direction, the image the sphere's diameter square: what
+    /// engines' octahedral bakers do by default.
+    #[default]
+    Orthographic,
+    /// A pinhole `distance` bounding radii from the centre (more than 1) whose field of view
+    /// just holds the sphere: perspective as a camera at that distance sees it, for objects
+    /// seen from near.
+    Pinhole {
+        /// Eye distance from the sphere's centre, in radii.
+        distance: f32,
+    },
+}
+
+impl FrameProjection {
+    /// The tangent of the half field of view of a pinhole frame at `distance` radii that just
+    /// holds the sphere.
+    pub fn tan_half_fov(distance: f64) -> f64 {
+        1.0 / (distance * distance - 1.0).max(1e-12).sqrt()
+    }
+}
+
+/// A frame's camera.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FrameCamera {
+    /// Orthographic.
+    Orthographic(Orthographic),
+    /// Pinhole.
+    Pinhole(Pinhole),
+}
+
+impl FrameCamera {
+    /// The ray through frame pixel position `pixel` (texel centres at `+½`).
+    pub fn ray(&self, pixel: glam::DVec2) -> crate::geom::Ray {
+        match self {
+            FrameCamera::Orthographic(c) => c.ray(pixel),
+            FrameCamera::Pinhole(c) => c.ray(pixel),
+        }
+    }
 }
 
 /// Why an atlas could not be baked.
@@ -48,6 +94,11 @@ pub enum BakeError {
     /// The atlas would need more memory than the budget allows.
     #[error(transparent)]
     Memory(#[from] crate::memory::OverBudget),
+    /// A pinhole frame's eye distance is not past the bounding sphere.
+    #[error(
+        "pinhole frames at {0} bounding radii: the eye must be outside the sphere (more than 1, at most 10 000)"
+    )]
+    Distance(f32),
 }
 
 /// A baked atlas, in the object's own space.
@@ -143,7 +194,7 @@ impl OctahedralAtlas {
     }
 
     /// The camera of frame `(i, j)`.
-    pub fn frame_camera(&self, i: u32, j: u32) -> Orthographic {
+    pub fn frame_camera(&self, i: u32, j: u32) -> FrameCamera {
         frame_camera(
             &self.settings,
             self.centre.as_dvec3(),
@@ -154,20 +205,36 @@ impl OctahedralAtlas {
     }
 }
 
-fn frame_camera(s: &BakeSettings, centre: DVec3, radius: f64, i: u32, j: u32) -> Orthographic {
+fn frame_camera(s: &BakeSettings, centre: DVec3, radius: f64, i: u32, j: u32) -> FrameCamera {
     let d = s.grid.direction(i, j);
     let (_, up) = frame_basis(d);
-    let eye = centre + d * radius;
-    // Valid by construction: a positive radius and a unit direction.
-    match Orthographic::look_at(
-        eye.as_vec3(),
-        centre.as_vec3(),
-        up.as_vec3(),
-        radius,
-        2.0 * radius,
-        s.frame_size,
-        s.frame_size,
-    ) {
+    // Valid by construction: a positive radius, a unit direction, a distance past the sphere.
+    let made = match s.projection {
+        FrameProjection::Orthographic => Orthographic::look_at(
+            (centre + d * radius).as_vec3(),
+            centre.as_vec3(),
+            up.as_vec3(),
+            radius,
+            2.0 * radius,
+            s.frame_size,
+            s.frame_size,
+        )
+        .map(FrameCamera::Orthographic),
+        FrameProjection::Pinhole { distance } => {
+            let distance = f64::from(distance);
+            let fov = 2.0 * FrameProjection::tan_half_fov(distance).atan().to_degrees();
+            Pinhole::look_at(
+                (centre + d * (radius * distance)).as_vec3(),
+                centre.as_vec3(),
+                up.as_vec3(),
+                fov,
+                s.frame_size,
+                s.frame_size,
+            )
+            .map(|c| FrameCamera::Pinhole(c.with_near(radius * (distance - 1.0) * 0.5)))
+        }
+    };
+    match made {
         Ok(c) => c,
         Err(_) => unreachable!("a frame camera has a positive radius and a unit direction"),
     }
@@ -187,6 +254,11 @@ pub fn bake(
             reason: "an octahedral grid has 2 to 64 frames a side, each at least one texel",
         }
         .into());
+    }
+    if let FrameProjection::Pinhole { distance } = settings.projection
+        && !(distance.is_finite() && distance > 1.0 && distance <= 1e4)
+    {
+        return Err(BakeError::Distance(distance));
     }
     let b = mesh.bounds();
     let centre = b.center();
@@ -258,10 +330,12 @@ fn bake_frame(
     i: u32,
     j: u32,
 ) -> Result<FrameTexels, crate::frame::FrameError> {
-    let camera = frame_camera(settings, centre, radius, i, j);
     let d = settings.grid.direction(i, j);
     let front = centre + d * radius;
-    let (target, _) = rasterize(&camera, &[mesh], &StoreFragment, None)?;
+    let (target, _) = match frame_camera(settings, centre, radius, i, j) {
+        FrameCamera::Orthographic(c) => rasterize(&c, &[mesh], &StoreFragment, None)?,
+        FrameCamera::Pinhole(c) => rasterize(&c, &[mesh], &StoreFragment, None)?,
+    };
     let s = settings.frame_size as usize;
     let mut color = vec![Vec4::ZERO; s * s];
     let mut normal = vec![Vec3::ZERO; s * s];

@@ -37,6 +37,11 @@ pub struct Sidecar {
     pub centre: [f32; 3],
     /// Bounding sphere radius.
     pub radius: f32,
+    /// How each frame sees the object: `{ "type": "orthographic" }` or
+    /// `{ "type": "pinhole", "distance": D }` (eye `D` radii from the centre, field of view
+    /// `2·atan(1/√(D² − 1))`); orthographic when absent.
+    #[serde(default)]
+    pub projection: super::FrameProjection,
     /// Base colour + coverage (PNG, sRGB).
     pub color: String,
     /// Object-space normals (OpenEXR, float RGB).
@@ -110,6 +115,7 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
         dilation: atlas.settings.dilation,
         centre: atlas.centre.to_array(),
         radius: atlas.radius,
+        projection: atlas.settings.projection,
         color: name(&color),
         normal: name(&normal),
         depth: name(&depth),
@@ -171,9 +177,13 @@ impl std::fmt::Display for OctahedralReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let s = &self.sidecar;
         let side = s.grid.n * s.frame_size;
+        let projection = match s.projection {
+            super::FrameProjection::Orthographic => "orthographic".to_string(),
+            super::FrameProjection::Pinhole { distance } => format!("pinhole at {distance} radii"),
+        };
         writeln!(
             f,
-            "octahedral impostor: {n} × {n} frames ({:?}) of {fs}², atlas {side}², baked in {:.2} s",
+            "octahedral impostor: {n} × {n} {projection} frames ({:?}) of {fs}², atlas {side}², baked in {:.2} s",
             s.grid.coverage,
             self.bake_time.as_secs_f64(),
             n = s.grid.n,

@@ -174,6 +174,7 @@ mod tests {
             },
             frame_size: 16,
             dilation: 2,
+            projection: Default::default(),
         };
         let atlas = bake(&mesh, &crate::scene::Surface::Diffuse(None), settings).unwrap();
         let dir = crate::test_scratch::scratch("octahedral_glb");

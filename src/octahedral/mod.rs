@@ -17,6 +17,6 @@ pub mod render;
 pub mod scene;
 pub mod turntable;
 
-pub use bake::{BakeError, BakeSettings, OctahedralAtlas, bake};
+pub use bake::{BakeError, BakeSettings, FrameCamera, FrameProjection, OctahedralAtlas, bake};
 pub use mapping::{Coverage, Grid};
 pub use turntable::{TurntableView, turntable};

@@ -5,10 +5,11 @@
 //! read there, a few times over), and the blended base colour is relit with the blended normal.
 //!
 //! Invariants: a frame's texel `(x, y)` images the point `c + r·(2(x+½)/s − 1)·right +
-//! r·(1 − 2(y+½)/s)·up` of its plane, as its baking camera did; lookups are bilinear and clamped
+//! r·(1 − 2(y+½)/s)·up` of its plane (orthographic frames; a pinhole frame the ray through that
+//! point of the plane tangent to the sphere, scaled by its depth), as its baking camera did; lookups are bilinear and clamped
 //! to the frame, never reading a neighbour frame.
 
-use super::bake::OctahedralAtlas;
+use super::bake::{FrameProjection, OctahedralAtlas};
 use super::mapping::frame_basis;
 use crate::camera::Pinhole;
 use crate::frame::{Image, Rgba};
@@ -20,6 +21,34 @@ use rayon::prelude::*;
 
 /// Parallax refinement steps (0: the frame's plane through the centre, no depth).
 pub const PARALLAX_STEPS: u32 = 4;
+
+/// Where world point `p` lands in frame `(i, j)` of an atlas baked with `settings` on the
+/// sphere `(centre, radius)`, in frame texel coordinates (texel centres at `+½`): along the
+/// frame's direction (orthographic), or through its pinhole. The shader's `frame_texel` is the
+/// same function (checked by the tests).
+pub fn frame_texel(
+    settings: &super::BakeSettings,
+    (centre, r): (DVec3, f64),
+    (i, j): (u32, u32),
+    p: DVec3,
+) -> DVec2 {
+    let d = settings.grid.direction(i, j);
+    let (right, up) = frame_basis(d);
+    let s = f64::from(settings.frame_size);
+    let (q, scale) = match settings.projection {
+        FrameProjection::Orthographic => (p - centre, r),
+        FrameProjection::Pinhole { distance } => {
+            let distance = f64::from(distance);
+            let q = p - (centre + d * (r * distance));
+            let z = (-q.dot(d)).max(1e-12 * r);
+            (q, z * FrameProjection::tan_half_fov(distance))
+        }
+    };
+    DVec2::new(
+        (q.dot(right) / scale + 1.0) * 0.5 * s,
+        (1.0 - q.dot(up) / scale) * 0.5 * s,
+    )
+}
 
 /// What a lookup returns, premultiplied by coverage.
 #[derive(Clone, Copy, Debug, Default)]
@@ -137,15 +166,8 @@ impl OctahedralAtlas {
         // The ray against the plane at signed offset `off` from the centre along `d`.
         let along = |off: f64| (centre + d * off - o).dot(d) / facing;
         let at = |off: f64| o + dir * along(off);
-        let (right, up) = frame_basis(d);
         let s = f64::from(self.settings.frame_size);
-        let texel = |p: DVec3| {
-            let q = p - centre;
-            DVec2::new(
-                (q.dot(right) / r + 1.0) * 0.5 * s,
-                (1.0 - q.dot(up) / r) * 0.5 * s,
-            )
-        };
+        let texel = |p: DVec3| frame_texel(&self.settings, (centre, r), (i, j), p);
         let mut uv = texel(at(0.0));
         let mut t = along(0.0);
         for _ in 0..steps {

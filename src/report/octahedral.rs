@@ -23,6 +23,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         },
         frame_size: 96,
         dilation: 4,
+        projection: Default::default(),
     };
     let start = std::time::Instant::now();
     let atlas = bake(&mesh, &surface, settings)?;
