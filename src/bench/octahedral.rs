@@ -21,7 +21,7 @@ pub struct BakeRow {
     pub name: String,
     /// Its triangles.
     pub triangles: usize,
-    /// The bake's wall time (colour, normal, depth, dilation).
+    /// The bake's wall time (colour, normal, depth, ORM, dilation).
     pub bake: Duration,
     /// Rasterizing the 256 frames' depth alone, the peer.
     pub depth_only: Duration,
@@ -139,7 +139,7 @@ impl std::fmt::Display for OctahedralFigures {
         )?;
         writeln!(
             f,
-            "| model | triangles | bake (colour, normal, depth, dilation) | peer: depth of the 256 frames alone | ratio |"
+            "| model | triangles | bake (colour, normal, depth, ORM, dilation) | peer: depth of the 256 frames alone | ratio |"
         )?;
         writeln!(f, "|---|---|---|---|---|")?;
         for b in &self.bakes {
