@@ -52,6 +52,9 @@ pub enum ReportError {
     /// An octahedral bake failed.
     #[error(transparent)]
     Octahedral(#[from] crate::octahedral::BakeError),
+    /// A scene could not be drawn from octahedral atlases.
+    #[error(transparent)]
+    OctahedralScene(#[from] crate::octahedral::scene::SceneAtlasError),
     /// A relief walk failed.
     #[error(transparent)]
     Relief(Box<crate::relief::ReliefError>),
