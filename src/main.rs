@@ -6,12 +6,23 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     match cli::run(cli::Cli::parse()) {
         Ok(code) => code,
         Err(err) => {
             eprintln!("error: {}", error_chain(&err));
             ExitCode::from(1)
         }
+    }
+}
+
+/// A closed output pipe (`trompe info FILE | head`) ends the program quietly, as it ends any
+/// Unix tool, instead of a panic at the next print.
+fn quiet_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: sets the default action of one signal, before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 
