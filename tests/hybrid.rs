@@ -297,3 +297,55 @@ fn render_c3rc_prints_its_statistics_and_refuses_bad_settings() {
         "subdivide",
     );
 }
+
+#[test]
+fn points_follow_their_object_as_it_deforms() {
+    use trompe::scene::{DeformKind, Deformation};
+    let mut s = scene(FLAT_MIRROR);
+    let mesh = &s.objects[1].mesh;
+    s.objects[1].deform = Some(Deformation::of(mesh, DeformKind::Twist, 90.0, 0.5, 1.0));
+    let one = HybridSettings {
+        splat: 1,
+        ..HybridSettings::default()
+    };
+    let clouds = HybridReflections::prepare(&s, one).unwrap();
+    // sin(2π · 0.5 Hz · 0.5 s) = 1: the bunny's top turned 90°.
+    let t = 0.5;
+    let twisted = clouds.render_at(&s, t, &()).unwrap();
+    let exact_hits = exact_reflection_hits(&s, t);
+    let still = exact_reflection_hits(&s, 0.0);
+    let reached: Vec<bool> = twisted.reached.pixels().iter().map(|&o| o == 1).collect();
+    let count = |f: &dyn Fn(bool, bool) -> bool| {
+        exact_hits
+            .iter()
+            .zip(&reached)
+            .filter(|(a, b)| f(**a, **b))
+            .count()
+    };
+    let (both, stray) = (count(&|a, b| a && b), count(&|a, b| !a && b));
+    let exact_n = exact_hits.iter().filter(|a| **a).count();
+    // The twist changes what the mirror shows, and the splats follow the twisted surface: they
+    // cover what the exact reflection sees and little else.
+    assert_ne!(exact_hits, still);
+    println!("twisted: exact {exact_n}, both {both}, splats where exact sees none {stray}");
+    assert!(
+        both as f64 >= 0.97 * exact_n as f64,
+        "holes: {both} of {exact_n}"
+    );
+    // Splats reach past silhouettes by a share of what they cover even at rest (the splat's
+    // footprint); the twisted frame strays no more than that. Points left untwisted would
+    // cover 80 % and stray by 47 % here.
+    let mut rest = s.clone();
+    rest.objects[1].deform = None;
+    let at_rest = clouds.render_at(&rest, 0.0, &()).unwrap();
+    let rest_hits = exact_reflection_hits(&rest, 0.0);
+    let rest_stray = rest_hits
+        .iter()
+        .zip(at_rest.reached.pixels())
+        .filter(|(a, b)| !**a && **b == 1)
+        .count();
+    let rest_share = rest_stray as f64 / rest_hits.iter().filter(|a| **a).count() as f64;
+    let share = stray as f64 / exact_n as f64;
+    println!("stray share {share:.3}, at rest {rest_share:.3}");
+    assert!(share <= rest_share + 0.05, "stray: {stray}");
+}

@@ -173,6 +173,9 @@ pub fn render_frame_from(
     if let Some(camera) = camera {
         view.camera = camera;
     }
+    // Deforming objects' points follow their surface this frame.
+    let deformed = clouds.deformed_at(scene, t);
+    let clouds = deformed.as_ref().unwrap_or(clouds);
     crate::render::check_memory(&view, crate::render::Method::Trace)?;
     let (w, h) = view.camera.resolution();
     crate::memory::check(

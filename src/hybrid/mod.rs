@@ -14,8 +14,10 @@
 //! reflections (the paper's method reflects diffuse objects only).
 //!
 //! Invariants: the points and trees are built once per scene and reused for every frame and any
-//! rigid (indeed affine) motion of their object; a frame's pixels do not depend on the thread
-//! count (splats resolve by an atomic minimum over `(key, point)`).
+//! rigid (indeed affine) motion of their object; a deforming object's points are carried by its
+//! deformation each frame and its tree built again ([`HybridReflections::deformed_at`]); a
+//! frame's pixels do not depend on the thread count (splats resolve by an atomic minimum over
+//! `(key, point)`).
 
 pub mod frame;
 pub mod kdtree;
@@ -191,6 +193,58 @@ impl HybridReflections {
             clouds,
             settings,
             thinned,
+        })
+    }
+
+    /// The clouds as `scene`'s deforming objects stand at time `t`: each deforming object's
+    /// points carried by its deformation (normals by the Jacobian, as its mesh's are) and its
+    /// tree built again over them; `None` when no cloud's object deforms (the clouds stand as
+    /// prepared, placed by rigid motion alone).
+    pub fn deformed_at(&self, scene: &Scene, t: f32) -> Option<HybridReflections> {
+        let deforming = |c: &PointCloud| {
+            scene
+                .objects
+                .get(c.object as usize)
+                .and_then(|o| o.deform.as_ref())
+        };
+        if !self.clouds.iter().any(|c| deforming(c).is_some()) {
+            return None;
+        }
+        let clouds = self
+            .clouds
+            .iter()
+            .map(|c| {
+                let Some(d) = deforming(c) else {
+                    return c.clone();
+                };
+                let start = Instant::now();
+                let (positions, normals) = c
+                    .points
+                    .positions
+                    .iter()
+                    .zip(&c.points.normals)
+                    .map(|(&p, &n)| d.carry(p, n, t))
+                    .unzip();
+                let moved = PointSet {
+                    positions,
+                    normals,
+                    albedo: c.points.albedo.clone(),
+                };
+                let (tree, points) = KdTree::build(&moved, self.settings.tree);
+                PointCloud {
+                    object: c.object,
+                    spacing: c.spacing,
+                    points,
+                    tree,
+                    sample_time: c.sample_time,
+                    build_time: start.elapsed(),
+                }
+            })
+            .collect();
+        Some(HybridReflections {
+            clouds,
+            settings: self.settings,
+            thinned: self.thinned,
         })
     }
 

@@ -85,18 +85,25 @@ impl Deformation {
         }
     }
 
+    /// The object-space point `p` with normal `n` carried by the deformation at time `t`: the
+    /// point moved, the normal by the Jacobian's inverse transpose.
+    pub fn carry(&self, p: Vec3, n: Vec3, t: f32) -> (Vec3, Vec3) {
+        let h = 1e-3 * self.height;
+        let column =
+            |axis: Vec3| (self.point(p + axis * h, t) - self.point(p - axis * h, t)) / (2.0 * h);
+        let jacobian = Mat3::from_cols(column(Vec3::X), column(Vec3::Y), column(Vec3::Z));
+        (
+            self.point(p, t),
+            (jacobian.inverse().transpose() * n).normalize_or(n),
+        )
+    }
+
     /// `mesh` (object space) deformed at time `t`: positions moved, normals carried by the
-    /// Jacobian's inverse transpose.
+    /// Jacobian's inverse transpose ([`Deformation::carry`]).
     pub fn apply(&self, mesh: &Mesh, t: f32) -> Mesh {
         let mut out = mesh.clone();
-        let h = 1e-3 * self.height;
         for (p, n) in out.positions.iter_mut().zip(out.normals.iter_mut()) {
-            let column = |axis: Vec3| {
-                (self.point(*p + axis * h, t) - self.point(*p - axis * h, t)) / (2.0 * h)
-            };
-            let jacobian = Mat3::from_cols(column(Vec3::X), column(Vec3::Y), column(Vec3::Z));
-            *n = (jacobian.inverse().transpose() * *n).normalize_or(*n);
-            *p = self.point(*p, t);
+            (*p, *n) = self.carry(*p, *n, t);
         }
         out
     }
