@@ -12,10 +12,10 @@ use super::{DepthEncoding, Displacements, ReliefError, ReliefFrame, ReliefImpost
 use crate::camera::{Pinhole, Projection};
 use crate::frame::Frame;
 use crate::geom::Ray;
-use crate::geom::optics::{facing, fresnel, reflect, refract};
-use crate::render::shading::albedo;
-use crate::scene::{Lighting, RenderSettings, Surface, View};
-use crate::trace::{Bvh, Hit, RayQuery};
+use crate::geom::optics::facing;
+use crate::render::Tracer;
+use crate::scene::{Lighting, RenderSettings, View};
+use crate::trace::{Bvh, Exact, Hit, RayQuery};
 use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -159,56 +159,27 @@ impl SoftwareShader {
 
     /// The radiance arriving along `ray` through the whole scene.
     pub fn radiance(&self, ray: &Ray, depth: u32) -> Vec3 {
-        match self.scene.closest_hit(ray, f32::INFINITY) {
-            Some(hit) => self.shade(ray, &hit, depth),
-            None => self.lighting.environment.radiance(ray.dir),
-        }
+        self.with_tracer(|t| t.radiance(ray, depth))
     }
 
-    /// Shades `hit`: Lambert under the light with a shadow ray and the environment's irradiance,
-    /// mirrors and glass followed through the scene up to the scene's depth limit.
+    /// Shades `hit` as trompe's Whitted tracer does over the exact scene: Lambert under the
+    /// light with a shadow ray and the environment's irradiance, mirrors and glass followed
+    /// through the scene up to the scene's depth limit.
     fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
-        let o = hit.object as usize;
-        let (mesh, surface) = (&self.view.meshes[o], &self.view.surfaces[o]);
-        let d = ray.dir;
-        let (n, ng, front) = facing(d, hit.normal, hit.geometric_normal);
-        let eps = self.settings.ray_epsilon;
-        let env = &self.lighting.environment;
-        let last = depth + 1 >= self.settings.max_depth;
-        let follow = |origin: Vec3, dir: Vec3| {
-            if last {
-                env.radiance(dir)
-            } else {
-                self.radiance(&Ray::new(origin, dir), depth + 1)
-            }
-        };
-        match surface {
-            Surface::Diffuse(_) => {
-                let a = albedo(mesh, surface, hit.triangle, hit.uv);
-                let mut e = env.irradiance(n);
-                if let Some(sun) = &self.lighting.light {
-                    let cos = n.dot(sun.direction);
-                    if cos > 0.0 {
-                        let shadow = Ray::new(hit.position + ng * eps, sun.direction);
-                        if !self.scene.any_hit(&shadow, f32::INFINITY) {
-                            e += sun.irradiance * (cos / std::f32::consts::PI);
-                        }
-                    }
-                }
-                a * e
-            }
-            Surface::Mirror { tint } => *tint * follow(hit.position + ng * eps, reflect(d, n)),
-            Surface::Glass { ior, tint } => {
-                let eta = if front { 1.0 / ior } else { *ior };
-                let kr = fresnel((-d.dot(n)).max(0.0), eta);
-                let reflected = follow(hit.position + ng * eps, reflect(d, n));
-                let transmitted = match refract(d, n, eta) {
-                    Some(t) if kr < 1.0 => *tint * follow(hit.position - ng * eps, t),
-                    _ => Vec3::ZERO,
-                };
-                kr * reflected + (1.0 - kr) * transmitted
-            }
-        }
+        self.with_tracer(|t| t.shade(ray, hit, depth))
+    }
+
+    /// `f` of the Whitted tracer over this shader's copy of the scene, every ray answered
+    /// exactly.
+    fn with_tracer<R>(&self, f: impl FnOnce(&Tracer<'_, Bvh, Exact<'_, Bvh>>) -> R) -> R {
+        let exact = Exact(&self.scene);
+        f(&Tracer {
+            view: &self.view,
+            primary: &self.scene,
+            secondary: &exact,
+            lighting: &self.lighting,
+            settings: &self.settings,
+        })
     }
 
     /// The true frame through `camera`: every pixel ray traced by this shader, the objects in
@@ -254,7 +225,7 @@ impl SoftwareShader {
 pub(crate) mod tests {
     use super::*;
     use crate::frame::envmap::EnvMap;
-    use crate::scene::Light;
+    use crate::scene::{Light, Surface};
 
     /// A sphere of radius 0.5 above a floor, lit from straight above: the floor under it is in shadow.
     pub(crate) fn sphere_on_floor() -> (View, Lighting, RenderSettings) {
