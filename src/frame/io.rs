@@ -37,16 +37,21 @@ pub fn write_png(path: &Path, image: &Image<Rgba>) -> Result<(), FrameError> {
 
 /// Encodes a linear colour image as sRGB PNG bytes (`path` only names it in errors).
 pub fn encode_png(image: &Image<Rgba>, path: &Path) -> Result<Vec<u8>, FrameError> {
-    use image::ImageEncoder as _;
     let pixels = to_srgb8(image);
+    png_bytes(&pixels, image.size(), image::ExtendedColorType::Rgba8, path)
+}
+
+/// PNG bytes of 8-bit `pixels` of `size`, `layout` their channels.
+fn png_bytes(
+    pixels: &[u8],
+    (w, h): (u32, u32),
+    layout: image::ExtendedColorType,
+    path: &Path,
+) -> Result<Vec<u8>, FrameError> {
+    use image::ImageEncoder as _;
     let mut encoded = Vec::new();
     image::codecs::png::PngEncoder::new(&mut encoded)
-        .write_image(
-            &pixels,
-            image.width(),
-            image.height(),
-            image::ExtendedColorType::Rgba8,
-        )
+        .write_image(pixels, w, h, layout)
         .map_err(|e| codec(path, e))?;
     Ok(encoded)
 }
@@ -54,7 +59,6 @@ pub fn encode_png(image: &Image<Rgba>, path: &Path) -> Result<Vec<u8>, FrameErro
 /// An image of data in `[0, 1]` (not colour: occlusion, roughness …) as an 8-bit RGB PNG, stored
 /// linearly, as glTF's data textures are.
 pub fn encode_png_data(image: &Image<Vec3>, path: &Path) -> Result<Vec<u8>, FrameError> {
-    use image::ImageEncoder as _;
     let pixels: Vec<u8> = image
         .pixels()
         .iter()
@@ -63,16 +67,7 @@ pub fn encode_png_data(image: &Image<Vec3>, path: &Path) -> Result<Vec<u8>, Fram
                 .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
         })
         .collect();
-    let mut encoded = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut encoded)
-        .write_image(
-            &pixels,
-            image.width(),
-            image.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| codec(path, e))?;
-    Ok(encoded)
+    png_bytes(&pixels, image.size(), image::ExtendedColorType::Rgb8, path)
 }
 
 /// Writes an image of data in `[0, 1]` as a linear 8-bit RGB PNG ([`encode_png_data`]).
