@@ -218,6 +218,11 @@ pub struct CheckArgs {
     #[arg(long, default_value_t = 20_000, requires = "impostor",
           value_parser = clap::value_parser!(u32).range(1..=MAX_CHECK_RAYS))]
     rays: u32,
+    /// Depth layers: a count from 1 to 8, or auto (added while a new layer holds more than
+    /// 1 % of the first layer's texels). With more than one, the impostor with 1, 2, 4 and
+    /// auto layers is checked beside it on the same rays.
+    #[arg(long, default_value = "1", conflicts_with = "impostor")]
+    layers: trompe::impostor::Layers,
 }
 
 /// `trompe impostor bake`.
@@ -266,6 +271,11 @@ pub struct BakeArgs {
     /// With --octahedral and a batch: bake only shard K of N of the sorted inputs ("K/N").
     #[arg(long)]
     shard: Option<trompe::octahedral::batch::Shard>,
+    /// Depth layers peeled through the camera: a count from 1 to 8 (peeling stops early at a
+    /// layer that would hold nothing), or auto (added while a new layer holds more than 1 % of
+    /// the first layer's texels).
+    #[arg(long, default_value = "1")]
+    layers: trompe::impostor::Layers,
 }
 
 /// `--camera` of `impostor`.
@@ -506,6 +516,7 @@ impl BakeArgs {
             resolution: self.resolution,
             from: self.from,
             distance: self.distance,
+            layers: self.layers,
         };
         let report = with_spinner("baking the impostor", || {
             bake(&subject, &settings, &self.output)
@@ -542,6 +553,7 @@ impl CheckArgs {
                 distance: self.distance,
                 view: self.view,
                 sphere_rays: self.sphere_rays,
+                layers: self.layers,
             };
             return Ok(check_built(&subject, &settings)?);
         };

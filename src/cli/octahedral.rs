@@ -109,6 +109,12 @@ impl BakeArgs {
     /// The octahedral settings these arguments ask for.
     pub(super) fn octahedral_settings(&self, n: u32) -> Result<trompe::octahedral::BakeSettings> {
         use trompe::octahedral::{BakeSettings, Coverage, Grid};
+        if self.layers != trompe::impostor::Layers::ONE {
+            anyhow::bail!(
+                "--layers {}: an octahedral atlas holds one layer a frame; peeling is for depth-image impostors",
+                self.layers
+            );
+        }
         let frame_size = self.resolution / n;
         if frame_size < 8 {
             anyhow::bail!(

@@ -20,8 +20,8 @@ use crate::camera::CameraError;
 use crate::frame::FrameError;
 use crate::geom::{Mesh, Ray};
 use crate::impostor::{
-    CameraChoice, Impostor, ImpostorCamera, Paired, Subject, SubjectError, ViewCamera, WalkMode,
-    albedo_of, build,
+    CameraChoice, Impostor, ImpostorCamera, Layers, Paired, Subject, SubjectError, ViewCamera,
+    WalkMode, albedo_of, build,
 };
 use crate::progress::Timings;
 use crate::trace::Bvh;
@@ -54,6 +54,10 @@ pub struct CheckSettings {
     pub view: u32,
     /// Also fire this many rays from a sphere of 3 bounding radii around the object.
     pub sphere_rays: u32,
+    /// Depth layers to peel behind the impostor's first (`impostor/peel.rs`). With more than
+    /// one, the report also sets the impostor with 1, 2, 4 and the automatic number of layers
+    /// beside it, on the same rays ([`CheckReport::layers_beside`]).
+    pub layers: Layers,
 }
 
 impl Default for CheckSettings {
@@ -65,6 +69,7 @@ impl Default for CheckSettings {
             distance: 1.4,
             view: 1024,
             sphere_rays: 0,
+            layers: Layers::ONE,
         }
     }
 }
@@ -111,6 +116,9 @@ pub enum CheckError {
     /// The impostor's maps could not be allocated.
     #[error("building the impostor: {0}")]
     Build(#[from] FrameError),
+    /// The impostor's layers could not be peeled.
+    #[error("peeling the impostor's layers: {0}")]
+    Layers(#[from] crate::impostor::LayerError),
     /// A walk does not go with the impostor's camera.
     #[error(transparent)]
     Walk(#[from] crate::impostor::WalkError),
@@ -167,17 +175,34 @@ pub struct CheckReport {
     pub pinhole_beside: Option<(FidelityReport, SurfaceCapture)>,
     /// For a graph camera: §4.6's algorithm 1 (uniform 3-D steps) beside the default walk.
     pub algorithm_1: Option<FidelityReport>,
+    /// When layers were asked for: the same camera with 1, 2, 4 and the automatic number of
+    /// layers, on the same rays.
+    pub layers_beside: Vec<LayerRow>,
     /// The steps' durations.
     pub timings: Timings,
 }
 
-/// An impostor to check, the object it replaces, the rays, and the camera of the pinhole to
-/// set beside a SPOC.
+/// One impostor of a layer comparison ([`CheckReport::layers_beside`]).
+#[derive(Clone, Debug)]
+pub struct LayerRow {
+    /// The layers asked for.
+    pub asked: Layers,
+    /// The layers it holds.
+    pub layers: usize,
+    /// Its answers against the exact BVH.
+    pub fidelity: FidelityReport,
+    /// Bytes of its maps.
+    pub map_bytes: u64,
+}
+
+/// An impostor to check, the object it replaces, the rays, the camera of the pinhole to
+/// set beside a SPOC, and whether to set other layer counts beside it.
 struct Checked {
     impostor: Impostor,
     target: Arc<Mesh>,
     rays: Vec<Ray>,
     pinhole_beside: Option<ImpostorCamera>,
+    compare_layers: bool,
 }
 
 /// Builds an impostor of `subject` through `settings.camera` and checks it on the reflector's
@@ -210,9 +235,15 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
             (setup, camera)
         }
     };
-    let impostor = timings.time("build impostor", || {
+    let mut impostor = timings.time("build impostor", || {
         build(camera, &setup.target, 0, &albedo_of(&setup.target))
     })?;
+    let compare_layers = settings.layers != Layers::ONE;
+    if compare_layers {
+        timings.time("peel layers", || {
+            impostor.peel(&setup.target, 0, &albedo_of(&setup.target), settings.layers)
+        })?;
+    }
     let pinhole_beside = match &impostor.camera() {
         ImpostorCamera::Spoc(_) => Some(
             setup
@@ -235,6 +266,7 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
         target: setup.target,
         rays,
         pinhole_beside,
+        compare_layers,
     };
     measure(checked, timings)
 }
@@ -319,6 +351,7 @@ pub fn check_baked(
         target,
         rays,
         pinhole_beside,
+        compare_layers: false,
     };
     measure(checked, timings)
 }
@@ -330,6 +363,7 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         target,
         rays,
         pinhole_beside,
+        compare_layers,
     } = checked;
     let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]));
     let fidelity = timings.time("check", || fidelity::check(&impostor, &exact, &rays));
@@ -354,12 +388,33 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
             })
         })
         .transpose()?;
+    let mut layers_beside = Vec::new();
+    if compare_layers {
+        for asked in [
+            Layers::ONE,
+            Layers::Count(2),
+            Layers::Count(4),
+            Layers::Auto,
+        ] {
+            let albedo = albedo_of(&target);
+            let mut other = build(impostor.camera().clone(), &target, 0, &albedo)?;
+            other.peel(&target, 0, &albedo, asked)?;
+            let fidelity = timings.time("check layers", || fidelity::check(&other, &exact, &rays));
+            layers_beside.push(LayerRow {
+                asked,
+                layers: other.layer_count(),
+                fidelity,
+                map_bytes: other.map_bytes(),
+            });
+        }
+    }
     Ok(CheckReport {
         impostor,
         fidelity,
         captured,
         pinhole_beside,
         algorithm_1,
+        layers_beside,
         timings,
     })
 }
@@ -375,9 +430,12 @@ impl fmt::Display for CheckReport {
         let (w, h) = imp.gd().size();
         writeln!(
             f,
-            "impostor  {} {w}×{h}, {:.1} % of texels covered",
+            "impostor  {} {w}×{h}, {:.1} % of texels covered, {} layer{}, maps {:.1} MB",
             imp.camera().kind(),
-            imp.coverage() * 100.0
+            imp.coverage() * 100.0,
+            imp.layer_count(),
+            if imp.layer_count() == 1 { "" } else { "s" },
+            imp.map_bytes() as f64 / 1e6
         )?;
         let (r, c) = (&self.fidelity, &self.captured);
         writeln!(f, "rays      {} ({} hit the object)", r.rays, r.exact_hits)?;
@@ -425,6 +483,28 @@ impl fmt::Display for CheckReport {
                 cp.within_footprint * 100.0,
                 cp.within_texel * 100.0
             )?;
+        }
+        if !self.layers_beside.is_empty() {
+            write!(
+                f,
+                "\nlayers    asked  held  agreement  missed (unheld / walk)  spurious  visits/ray  maps"
+            )?;
+            for row in &self.layers_beside {
+                let r = &row.fidelity;
+                write!(
+                    f,
+                    "\n          {:>5}  {:>4}  {:>8.3} %  {:>6} ({:>6} / {:>4})  {:>8}  {:>10.1}  {:.1} MB",
+                    row.asked.to_string(),
+                    row.layers,
+                    r.agreement() * 100.0,
+                    r.missed,
+                    r.missed_unheld,
+                    r.missed - r.missed_unheld,
+                    r.spurious,
+                    r.texel_visits_per_ray,
+                    row.map_bytes as f64 / 1e6
+                )?;
+            }
         }
         if let Some(r1) = &self.algorithm_1 {
             write!(

@@ -166,13 +166,17 @@ pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
     let bvh = Bvh::build(vec![reflector.clone()]);
     let eps = reflector.bounds().radius() * 1e-4;
     let (w, h) = view.resolution();
-    (0..w * h)
+    let primary: Vec<(Ray, f32)> = (0..w * h)
         .into_par_iter()
-        .filter_map(|i| {
+        .map(|i| {
             let r = view.ray(DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5));
-            let hit = bvh.closest_hit(&r, f32::INFINITY)?;
-            Some(hit.mirror_ray(&r, eps))
+            (r, f32::INFINITY)
         })
+        .collect();
+    let mut hits = Vec::new();
+    bvh.closest_hits(&primary, &mut hits);
+    (primary.iter().zip(&hits))
+        .filter_map(|((r, _), hit)| Some(hit.as_ref()?.mirror_ray(r, eps)))
         .collect()
 }
 
@@ -233,9 +237,20 @@ pub struct Held {
     pub within_texel: bool,
 }
 
-/// Whether the impostor holds the surface point `p` ([`Held`]; neither when `p` is outside the
-/// camera's image or its texel is empty).
+/// Whether the impostor holds the surface point `p` in any of its layers ([`Held`]; neither
+/// when `p` is outside the camera's image or its texel is empty in every layer).
 pub fn holds(impostor: &Impostor, p: Vec3) -> Held {
+    impostor
+        .layers()
+        .map(|layer| layer_holds(layer, p))
+        .fold(Held::default(), |a, b| Held {
+            within_footprint: a.within_footprint || b.within_footprint,
+            within_texel: a.within_texel || b.within_texel,
+        })
+}
+
+/// [`holds`] for one layer.
+fn layer_holds(impostor: &Impostor, p: Vec3) -> Held {
     let Some(q) = impostor.camera().project(p.as_dvec3()) else {
         return Held::default();
     };

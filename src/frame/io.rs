@@ -297,8 +297,9 @@ impl ExrChannels {
     }
 }
 
-/// The most channels trompe reads from one EXR layer (an impostor has 15 at most).
-pub const MAX_EXR_CHANNELS: usize = 32;
+/// The most channels trompe reads from one EXR layer (an impostor has 15 a depth layer, and
+/// at most 8 depth layers).
+pub const MAX_EXR_CHANNELS: usize = 128;
 
 fn check_exr_size(path: &Path) -> Result<(), FrameError> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| codec(path, e))?;

@@ -23,6 +23,8 @@ pub struct BakeSettings {
     pub from: Vec3,
     /// Camera distance from the mesh's centre, in bounding-sphere radii (more than 1).
     pub distance: f32,
+    /// Depth layers to peel (`peel.rs`; default one).
+    pub layers: super::Layers,
 }
 
 impl Default for BakeSettings {
@@ -32,6 +34,7 @@ impl Default for BakeSettings {
             resolution: 512,
             from: Vec3::new(0.0, 0.3, 1.0),
             distance: 3.0,
+            layers: super::Layers::ONE,
         }
     }
 }
@@ -62,6 +65,9 @@ pub enum BakeError {
     /// The impostor's maps could not be allocated.
     #[error("building the impostor: {0}")]
     Build(FrameError),
+    /// The layers could not be peeled.
+    #[error("peeling the impostor's layers: {0}")]
+    Layers(#[from] super::LayerError),
     /// The sidecar or its EXR could not be written.
     #[error("saving the impostor: {0}")]
     Save(#[from] ImpostorFileError),
@@ -78,6 +84,10 @@ pub struct BakeReport {
     pub resolution: u32,
     /// Fraction of texels covered.
     pub coverage: f64,
+    /// Depth layers.
+    pub layers: usize,
+    /// Bytes of the maps, every layer's.
+    pub map_bytes: u64,
     /// The sidecar, the EXR and the preview, in that order.
     pub files: [PathBuf; 3],
     /// The steps' durations.
@@ -124,11 +134,16 @@ pub fn bake(
         }
     };
     let mesh = subject.mesh();
-    let imp = timings
+    let mut imp = timings
         .time("build impostor", || {
             build(camera, mesh, 0, &albedo_of(mesh))
         })
         .map_err(BakeError::Build)?;
+    if settings.layers != super::Layers::ONE {
+        timings.time("peel layers", || {
+            imp.peel(mesh, 0, &albedo_of(mesh), settings.layers)
+        })?;
+    }
     timings.time("save", || save(&imp, output))?;
     let preview = output.with_extension("png");
     timings
@@ -140,6 +155,8 @@ pub fn bake(
         kind: imp.camera.kind(),
         resolution: settings.resolution,
         coverage: imp.coverage(),
+        layers: imp.layer_count(),
+        map_bytes: imp.map_bytes(),
         files: [output.to_path_buf(), output.with_extension("exr"), preview],
         timings,
     })
@@ -147,13 +164,17 @@ pub fn bake(
 
 impl fmt::Display for BakeReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
+        write!(
             f,
             "{} impostor {}², {:.1} % of texels covered",
             self.kind,
             self.resolution,
             self.coverage * 100.0
         )?;
+        if self.layers > 1 {
+            write!(f, ", {} depth layers", self.layers)?;
+        }
+        writeln!(f, ", maps {:.1} MB", self.map_bytes as f64 / 1e6)?;
         let [a, b, c] = &self.files;
         write!(
             f,

@@ -20,6 +20,11 @@
 //! camera), `P.X P.Y P.Z` world position, `id` = object id + 1 (0 where empty; ids below 2^24
 //! are exact). Files written with another lossless encoding load the same.
 //!
+//! A layered impostor (`peel.rs`) says `"layers": L` in its sidecar (absent for one layer);
+//! its first layer has the channels above, and layer `l` from 2 to `L` the same channels
+//! prefixed `layer<l>.` (`layer2.R`, `layer2.gd`, …: OpenEXR's layer naming). A file whose
+//! channels hold another number of layers than its sidecar says is refused, naming both.
+//!
 //! The channels hold the impostor's compact maps decoded (colour already in half precision,
 //! normals from their octahedral codes, positions derived from `gd`), and loading packs them
 //! again: a saved impostor reloads bit for bit. `P` is read and checked for every camera but
@@ -81,6 +86,10 @@ struct Sidecar {
     height: u32,
     bounds: BoundsFile,
     camera: CameraFile,
+    /// Depth layers (`peel.rs`): layer 1's channels are unprefixed, layer `l ≥ 2`'s are
+    /// prefixed `layer<l>.`. Absent for one layer.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    layers: Option<u32>,
     /// The EXR's size in bytes and FNV-1a 64 checksum (hex): a sidecar is only ever read with
     /// the EXR it was saved with. Absent in files written before they were recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -313,29 +322,8 @@ impl CameraFile {
     }
 }
 
-/// Writes `impostor` as `json_path` (sidecar) and the EXR beside it (same stem, `.exr`).
-pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileError> {
-    let exr_path = json_path.with_extension("exr");
-    let exr_name = exr_path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .ok_or_else(|| ImpostorFileError::Invalid {
-            path: json_path.to_path_buf(),
-            reason: "the file name is not valid UTF-8".into(),
-        })?
-        .to_string();
-    let (w, h) = impostor.gd.size();
-    if impostor
-        .object
-        .pixels()
-        .iter()
-        .any(|&o| o != NO_OBJECT && o >= (1 << 24) - 1)
-    {
-        return Err(ImpostorFileError::Invalid {
-            path: json_path.to_path_buf(),
-            reason: "object ids must be below 2^24 - 1".into(),
-        });
-    }
+/// The channels of one depth layer, each name prefixed by `prefix`.
+fn layer_channels(impostor: &Impostor, prefix: &str) -> Vec<(String, Vec<f32>)> {
     let split3 =
         |img: &Image<Vec3>, k: usize| img.pixels().iter().map(|v| v[k]).collect::<Vec<f32>>();
     let color_image = impostor.color_image();
@@ -351,7 +339,13 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
         impostor.face_normal_image(),
         impostor.position_image(),
     );
-    let channels = vec![
+    let ids = impostor
+        .object
+        .pixels()
+        .iter()
+        .map(|&o| if o == NO_OBJECT { 0.0 } else { (o + 1) as f32 })
+        .collect();
+    [
         ("R", color(0)),
         ("G", color(1)),
         ("B", color(2)),
@@ -366,16 +360,45 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
         ("P.X", split3(&position, 0)),
         ("P.Y", split3(&position, 1)),
         ("P.Z", split3(&position, 2)),
-        (
-            "id",
-            impostor
-                .object
-                .pixels()
-                .iter()
-                .map(|&o| if o == NO_OBJECT { 0.0 } else { (o + 1) as f32 })
-                .collect(),
-        ),
-    ];
+        ("id", ids),
+    ]
+    .into_iter()
+    .map(|(name, data)| (format!("{prefix}{name}"), data))
+    .collect()
+}
+
+/// Writes `impostor` as `json_path` (sidecar) and the EXR beside it (same stem, `.exr`).
+pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileError> {
+    let exr_path = json_path.with_extension("exr");
+    let exr_name = exr_path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| ImpostorFileError::Invalid {
+            path: json_path.to_path_buf(),
+            reason: "the file name is not valid UTF-8".into(),
+        })?
+        .to_string();
+    let (w, h) = impostor.gd.size();
+    if impostor.layers().any(|layer| {
+        layer
+            .object
+            .pixels()
+            .iter()
+            .any(|&o| o != NO_OBJECT && o >= (1 << 24) - 1)
+    }) {
+        return Err(ImpostorFileError::Invalid {
+            path: json_path.to_path_buf(),
+            reason: "object ids must be below 2^24 - 1".into(),
+        });
+    }
+    let mut channels = layer_channels(impostor, "");
+    for (l, layer) in impostor.layers().enumerate().skip(1) {
+        channels.extend(layer_channels(layer, &format!("layer{}.", l + 1)));
+    }
+    let channels: Vec<(&str, Vec<f32>)> = channels
+        .iter()
+        .map(|(name, data)| (name.as_str(), data.clone()))
+        .collect();
     // The maps first, whole, then the sidecar that names them with their checksum: a reader sees
     // the old pair, or the new EXR with the old sidecar (refused by the checksum), never a
     // truncated file.
@@ -405,6 +428,7 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
             max: impostor.bounds.max.to_array(),
         },
         camera: CameraFile::from_camera(&impostor.camera),
+        layers: (impostor.layer_count() > 1).then_some(impostor.layer_count() as u32),
         exr_bytes: Some(bytes.len() as u64),
         exr_fnv1a: Some(format!("{:016x}", fnv1a(bytes.iter().copied(), FNV_OFFSET))),
     };
@@ -487,11 +511,75 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             sidecar.height
         )));
     }
+    let layers = sidecar.layers.unwrap_or(1);
+    if !(1..=super::MAX_LAYERS).contains(&layers) {
+        return Err(invalid(format!(
+            "layers: {layers} (between 1 and {})",
+            super::MAX_LAYERS
+        )));
+    }
+    // The layers the channels hold must be the sidecar's: layer l ≥ 2's channels are
+    // prefixed `layer<l>.`.
+    let in_file = (2..=super::MAX_LAYERS + 1)
+        .take_while(|l| {
+            let prefix = format!("layer{l}.");
+            ch.channels.iter().any(|(n, _)| n.starts_with(&prefix))
+        })
+        .count() as u32
+        + 1;
+    let stray = ch.channels.iter().find(|(n, _)| {
+        n.strip_prefix("layer")
+            .and_then(|rest| rest.split_once('.'))
+            .and_then(|(l, _)| l.parse::<u32>().ok())
+            .is_some_and(|l| l < 2 || l > layers)
+    });
+    if in_file != layers || stray.is_some() {
+        let found = stray.map_or(String::new(), |(n, _)| format!(", and channel {n:?}"));
+        return Err(invalid(format!(
+            "the sidecar says {layers} layer{} but {} holds channels of {in_file}{found}",
+            if layers == 1 { "" } else { "s" },
+            exr_path.display(),
+        )));
+    }
+    let mut impostor = read_layer(&ch, "", &exr_path, (&camera, bounds))?;
+    for l in 2..=layers {
+        let layer = read_layer(&ch, &format!("layer{l}."), &exr_path, (&camera, bounds))?;
+        impostor.deeper.push(layer);
+    }
+    // Last, once the EXR is known to be a readable impostor: that it is this sidecar's.
+    if let (Some(size), Some(sum)) = (sidecar.exr_bytes, &sidecar.exr_fnv1a) {
+        let (got_size, got) =
+            size_and_checksum(&exr_path).map_err(|source| ImpostorFileError::Io {
+                path: exr_path.clone(),
+                source,
+            })?;
+        if got_size != size || format!("{got:016x}") != *sum {
+            return Err(invalid(format!(
+                "{} is not the EXR this sidecar was saved with ({got_size} bytes, checksum {got:016x}; the sidecar says {size} bytes, {sum}): bake again",
+                exr_path.display()
+            )));
+        }
+    }
+    Ok(impostor)
+}
+
+/// One depth layer's maps from the channels named `prefix` + the single-layer names.
+fn read_layer(
+    ch: &crate::frame::io::ExrChannels,
+    prefix: &str,
+    exr_path: &Path,
+    (camera, bounds): (&ImpostorCamera, Aabb),
+) -> Result<Impostor, ImpostorFileError> {
+    let invalid = |reason: String| ImpostorFileError::Invalid {
+        path: exr_path.to_path_buf(),
+        reason,
+    };
     let get = |name: &str| -> Result<Vec<f32>, ImpostorFileError> {
+        let name = &format!("{prefix}{name}");
         let img = ch.channel(name)?;
         if img.pixels().iter().any(|v| !v.is_finite()) {
             return Err(ImpostorFileError::Invalid {
-                path: exr_path.clone(),
+                path: exr_path.to_path_buf(),
                 reason: format!("channel {name:?} holds a value that is not finite"),
             });
         }
@@ -523,8 +611,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
     let gd = Image::from_vec(w, h, get("gd")?)?;
     if gd.pixels().iter().any(|&g| g < 0.0) {
         return Err(invalid(format!(
-            "{}: channel \"gd\" holds negative values",
-            exr_path.display()
+            "channel \"{prefix}gd\" holds negative values"
         )));
     }
     let ids = get("id")?;
@@ -533,8 +620,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
         .any(|&i| i < 0.0 || i.fract() != 0.0 || i >= (1 << 24) as f32)
     {
         return Err(invalid(format!(
-            "{}: channel \"id\" holds values that are not ids",
-            exr_path.display()
+            "channel \"{prefix}id\" holds values that are not ids"
         )));
     }
     // Packed as a build packs them; empty texels hold the zero bits a fresh build leaves.
@@ -555,22 +641,8 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             .map(|i| if i == 0.0 { NO_OBJECT } else { i as u32 - 1 })
             .collect(),
     )?;
-    // Last, once the EXR is known to be a readable impostor: that it is this sidecar's.
-    if let (Some(size), Some(sum)) = (sidecar.exr_bytes, &sidecar.exr_fnv1a) {
-        let (got_size, got) =
-            size_and_checksum(&exr_path).map_err(|source| ImpostorFileError::Io {
-                path: exr_path.clone(),
-                source,
-            })?;
-        if got_size != size || format!("{got:016x}") != *sum {
-            return Err(invalid(format!(
-                "{} is not the EXR this sidecar was saved with ({got_size} bytes, checksum {got:016x}; the sidecar says {size} bytes, {sum}): bake again",
-                exr_path.display()
-            )));
-        }
-    }
     Ok(Impostor::from_maps(
-        camera,
+        camera.clone(),
         color,
         gd,
         normal,

@@ -22,6 +22,7 @@ mod build;
 pub mod file;
 mod front;
 pub mod gltf;
+mod peel;
 mod planes;
 mod pyramid;
 mod settings;
@@ -38,6 +39,7 @@ pub use bake::{BakeError, BakeReport, BakeSettings, bake};
 pub use billboard::Billboard;
 pub use build::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};
 pub use front::front_bounds;
+pub use peel::{AUTO_SHARE, LayerError, Layers, MAX_LAYERS, PEEL_GAP};
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
 pub use settings::{ImpostorError, ImpostorSettings};
@@ -361,6 +363,9 @@ pub struct Impostor {
     /// `front.rs`) and the packed [`TexelPlane`]s. Call [`Impostor::maps_changed`] after
     /// editing the maps.
     walk_index: std::sync::OnceLock<WalkIndex>,
+    /// The depth layers behind this one, nearest first, peeled through the same camera
+    /// (`peel.rs`); each holds no layers of its own. Empty for a plain impostor.
+    deeper: Vec<Impostor>,
 }
 
 /// See [`Impostor::pyramid`], [`Impostor::texel_planes`] and [`Impostor::exit_margin`].
@@ -397,6 +402,7 @@ impl Impostor {
             object,
             bounds,
             walk_index: std::sync::OnceLock::new(),
+            deeper: Vec::new(),
         }
     }
 
@@ -445,6 +451,9 @@ impl Impostor {
                 *o = id;
             }
         }
+        for layer in &mut self.deeper {
+            layer.set_object_id(id);
+        }
     }
 
     /// Colour of texel `(x, y)`.
@@ -478,6 +487,14 @@ impl Impostor {
     /// impostor method lights the impostors it builds. Empty texels keep theirs. Rows are shaded
     /// in parallel; the result does not depend on the thread count.
     pub fn relight<F: Fn(Vec3, Vec3, Vec3) -> Vec3 + Sync>(&mut self, shade: F) {
+        self.relight_layer(&shade);
+        for layer in &mut self.deeper {
+            layer.relight_layer(&shade);
+        }
+    }
+
+    /// [`Impostor::relight`] of this layer's maps.
+    fn relight_layer<F: Fn(Vec3, Vec3, Vec3) -> Vec3 + Sync>(&mut self, shade: &F) {
         use rayon::prelude::*;
         let (w, _) = self.gd.size();
         let mut color = self.color.clone();
@@ -567,7 +584,9 @@ impl Impostor {
     /// rather than on the first walk: before walking from many threads at once, which would
     /// otherwise each build it.
     pub fn prepare_walks(&self) {
-        self.walk_index();
+        for layer in self.layers() {
+            layer.walk_index();
+        }
     }
 
     /// The texels as the walks read them, packed ([`TexelPlane`]), built with the pyramid.
@@ -657,6 +676,18 @@ impl Impostor {
             && (self.bounds.max - expected.max).abs().max_element() <= tolerance
     }
 
+    /// Bytes its maps take, every layer's (what the walks derive from them is built on
+    /// demand and not counted).
+    pub fn map_bytes(&self) -> u64 {
+        self.layers()
+            .map(|l| {
+                let texels = l.gd.pixels().len() as u64;
+                let per_texel = 24 + if l.position.is_some() { 12 } else { 0 };
+                texels * per_texel
+            })
+            .sum()
+    }
+
     /// Fraction of texels that are covered.
     pub fn coverage(&self) -> f64 {
         self.gd.pixels().iter().filter(|&&g| g > 0.0).count() as f64 / self.gd.pixels().len() as f64
@@ -704,6 +735,19 @@ impl std::fmt::Display for ImpostorSummary<'_> {
             ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {}
         }
         writeln!(f, "  covered    {:.1} % of texels", imp.coverage() * 100.0)?;
+        if imp.layer_count() > 1 {
+            let shares: Vec<String> = imp
+                .layers()
+                .map(|l| format!("{:.1} %", l.coverage() * 100.0))
+                .collect();
+            writeln!(
+                f,
+                "  layers     {} (covering {} of texels)",
+                imp.layer_count(),
+                shares.join(", ")
+            )?;
+        }
+        writeln!(f, "  maps       {:.1} MB", imp.map_bytes() as f64 / 1e6)?;
         let b = imp.bounds;
         write!(
             f,

@@ -20,6 +20,9 @@ pub enum ImpostorError {
     /// The maps could not be allocated at this resolution.
     #[error("allocating the impostor's maps: {0}")]
     Maps(#[from] FrameError),
+    /// The depth layers could not be peeled.
+    #[error("peeling the impostor's layers: {0}")]
+    Layers(#[from] super::LayerError),
 }
 
 /// Where the camera stands.
@@ -54,6 +57,7 @@ pub struct ImpostorSettings<'a> {
     resolution: u32,
     region: Option<f32>,
     object: u32,
+    layers: super::Layers,
 }
 
 impl Impostor {
@@ -85,6 +89,7 @@ impl<'a> ImpostorSettings<'a> {
             resolution: 512,
             region: None,
             object: 0,
+            layers: super::Layers::ONE,
         }
     }
 
@@ -131,6 +136,13 @@ impl<'a> ImpostorSettings<'a> {
         self
     }
 
+    /// Depth layers to peel behind the first (default one: a plain impostor; see
+    /// [`super::Layers`]).
+    pub fn layers(mut self, layers: super::Layers) -> Self {
+        self.layers = layers;
+        self
+    }
+
     /// Places the camera these settings describe.
     pub fn camera(&self) -> Result<ImpostorCamera, ImpostorError> {
         let b = self.mesh.bounds();
@@ -161,11 +173,11 @@ impl<'a> ImpostorSettings<'a> {
 
     /// Builds the impostor, its colour the mesh's albedo ([`albedo_of`]).
     pub fn build(&self) -> Result<Impostor, ImpostorError> {
-        Ok(build(
-            self.camera()?,
-            self.mesh,
-            self.object,
-            &albedo_of(self.mesh),
-        )?)
+        let color = albedo_of(self.mesh);
+        let mut impostor = build(self.camera()?, self.mesh, self.object, &color)?;
+        if self.layers != super::Layers::ONE {
+            impostor.peel(self.mesh, self.object, &color, self.layers)?;
+        }
+        Ok(impostor)
     }
 }

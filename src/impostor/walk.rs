@@ -13,6 +13,9 @@
 //! footprints from the stored point is a false crossing — the ray passed behind an occluding
 //! edge of the single-layer image, or met a texel plane edge-on — and the walk goes on. Empty
 //! texels are "in front" of everything.
+//!
+//! A layered impostor (`peel.rs`) is walked layer by layer, each with these rules, and the
+//! nearest crossing wins.
 
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
@@ -172,8 +175,27 @@ impl Impostor {
         Ok(self.walk_unchecked(ray, t_max, mode))
     }
 
-    /// The walk in `mode`, which goes with the camera.
+    /// The walk in `mode`, which goes with the camera, through every layer: the nearest
+    /// crossing of any layer's surface wins. Each deeper layer is walked only up to the best
+    /// hit so far (it can only answer nearer).
     fn walk_unchecked(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
+        let (mut best, mut stats) = self.walk_layer(ray, t_max, mode);
+        for layer in &self.deeper {
+            let limit = best.map_or(t_max, |h| h.t.min(t_max));
+            let (hit, more) = layer.walk_layer(ray, limit, mode);
+            stats.texel_visits += more.texel_visits;
+            stats.projection_length = stats.projection_length.max(more.projection_length);
+            if let Some(h) = hit
+                && h.t < limit
+            {
+                best = Some(h);
+            }
+        }
+        (best, stats)
+    }
+
+    /// The walk in `mode` through this layer alone.
+    fn walk_layer(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
         match &self.camera {
             ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max, mode),
             ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max, mode),
@@ -587,6 +609,17 @@ impl Impostor {
 impl RayQuery for Impostor {
     fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         self.walk(ray, t_max).0.filter(|h| h.t > 0.0 && h.t < t_max)
+    }
+
+    /// Builds what the walks derive from the maps once, before the batch's threads start
+    /// (see [`Impostor::prepare_walks`]), then answers every ray as [`RayQuery::closest_hit`].
+    fn closest_hits(&self, rays: &[(Ray, f32)], hits: &mut Vec<Option<Hit>>) {
+        use rayon::prelude::*;
+        self.prepare_walks();
+        rays.par_iter()
+            .with_min_len(64)
+            .map(|(ray, t_max)| self.closest_hit(ray, *t_max))
+            .collect_into_vec(hits);
     }
 }
 

@@ -192,7 +192,42 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         objects,
         (shader, empty),
         &mut target,
-        RowsHold::Empty,
+        (RowsHold::Empty, None),
+    );
+    Ok((target, stats))
+}
+
+/// [`rasterize`] behind a layer already drawn, for depth peeling: a fragment is drawn only
+/// where its `gd` is strictly below `ceiling`'s at its pixel (0 there: nothing is drawn), so
+/// each pixel keeps the nearest surface behind the ceiling. With each layer's depth, a little
+/// nearer the camera than drawn, as the next one's ceiling, the layers peel a scene front to
+/// back (Everitt, "Interactive Order-Independent Transparency", 2001).
+///
+/// # Errors
+/// When the ceiling is not of the camera's size, or the image size is refused.
+pub fn rasterize_behind<P: Projection, S: FragmentShader>(
+    camera: &P,
+    objects: &[&Mesh],
+    shader: &S,
+    empty: S::Output,
+    ceiling: &Image<f32>,
+) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
+    let (w, h) = camera.resolution();
+    if ceiling.size() != (w, h) {
+        let (cw, ch) = ceiling.size();
+        return Err(FrameError::InvalidSize {
+            width: cw as u64,
+            height: ch as u64,
+            reason: "the ceiling is not of the camera's size",
+        });
+    }
+    let mut target = RasterTarget::new(w, h, empty)?;
+    let stats = draw_target(
+        camera,
+        objects,
+        (shader, empty),
+        &mut target,
+        (RowsHold::Empty, Some(ceiling.pixels())),
     );
     Ok((target, stats))
 }
@@ -214,7 +249,13 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
         *target = RasterTarget::new(w, h, empty)?;
         RowsHold::Empty
     };
-    Ok(draw_target(camera, objects, (shader, empty), target, rows))
+    Ok(draw_target(
+        camera,
+        objects,
+        (shader, empty),
+        target,
+        (rows, None),
+    ))
 }
 
 /// Rasterizes `objects` into `target` as it is, without clearing it: the depth test compares
@@ -245,7 +286,7 @@ pub fn rasterize_over<P: Projection, S: FragmentShader>(
         objects,
         (shader, empty),
         target,
-        RowsHold::Drawn,
+        (RowsHold::Drawn, None),
     ))
 }
 
@@ -421,6 +462,7 @@ where
         },
         width: w,
         binned,
+        ceiling: None,
     };
     Ok(pass.draw(
         setup.stats,
@@ -446,7 +488,7 @@ fn draw_target<P: Projection, S: FragmentShader>(
     objects: &[&Mesh],
     (shader, empty): (&S, S::Output),
     target: &mut RasterTarget<S::Output>,
-    rows: RowsHold,
+    (rows, ceiling): (RowsHold, Option<&[f32]>),
 ) -> RasterStats {
     let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
     let RasterTarget {
@@ -461,6 +503,7 @@ fn draw_target<P: Projection, S: FragmentShader>(
         rows,
         width: gd.size().0,
         binned,
+        ceiling,
     };
     let bands = gd.size().1.div_ceil(BAND_ROWS) as usize;
     let images = BandRows::Images(item.pixels_mut(), attributes.pixels_mut());
@@ -489,6 +532,8 @@ struct BandPass<'a, S: FragmentShader> {
     rows: RowsHold,
     width: u32,
     binned: &'a setup::Binned,
+    /// A depth-peeling ceiling over the whole image ([`rasterize_behind`]).
+    ceiling: Option<&'a [f32]>,
 }
 
 impl<S: FragmentShader> BandPass<'_, S> {
@@ -570,9 +615,13 @@ impl<S: FragmentShader> BandPass<'_, S> {
         if clear_gd {
             gd.fill(0.0);
         }
+        let first_pixel = index * (BAND_ROWS * self.width) as usize;
         let mut band = scan::Band {
             width: self.width,
             first_row: index as u32 * BAND_ROWS,
+            ceiling: self
+                .ceiling
+                .map(|c| &c[first_pixel..first_pixel + gd.len()]),
             gd,
             item,
             attr,
@@ -586,7 +635,6 @@ impl<S: FragmentShader> BandPass<'_, S> {
                 columns = Some((x0, x1));
             }
         }
-        let first_pixel = index * (BAND_ROWS * self.width) as usize;
         let finished = FinishedBand {
             first_pixel,
             columns,

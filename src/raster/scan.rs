@@ -12,6 +12,9 @@ pub(super) struct Band<'a, T> {
     pub gd: &'a mut [f32],
     pub item: &'a mut [ItemId],
     pub attr: &'a mut [T],
+    /// The band's rows of a depth-peeling ceiling: a fragment is drawn only where its `gd` is
+    /// strictly below the ceiling's (behind the layer peeled before). `None`: no ceiling.
+    pub ceiling: Option<&'a [f32]>,
 }
 
 /// An edge function `E(p) = dx·(p.y − a.y) − dy·(p.x − a.x)` of the directed edge `a → b`,
@@ -73,7 +76,7 @@ impl<T: Copy> Band<'_, T> {
                     let gd = gd_p.f0 + gd_p.dfdx * dx + gd_p.dfdy * dy;
                     let idx = row + x as usize;
                     let gd32 = gd as f32;
-                    if gd32 > self.gd[idx] {
+                    if gd32 > self.gd[idx] && self.ceiling.is_none_or(|c| gd32 < c[idx]) {
                         let [inv_w, q0, q1, q2] =
                             [w_p, q0, q1, q2].map(|p| p.f0 + p.dfdx * dx + p.dfdy * dy);
                         // One division for the three weights.

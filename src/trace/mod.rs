@@ -51,6 +51,17 @@ pub trait RayQuery: Sync {
     fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
         self.closest_hit(ray, t_max).is_some()
     }
+    /// The nearest hit of every ray of `rays` (each with its own `t_max`), in order, into
+    /// `hits` (replacing what it held): a batch spread over the current thread pool. Each
+    /// answer is [`RayQuery::closest_hit`]'s, whatever the thread count; an implementation may
+    /// reorder the work (by image position, in packets) but not the answers.
+    fn closest_hits(&self, rays: &[(Ray, f32)], hits: &mut Vec<Option<Hit>>) {
+        use rayon::prelude::*;
+        rays.par_iter()
+            .with_min_len(64)
+            .map(|(ray, t_max)| self.closest_hit(ray, *t_max))
+            .collect_into_vec(hits);
+    }
 }
 
 impl Hit {

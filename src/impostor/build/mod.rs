@@ -11,6 +11,9 @@ mod tessellate;
 use clip::*;
 pub(super) use resolve::impostor_bounds;
 use resolve::*;
+pub(super) use resolve::{
+    Barycentrics, MapsBefore, Visible, full_barycentrics, resolve, to_source, zeroed_impostor,
+};
 use tessellate::*;
 pub use tessellate::{SourceTriangle, Tessellation, tessellate};
 

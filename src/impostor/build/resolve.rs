@@ -8,7 +8,7 @@ use super::*;
 /// are resolved afterwards, once per covered texel ([`resolve_run`]); writing them per
 /// fragment into a wide attribute image cost more than the rasterization itself. Two weights
 /// are stored, the third is `1 − b₁ − b₂` ([`full_barycentrics`]).
-pub(super) struct Barycentrics;
+pub(in crate::impostor) struct Barycentrics;
 
 impl FragmentShader for Barycentrics {
     type Output = Vec2;
@@ -18,7 +18,7 @@ impl FragmentShader for Barycentrics {
 }
 
 /// The three weights from the two a [`Barycentrics`] buffer stores.
-pub(super) fn full_barycentrics(b: Vec2) -> Vec3 {
+pub(in crate::impostor) fn full_barycentrics(b: Vec2) -> Vec3 {
     Vec3::new(1.0 - b.x - b.y, b.x, b.y)
 }
 
@@ -27,10 +27,10 @@ pub(super) fn full_barycentrics(b: Vec2) -> Vec3 {
 /// frustum again with `locate` cost 5 % of a graph build, and where frusta meet it may name
 /// another one than the frustum that imaged the point: 303 texels of the demo maze at 512².)
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Visible {
-    pub(super) triangle: u32,
-    pub(super) bary: Vec3,
-    pub(super) frustum: Option<u32>,
+pub(in crate::impostor) struct Visible {
+    pub(in crate::impostor) triangle: u32,
+    pub(in crate::impostor) bary: Vec3,
+    pub(in crate::impostor) frustum: Option<u32>,
 }
 
 /// A run of texels of every map of an impostor (the same texels of each), row-major.
@@ -69,7 +69,7 @@ impl Impostor {
 
 /// What an impostor's maps hold before a resolve pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum MapsBefore {
+pub(in crate::impostor) enum MapsBefore {
     /// The result of an earlier resolve: every map is empty wherever `object` is
     /// [`NO_OBJECT`], so only texels with an object need clearing.
     Resolved,
@@ -235,8 +235,8 @@ pub(super) fn empty_texels(
 }
 
 /// Fills the impostor's maps from the visible points `visible(i)` of texels `i` (row-major),
-/// in parallel over rows (see [`resolve_run`]).
-pub(super) fn resolve<F, V>(
+/// in parallel over rows (see [`resolve_run`]); its `gd` holds the depth as drawn.
+pub(in crate::impostor) fn resolve<F, V>(
     impostor: &mut Impostor,
     (mesh, object): (&Mesh, u32),
     color: &F,
@@ -248,14 +248,27 @@ pub(super) fn resolve<F, V>(
 {
     let row = impostor.color.size().0 as usize;
     let inputs = ResolveInputs::of(impostor, (mesh, object), color, before);
-    impostor
-        .gd_and_texel_runs(row)
-        .1
-        .into_par_iter()
+    let spoc = match &inputs.camera {
+        ImpostorCamera::Spoc(s) => Some(s),
+        _ => None,
+    };
+    let (gd, runs) = impostor.gd_and_texel_runs(row);
+    gd.pixels_mut()
+        .par_chunks_mut(row)
+        .zip(runs)
         .enumerate()
-        .for_each(|(y, mut run)| {
+        .for_each(|(y, (gd, mut run))| {
             let whole_row = (row, Some((0, row - 1)));
-            resolve_run(&mut run, whole_row, None, &inputs, |x| visible(y * row + x));
+            // Through a SPOC, each texel's drawn `gd` is moved onto its triangle's plane, as
+            // a build's bands are.
+            let depth = spoc.map(|spoc| RunDepth {
+                gd,
+                first_pixel: y * row,
+                spoc,
+            });
+            resolve_run(&mut run, whole_row, depth, &inputs, |x| {
+                visible(y * row + x)
+            });
         });
     finish_resolve(impostor, mesh);
 }
@@ -280,7 +293,7 @@ pub(in crate::impostor) fn impostor_bounds(mesh: &Mesh) -> Aabb {
 /// An impostor sized for its camera whose maps are all zeros — object 0 everywhere, so not yet
 /// a valid impostor: resolve it with [`MapsBefore::Zeroed`]. Its memory is not touched here
 /// (see [`Image::zeroed`]): the parallel resolve takes the page faults, band by band.
-pub(super) fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
+pub(in crate::impostor) fn zeroed_impostor(camera: ImpostorCamera) -> Result<Impostor, FrameError> {
     let (w, h) = camera.resolution();
     crate::memory::check(
         || format!("a {w} × {h} impostor"),
@@ -377,7 +390,11 @@ pub(super) fn toward_viewer(
 
 /// The source triangle and barycentrics of a fragment of sub-triangle `t` (or of `t` itself
 /// when the mesh was not tessellated).
-pub(super) fn to_source(source: Option<&[SourceTriangle]>, t: u32, bary: Vec3) -> Visible {
+pub(in crate::impostor) fn to_source(
+    source: Option<&[SourceTriangle]>,
+    t: u32,
+    bary: Vec3,
+) -> Visible {
     let (triangle, bary) = match source {
         Some(src) => {
             let (s, c) = src[t as usize];
