@@ -517,6 +517,7 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
         return out;
     };
     let rays = setup.rays();
+    let exact = Bvh::build(vec![setup.target.clone()]);
     out.push(Figure {
         name: "SPOC walks below: reflected rays of a bunny reflector that enter the teapot's box"
             .into(),
@@ -589,6 +590,55 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
             unit: "px",
             versus: Some((mean_len, "px mean".into())),
         });
+        // The peer: the exact BVH of the same mesh on the same rays, timed alternately with
+        // the default walk (`Impostor::walk`).
+        let query_all = |q: &dyn RayQuery| {
+            rays.par_iter().for_each(|r| {
+                std::hint::black_box(q.closest_hit(r, f32::INFINITY));
+            });
+        };
+        let (t_walk, t_bvh) = time_pair_median(min, || query_all(&imp), || query_all(&exact));
+        out.push(Figure {
+            name: format!("SPOC walk {res}², default walk, against the exact BVH"),
+            value: per_ray(t_walk),
+            unit: "ns",
+            versus: Some((
+                per_ray(t_walk) / per_ray(t_bvh),
+                format!(
+                    "× the BVH's {:.0} ns a ray (timed alternately)",
+                    per_ray(t_bvh)
+                ),
+            )),
+        });
+        if res == 512 {
+            // Depth layers: the automatic count against one, on the same rays.
+            let mut layered = imp.clone();
+            if layered
+                .peel(
+                    &setup.target,
+                    0,
+                    &albedo_of(&setup.target),
+                    crate::impostor::Layers::Auto,
+                )
+                .is_ok()
+            {
+                layered.prepare_walks();
+                let (t_layered, t_one) =
+                    time_pair_median(min, || query_all(&layered), || query_all(&imp));
+                out.push(Figure {
+                    name: format!(
+                        "SPOC walk 512², {} depth layers (auto)",
+                        layered.layer_count()
+                    ),
+                    value: per_ray(t_layered),
+                    unit: "ns",
+                    versus: Some((
+                        per_ray(t_layered) / per_ray(t_one),
+                        "× one layer (timed alternately)".into(),
+                    )),
+                });
+            }
+        }
     }
     out
 }

@@ -5,7 +5,8 @@
 //! coverage, masked); the camera and maps are in the node's `extras.trompe_impostor`, the
 //! sidecar's fields as `impostor::file` documents them, whose `exr` names the OpenEXR file of
 //! every map (`gd`, normals, face normals, positions, ids) beside the `.glb` — glTF images are
-//! PNG or JPEG and cannot hold them.
+//! PNG or JPEG and cannot hold them. Of a layered impostor the surface is its first layer's;
+//! the sidecar in `extras` says how many layers the EXR holds.
 //!
 //! Invariants: valid glTF 2.0 (the Khronos validator reports no errors; CI runs it); a vertex
 //! is a covered texel's stored position, its UV that texel's centre; no triangle spans a depth
