@@ -25,7 +25,7 @@ pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
 pub use impostor::{ImpostorInputs, ReflectorImpostors, StandIns, placed_cameras};
 pub use raster::{primary_hits, render_raster};
 pub use sequence::{FrameReport, Sequence};
-pub use trace::{Tracer, render_trace, shade_pixels};
+pub use trace::{Tracer, render_trace, shade_pixels, shade_rows};
 
 use crate::frame::{Frame, FrameError};
 pub use crate::progress::{Progress, Timings};
@@ -377,7 +377,11 @@ pub fn trace_frame<P: crate::trace::RayQuery, S: crate::trace::SecondaryQuery + 
         None => tracer.primary.closest_hit(ray, f32::INFINITY),
     };
     match refraction {
-        Refraction::Exact => timings.time("trace", || shade_pixels(tracer, progress, primary_hit)),
+        Refraction::Exact => timings.time("trace", || match &rasterized {
+            // Traced: each row's primary rays as one batch.
+            None => render_trace(tracer, progress),
+            Some(_) => shade_pixels(tracer, progress, primary_hit),
+        }),
         Refraction::Wyman => {
             let backs = timings.time("back faces (Wyman pass 1)", || {
                 wyman::BackFaces::build(tracer.view)

@@ -116,8 +116,12 @@ pub fn render_trace<P: RayQuery, S: SecondaryQuery + ?Sized>(
     tracer: &Tracer<'_, P, S>,
     progress: &dyn Progress,
 ) -> Result<Frame, RenderError> {
-    shade_pixels(tracer, progress, |_, ray| {
-        tracer.primary.closest_hit(ray, f32::INFINITY)
+    // Each row's primary rays go to the primary query as one batch.
+    let row_hits = |_: usize, rays: &[(Ray, f32)], hits: &mut Vec<Option<Hit>>| {
+        tracer.primary.closest_hits(rays, hits)
+    };
+    shade_rows(tracer, progress, row_hits, |_, ray, hit| {
+        tracer.shade(ray, hit, 0)
     })
 }
 
@@ -142,18 +146,42 @@ pub fn shade_pixels_with<P: RayQuery, S: SecondaryQuery + ?Sized>(
     primary_hit: impl Fn(usize, &Ray) -> Option<Hit> + Sync,
     shade: impl Fn(usize, &Ray, &Hit) -> Vec3 + Sync,
 ) -> Result<Frame, RenderError> {
+    let w = crate::camera::Projection::resolution(&tracer.view.camera).0 as usize;
+    let row_hits = |y: usize, rays: &[(Ray, f32)], hits: &mut Vec<Option<Hit>>| {
+        hits.clear();
+        hits.extend((rays.iter().enumerate()).map(|(x, (ray, _))| primary_hit(y * w + x, ray)));
+    };
+    shade_rows(tracer, progress, row_hits, shade)
+}
+
+/// Shades every pixel centre, row by row in parallel: `row_hits(row, rays, hits)` answers a
+/// row's primary rays at once (a batch of [`RayQuery::closest_hits`], or hits read from a
+/// G-buffer), then `shade(pixel index, ray, hit)` shades each hit.
+pub fn shade_rows<P: RayQuery, S: SecondaryQuery + ?Sized>(
+    tracer: &Tracer<'_, P, S>,
+    progress: &dyn Progress,
+    row_hits: impl Fn(usize, &[(Ray, f32)], &mut Vec<Option<Hit>>) + Sync,
+    shade: impl Fn(usize, &Ray, &Hit) -> Vec3 + Sync,
+) -> Result<Frame, RenderError> {
     let camera = &tracer.view.camera;
     let (w, h) = crate::camera::Projection::resolution(camera);
     let mut frame = Frame::new(w, h)?;
     frame
         .par_rows_mut()
         .for_each(|(y, (color, depth, normal, id))| {
-            for x in 0..w as usize {
-                let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                match primary_hit(y * w as usize + x, &ray) {
+            let rays: Vec<(Ray, f32)> = (0..w as usize)
+                .map(|x| {
+                    let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                    (ray, f32::INFINITY)
+                })
+                .collect();
+            let mut hits = Vec::with_capacity(rays.len());
+            row_hits(y, &rays, &mut hits);
+            for (x, ((ray, _), hit)) in rays.iter().zip(&hits).enumerate() {
+                match hit {
                     None => color[x] = tracer.lighting.environment.radiance(ray.dir).extend(1.0),
                     Some(hit) => {
-                        color[x] = shade(y * w as usize + x, &ray, &hit).extend(1.0);
+                        color[x] = shade(y * w as usize + x, ray, hit).extend(1.0);
                         depth[x] = hit.t;
                         normal[x] = facing(ray.dir, hit.normal, hit.geometric_normal).0;
                         id[x] = hit.object;
