@@ -184,6 +184,16 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
     shader: &S,
     empty: S::Output,
 ) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
+    rasterize_new(camera, objects, (shader, empty), None)
+}
+
+/// Rasterizes into a new target, under `ceiling` if given ([`rasterize_behind`]).
+fn rasterize_new<P: Projection, S: FragmentShader>(
+    camera: &P,
+    objects: &[&Mesh],
+    (shader, empty): (&S, S::Output),
+    ceiling: Option<&[f32]>,
+) -> Result<(RasterTarget<S::Output>, RasterStats), FrameError> {
     let (w, h) = camera.resolution();
     let mut target = RasterTarget::new(w, h, empty)?;
     // New, so already clear.
@@ -192,7 +202,7 @@ pub fn rasterize<P: Projection, S: FragmentShader>(
         objects,
         (shader, empty),
         &mut target,
-        (RowsHold::Empty, None),
+        (RowsHold::Empty, ceiling),
     );
     Ok((target, stats))
 }
@@ -221,15 +231,7 @@ pub fn rasterize_behind<P: Projection, S: FragmentShader>(
             reason: "the ceiling is not of the camera's size",
         });
     }
-    let mut target = RasterTarget::new(w, h, empty)?;
-    let stats = draw_target(
-        camera,
-        objects,
-        (shader, empty),
-        &mut target,
-        (RowsHold::Empty, Some(ceiling.pixels())),
-    );
-    Ok((target, stats))
+    rasterize_new(camera, objects, (shader, empty), Some(ceiling.pixels()))
 }
 
 /// [`rasterize`] into an existing target, reusing its memory (for images rebuilt every frame):
