@@ -87,7 +87,8 @@ impl ImpostorBuilder {
     }
 
     /// Builds `impostor` again through its own camera, from `mesh` as it is now, reusing its
-    /// maps. The result equals a fresh [`build`].
+    /// maps. The result equals a fresh [`build`]: depth layers it held are dropped (peel
+    /// again with [`Impostor::peel`]).
     pub fn rebuild<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         &mut self,
         impostor: &mut Impostor,
@@ -95,6 +96,7 @@ impl ImpostorBuilder {
         object: u32,
         color: &F,
     ) -> Result<(), FrameError> {
+        impostor.deeper.clear();
         self.build_into(impostor, (mesh, object), color, MapsBefore::Resolved)
     }
 
