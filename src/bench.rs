@@ -24,6 +24,7 @@ pub mod master;
 pub mod octahedral;
 pub mod reflect;
 pub mod relief;
+pub mod walks;
 
 use crate::camera::Pinhole;
 use crate::frame::Frame;
@@ -317,13 +318,9 @@ pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> (Duration, Duration) {
 /// Impostor workloads: building a SPOC impostor of `mesh` beside a plain pinhole
 /// rasterization of it at the same resolution (depth and ids only: the strict peer of the
 /// ≤ 1.5× goal) and beside its render by the raster method (the same maps a user gets from a
-/// pinhole); and walking reflected rays through SPOC
-/// impostors of `target` at resolutions 128 … 1024 (ns and texel visits per ray, and the length
-/// of the rays' image paths, as in paper 1's Table 2).
-pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> Vec<Figure> {
-    use crate::eval::fidelity::ReflectorSetup;
-    use crate::impostor::ViewCamera;
-    use crate::impostor::{ImpostorCamera, WalkMode, albedo_of, build};
+/// pinhole). Walks are in [`walks`].
+pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
+    use crate::impostor::{ImpostorCamera, albedo_of, build};
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
     let b = mesh.bounds();
@@ -513,133 +510,6 @@ pub fn impostors(mesh: &Mesh, target: &Mesh, reflector: &Mesh, quick: bool) -> V
             "= SPOC rebuild time / this (measured alternately)",
         ),
     );
-    let Ok(setup) = ReflectorSetup::new(target, reflector, 1.4, 512) else {
-        return out;
-    };
-    let rays = setup.rays();
-    let exact = Bvh::build(vec![setup.target.clone()]);
-    out.push(Figure {
-        name: "SPOC walks below: reflected rays of a bunny reflector that enter the teapot's box"
-            .into(),
-        value: rays.len() as f64,
-        unit: "rays",
-        versus: None,
-    });
-    for res in [128u32, 256, 512, 1024] {
-        let Ok(cam) = setup.camera(ViewCamera::Spoc(None), res) else {
-            continue;
-        };
-        let Ok(imp) = build(cam, &setup.target, 0, &albedo_of(&setup.target)) else {
-            continue;
-        };
-        let n = rays.len().max(1) as f64;
-        // Visits first: the first hierarchical walk also builds the pyramid, kept out of the
-        // timing (it is timed on its own above).
-        let visits = [WalkMode::Linear, WalkMode::Hierarchical].map(|mode| {
-            rays.iter()
-                .map(|r| {
-                    imp.walk_mode(r, f32::INFINITY, mode)
-                        .map_or(0.0, |w| w.1.texel_visits as f64)
-                })
-                .sum::<f64>()
-                / n
-        });
-        let walk_all = |mode: WalkMode| {
-            rays.par_iter().for_each(|r| {
-                let _ = std::hint::black_box(imp.walk_mode(r, f32::INFINITY, mode));
-            });
-        };
-        // Timed alternately, so their ratio is steady on a noisy machine.
-        let (t_linear, t_hierarchical) = time_pair_median(
-            min,
-            || walk_all(WalkMode::Linear),
-            || walk_all(WalkMode::Hierarchical),
-        );
-        let per_ray = |t: Duration| t.as_secs_f64() * 1e9 / n * rayon::current_num_threads() as f64;
-        let ns = [per_ray(t_linear), per_ray(t_hierarchical)];
-        for (k, label) in ["linear", "hierarchical"].into_iter().enumerate() {
-            out.push(Figure {
-                name: format!("SPOC walk {res}², {label}: time per ray"),
-                value: ns[k],
-                unit: "ns",
-                versus: (k == 1).then(|| {
-                    (
-                        ns[1] / ns[0],
-                        "× the linear walk (timed alternately)".to_string(),
-                    )
-                }),
-            });
-            out.push(Figure {
-                name: format!("SPOC walk {res}², {label}: texel visits per ray"),
-                value: visits[k],
-                unit: "texels",
-                versus: None,
-            });
-        }
-        let stats: Vec<crate::impostor::WalkStats> =
-            rays.iter().map(|r| imp.walk(r, f32::INFINITY).1).collect();
-        let max_len = stats.iter().map(|s| s.projection_length).max().unwrap_or(0);
-        let mean_len = stats
-            .iter()
-            .map(|s| s.projection_length as f64)
-            .sum::<f64>()
-            / n;
-        out.push(Figure {
-            name: format!("SPOC walk {res}²: ray image path, max / mean"),
-            value: max_len as f64,
-            unit: "px",
-            versus: Some((mean_len, "px mean".into())),
-        });
-        // The peer: the exact BVH of the same mesh on the same rays, timed alternately with
-        // the default walk (`Impostor::walk`).
-        let query_all = |q: &dyn RayQuery| {
-            rays.par_iter().for_each(|r| {
-                std::hint::black_box(q.closest_hit(r, f32::INFINITY));
-            });
-        };
-        let (t_walk, t_bvh) = time_pair_median(min, || query_all(&imp), || query_all(&exact));
-        out.push(Figure {
-            name: format!("SPOC walk {res}², default walk, against the exact BVH"),
-            value: per_ray(t_walk),
-            unit: "ns",
-            versus: Some((
-                per_ray(t_walk) / per_ray(t_bvh),
-                format!(
-                    "× the BVH's {:.0} ns a ray (timed alternately)",
-                    per_ray(t_bvh)
-                ),
-            )),
-        });
-        if res == 512 {
-            // Depth layers: the automatic count against one, on the same rays.
-            let mut layered = imp.clone();
-            if layered
-                .peel(
-                    &setup.target,
-                    0,
-                    &albedo_of(&setup.target),
-                    crate::impostor::Layers::Auto,
-                )
-                .is_ok()
-            {
-                layered.prepare_walks();
-                let (t_layered, t_one) =
-                    time_pair_median(min, || query_all(&layered), || query_all(&imp));
-                out.push(Figure {
-                    name: format!(
-                        "SPOC walk 512², {} depth layers (auto)",
-                        layered.layer_count()
-                    ),
-                    value: per_ray(t_layered),
-                    unit: "ns",
-                    versus: Some((
-                        per_ray(t_layered) / per_ray(t_one),
-                        "× one layer (timed alternately)".into(),
-                    )),
-                });
-            }
-        }
-    }
     out
 }
 
@@ -846,14 +716,14 @@ pub fn run(
     quick: bool,
 ) -> Result<BenchReport, BenchError> {
     let assets = &inputs.assets;
-    let teapot = crate::geom::io::load(&assets.join("meshes/teapot.obj"))?.mesh;
     let bunny = crate::geom::io::load(&assets.join("meshes/bunny.obj"))?.mesh;
     let maze_path = inputs.scenes.join("maze.maze");
     let maze = crate::scene::maze::Maze::load(&maze_path)?;
     let duck = crate::geom::io::load(&assets.join("gltf/Duck.glb"))?.mesh;
     let figures = foundation(mesh, quick)
         .into_iter()
-        .chain(impostors(mesh, &teapot, &bunny, quick))
+        .chain(impostors(mesh, quick))
+        .chain(walks::walks(inputs, quick)?)
         .chain(textured_impostor(&duck, "Duck.glb", quick))
         .chain(graph_impostors(&maze, &maze_path, &bunny, quick))
         .chain(relief::relief(inputs, quick)?)

@@ -139,6 +139,9 @@ pub enum BenchSuite {
     /// Reflections through impostors (paper 1 §6): frame time against output and impostor
     /// resolution, every method on every reflection scene, the reflected mesh grown 16×.
     Reflect,
+    /// Impostor walks (paper 1 §3.2): time and texel visits per ray from 128² to 2048² beside
+    /// the exact BVH on the same rays, a mesh 16× larger, depth layers.
+    Walks,
 }
 
 /// `trompe impostor …`.
@@ -694,7 +697,11 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             println!("{tables}");
         }
         Command::Bench {
-            suite: suite @ (BenchSuite::Relief | BenchSuite::Master | BenchSuite::Layers),
+            suite:
+                suite @ (BenchSuite::Relief
+                | BenchSuite::Master
+                | BenchSuite::Layers
+                | BenchSuite::Walks),
             quick,
             ..
         } => {
@@ -702,6 +709,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let (name, figures) = with_spinner("timing", || match suite {
                 BenchSuite::Master => ("master", trompe::bench::master::master(&inputs, quick)),
                 BenchSuite::Layers => ("layers", trompe::bench::layers::layers(&inputs, quick)),
+                BenchSuite::Walks => ("walks", trompe::bench::walks::walks(&inputs, quick)),
                 _ => ("relief", trompe::bench::relief::relief(&inputs, quick)),
             });
             let report = trompe::bench::BenchReport {

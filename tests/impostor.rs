@@ -211,15 +211,19 @@ fn corrupted_impostor_files_are_errors() {
 }
 
 #[test]
-fn hierarchical_and_linear_walks_give_identical_hits() {
+fn texel_walks_return_the_linear_walks_hits() {
     use trompe::eval::fidelity::sphere_rays;
-    use trompe::impostor::WalkMode;
     let s = setup();
     let b = s.target.bounds();
     let mut rays = sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 11);
     rays.extend(s.rays());
     assert!(rays.len() >= 100_000);
-    for kind in [ViewCamera::Pinhole, ViewCamera::Spoc(None)] {
+    let exact = Bvh::build(vec![s.target.clone()]);
+    for kind in [
+        ViewCamera::Pinhole,
+        ViewCamera::Orthographic,
+        ViewCamera::Spoc(None),
+    ] {
         let imp = build(
             s.camera(kind, 256).unwrap(),
             &s.target,
@@ -227,22 +231,10 @@ fn hierarchical_and_linear_walks_give_identical_hits() {
             &albedo_of(&s.target),
         )
         .unwrap();
-        let (mut linear_visits, mut hier_visits, mut hits) = (0u64, 0u64, 0usize);
-        for (i, r) in rays.iter().enumerate() {
-            let (a, sa) = imp.walk_mode(r, f32::INFINITY, WalkMode::Linear).unwrap();
-            let (b, sb) = imp
-                .walk_mode(r, f32::INFINITY, WalkMode::Hierarchical)
-                .unwrap();
-            assert_eq!(a, b, "{kind:?}: ray {i} differs");
-            hits += a.is_some() as usize;
-            linear_visits += sa.texel_visits;
-            hier_visits += sb.texel_visits;
-        }
-        // Texel visits are a cost, measured by `trompe bench`, not asserted here.
-        eprintln!(
-            "{kind:?}: {hits} hits, texel visits linear {linear_visits} hierarchical {hier_visits}"
-        );
-        assert!(hits > 10_000, "{kind:?}: {hits}");
+        let c = common::compare_walks(&imp, &exact, &rays);
+        eprintln!("{kind:?}: {c:?}");
+        c.holds();
+        assert!(c.hits > 10_000, "{kind:?}: {c:?}");
     }
 }
 
@@ -288,7 +280,7 @@ fn the_exact_straight_walk_agrees_with_the_bvh_at_least_as_well_as_sampling() {
         let mut err = 0.0f64;
         for r in &rays {
             let e = trompe::trace::RayQuery::closest_hit(&exact, r, f32::INFINITY);
-            let i = imp.walk_mode(r, f32::INFINITY, mode).unwrap().0;
+            let i = imp.walk_mode(r, f32::INFINITY, mode).0;
             match (e, i) {
                 (None, None) => good += 1,
                 (Some(e), Some(i)) => {
@@ -336,11 +328,7 @@ fn a_rebuilt_impostor_equals_a_fresh_build() {
     assert!(imp.normal() == fresh.normal() && imp.face_normal() == fresh.face_normal());
     assert!(imp.object() == fresh.object() && imp.bounds() == fresh.bounds());
     for r in s.rays().iter().take(300) {
-        let mode = trompe::impostor::WalkMode::Hierarchical;
-        assert_eq!(
-            imp.walk_mode(r, f32::INFINITY, mode).unwrap().0,
-            fresh.walk_mode(r, f32::INFINITY, mode).unwrap().0
-        );
+        assert_eq!(imp.walk(r, f32::INFINITY).0, fresh.walk(r, f32::INFINITY).0);
     }
 }
 
@@ -586,29 +574,4 @@ fn the_direction_toward_a_spoc_follows_its_curved_ray() {
     // Most of the teapot lies off the SPOC's pole, where its rays leave the eye's direction
     // by more than a degree.
     assert!(bent * 2 > points, "{bent} of {points}");
-}
-
-#[test]
-fn an_exact_walk_is_refused_through_a_curved_camera() {
-    use trompe::impostor::{WalkError, WalkMode};
-    let s = setup();
-    let spoc = build(
-        s.camera(ViewCamera::Spoc(None), 32).unwrap(),
-        &s.target,
-        0,
-        &albedo_of(&s.target),
-    )
-    .unwrap();
-    let ray = trompe::Ray::new(glam::Vec3::new(0.0, 0.5, 3.0), -glam::Vec3::Z);
-    assert_eq!(
-        spoc.walk_mode(&ray, f32::INFINITY, WalkMode::Exact),
-        Err(WalkError::ExactOnCurved { camera: "spoc" })
-    );
-    // The walks that go with it still answer, and the default one is one of them.
-    let linear = spoc
-        .walk_mode(&ray, f32::INFINITY, WalkMode::Linear)
-        .unwrap();
-    assert_eq!(linear.0, spoc.walk(&ray, f32::INFINITY).0);
-    let exact = Bvh::build(vec![s.target.clone()]);
-    assert!(trompe::eval::fidelity::check_with(&spoc, &exact, &[ray], WalkMode::Exact).is_err());
 }

@@ -2,7 +2,7 @@
 //! while projecting into the texel and lying behind (or on) the texel's stored plane. A walk
 //! sample with a larger `gd` is in front of its texel's surface (`delta > 0` in
 //! [`super::walk`]), so no crossing can end there. The max pyramid of these bounds lets the
-//! hierarchical walk skip runs of samples over covered texels too, not only over empty ones.
+//! texel walk step over nodes of covered texels too, not only empty ones.
 //!
 //! Math. With the texel's plane through `P` with normal `N` turned toward the camera:
 //! - pinhole (McMillan `X = C + t·(a·u + b·v + c)`, `gd = 1/t`): the pre-image of `(u, v)`
@@ -11,8 +11,9 @@
 //! - orthographic (`X = O + a·u + b·v + dir·(1 − gd)·depth`): `gd* = 1 + (O + a·u + b·v −
 //!   P)·N / (depth·(dir·N))`, affine too — exact;
 //! - SPOC: a pixel's pre-image at depth `z` is the pinhole point `q = p0 + (u′ − p0)/(1 +
-//!   κ(z))`; over the depths of the bounding box (where every walk sample lies) `κ` spans
-//!   `[κ_lo, κ_hi]`, so the texel's pre-image lies in the convex hull of the texel square
+//!   κ(z))`; over the depths of the walk's reach (the box grown by the exit margin, where
+//!   every walk sample lies) `κ` spans `[κ_lo, κ_hi]`, so the texel's pre-image lies in the
+//!   convex hull of the texel square
 //!   undistorted by `κ_lo` and by `κ_hi`, and the pinhole bound at those eight corners bounds
 //!   it — exact, if loose far from the pole;
 //! - graph camera: unbounded (its walks do not use the pyramid).
@@ -32,9 +33,17 @@ const MARGIN: f64 = 1e-5;
 /// size), in parallel over rows.
 pub fn front_bounds_into(impostor: &Impostor, out: &mut [f32]) {
     let w = impostor.gd.size().0 as usize;
-    // The SPOC's κ range over the bounding box is the same for every texel.
+    // The SPOC's κ range over the walk's reach (the bounding box grown by the exit margin,
+    // where every walk sample lies) is the same for every texel.
     let kappa = match &impostor.camera {
-        ImpostorCamera::Spoc(s) => spoc_kappa_range(s, &impostor.bounds),
+        ImpostorCamera::Spoc(s) => {
+            let margin = glam::Vec3::splat(super::walk::exit_margin(impostor));
+            let reach = crate::geom::Aabb {
+                min: impostor.bounds.min - margin,
+                max: impostor.bounds.max + margin,
+            };
+            spoc_kappa_range(s, &reach)
+        }
         _ => None,
     };
     out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -67,7 +76,7 @@ fn texel_bound(imp: &Impostor, kappa: Option<(f64, f64)>, x: u32, y: u32) -> f32
     let bound = match &imp.camera {
         ImpostorCamera::Pinhole(c) => pinhole_bound(c, p, n, square(0.0)),
         ImpostorCamera::Spoc(s) => {
-            // Every depth a walk sample can have lies in the bounding box's depth range, so
+            // Every depth a walk sample can have lies in the walk's reach's depth range, so
             // the texel's pre-image lies in the hull of the texel square undistorted with the
             // smallest and the largest κ there; gd* is affine over it: its corners bound it.
             let Some((k_lo, k_hi)) = kappa else {

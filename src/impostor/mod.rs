@@ -22,12 +22,13 @@ mod build;
 pub mod file;
 mod front;
 pub mod gltf;
+mod path;
 mod peel;
 mod planes;
 mod pyramid;
 mod settings;
-mod straight;
 mod subject;
+mod texels;
 mod walk;
 
 /// Bytes one texel of an impostor costs, for the memory budget ([`crate::memory`]): its maps
@@ -44,7 +45,7 @@ pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
 pub use settings::{ImpostorError, ImpostorSettings};
 pub use subject::{CameraChoice, Paired, Subject, SubjectError, is_maze};
-pub use walk::{HIERARCHICAL_MIN_SIDE, WalkError, WalkMode, WalkStats};
+pub use walk::{WalkMode, WalkStats};
 
 use crate::camera::{GraphCamera, ImagePoint, Orthographic, Pinhole, Projection, Spoc};
 use crate::frame::Image;
@@ -574,8 +575,9 @@ impl Impostor {
         Image::from_vec(w, h, data).expect("the size of the impostor's maps")
     }
 
-    /// The pyramid of front bounds the hierarchical walk skips with, built on the first walk
-    /// (so building an impostor that is never walked does not pay for it).
+    /// The pyramid of front bounds the walk steps over nodes with — for a layered impostor,
+    /// the largest of every layer's — built on the first walk (so building an impostor that
+    /// is never walked does not pay for it).
     pub fn pyramid(&self) -> &MaxPyramid {
         &self.walk_index().pyramid
     }
@@ -602,10 +604,20 @@ impl Impostor {
         if let Some(index) = self.walk_index.get() {
             return index;
         }
-        let (w, h) = self.gd.size();
-        let mut pyramid = MaxPyramid::default();
-        pyramid.rebuild_with(w, h, |level0| front::front_bounds_into(self, level0));
-        let planes = planes::texel_planes(self, pyramid.level(0).pixels());
+        let mut front = front::front_bounds(self);
+        let planes = planes::texel_planes(self, front.pixels());
+        // The walk tests every layer at each texel: it may step over a node only in front of
+        // them all.
+        for layer in &self.deeper {
+            for (mine, theirs) in front
+                .pixels_mut()
+                .iter_mut()
+                .zip(layer.pyramid().level(0).pixels())
+            {
+                *mine = mine.max(*theirs);
+            }
+        }
+        let pyramid = MaxPyramid::new(&front);
         let exit_margin = walk::exit_margin(self);
         let _ = self.walk_index.set(WalkIndex {
             pyramid,

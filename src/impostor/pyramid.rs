@@ -2,7 +2,7 @@
 //! front bounds (`front.rs`; 0 where empty) — and each further level halves the resolution
 //! keeping the largest value of the texels a node covers. A ray whose image path stays inside a
 //! node while its `gd` exceeds the node's value is in front of every texel plane there and
-//! cannot cross the stored surface; the hierarchical walk skips such stretches.
+//! cannot cross the stored surface; the texel walk (`texels.rs`) steps over such nodes.
 //!
 //! Invariant: a node's value is at least the value of every texel it covers.
 

@@ -1,8 +1,11 @@
 //! Ray–impostor intersection (paper 1 §3.2; docs/conventions.md §2.3): clip the ray to the bounding
 //! box (its exit grown by the farthest a hit is placed from a stored point, `exit_margin`: the
-//! surface a texel stores may reach that far past the geometry's box), cut the clipped segment into sub-segments of about one pixel of image path (interpolated
-//! in 3-D, then projected, so the path may curve; twice as dense for the SPOC, §3.4), and stop at
-//! the first sub-segment where the ray passes from in front of the stored surface to behind it.
+//! surface a texel stores may reach that far past the geometry's box), follow the clipped
+//! segment through the image, and stop at the first place where the ray passes from in front of
+//! the stored surface to behind it. The walk every query uses follows the segment's image
+//! texel by texel (`texels.rs`); the paper's walk, kept as the reference it is checked
+//! against, cuts the segment into sub-segments of about one pixel of image path (interpolated in
+//! 3-D, then projected, so the path may curve; twice as dense for the SPOC, §3.4).
 //!
 //! Where this departs from §2.3, and why: "in front of" is measured as the signed distance from
 //! the ray sample to the plane of the triangle its texel stores (texels keep the world position
@@ -14,9 +17,10 @@
 //! edge of the single-layer image, or met a texel plane edge-on — and the walk goes on. Empty
 //! texels are "in front" of everything.
 //!
-//! A layered impostor (`peel.rs`) is walked layer by layer, each with these rules, and the
+//! A layered impostor (`peel.rs`) is walked through every layer, each with these rules, and the
 //! nearest crossing wins.
 
+use super::path::ImagePath;
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
 use crate::geom::Ray;
@@ -35,45 +39,22 @@ const MIN_COS: f64 = 0.3;
 const REACH_FOOTPRINTS: f64 = THICKNESS_FOOTPRINTS / MIN_COS;
 /// Samples per pixel of image path in the graph camera's algorithm 1.
 const GRAPH_UNIFORM_DENSITY: f64 = 4.0;
-/// The hierarchical walk tries to skip only while more samples than this remain: over a short
-/// rest of the path an attempt costs more reads than it saves.
-const MIN_SKIP_REMAINING: usize = 4;
-/// Smallest impostor side at which [`Impostor::walk`] walks a SPOC hierarchically. Over
-/// shorter image paths a skip attempt's projections cost more than the texel reads it saves,
-/// an empty texel costing the linear walk a read of the compact `gd` map: `trompe bench`
-/// measured the hierarchical walk at 1.20 – 1.21 × the linear one's time at 128², 0.96 – 1.01 ×
-/// at 256² (break-even), 0.72 × at 512² and 0.55 – 0.57 × at 1024².
-pub const HIERARCHICAL_MIN_SIDE: u32 = 512;
 /// Upper bound on sub-segments per ray (bounds the work on degenerate input).
 const MAX_STEPS: usize = 1 << 16;
 
 /// How a walk advances along the ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WalkMode {
-    /// Every sub-segment in turn (docs/conventions.md §2.3).
+    /// Sub-segments of about one pixel of image path, each end projected (paper 1 §3.2;
+    /// docs/conventions.md §2.3): the reference the other modes are checked against. The graph
+    /// camera takes uniform 3-D steps (§4.6's algorithm 1).
     Linear,
-    /// Skips runs of samples that provably lie in front of their texels' planes (over empty
-    /// texels, or in front of covered ones: the pyramid of front bounds); returns exactly the
-    /// hits of [`WalkMode::Linear`].
-    Hierarchical,
-    /// Every texel the image path crosses, once, in order (`impostor/straight.rs`); for
-    /// projective cameras (pinhole, orthographic) and, frustum by frustum, the graph camera
-    /// (§4.6's algorithm 2). Refused for a SPOC, whose image path is curved.
+    /// Every texel the image path crosses, once, in order, along its closed form
+    /// (`impostor/texels.rs`); for the graph camera frustum by frustum (§4.6's algorithm 2).
     Exact,
-}
-
-/// A walk that cannot be done as asked.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[non_exhaustive]
-pub enum WalkError {
-    /// [`WalkMode::Exact`] through a camera whose image paths are curved.
-    #[error(
-        "an exact (texel-by-texel) walk needs straight image paths; a {camera} impostor's are curved: walk it linearly or hierarchically"
-    )]
-    ExactOnCurved {
-        /// The camera's kind.
-        camera: &'static str,
-    },
+    /// [`WalkMode::Exact`], stepping over pyramid nodes the ray passes in front of: the same
+    /// hits for fewer texel reads. What [`Impostor::walk`] does.
+    Pyramid,
 }
 
 /// Work done by one ray walk.
@@ -98,51 +79,11 @@ pub(super) struct Sample {
     pub delta: f64,
 }
 
-/// Where a skipped run's image must stay (see `Impostor::front_run`): inside one pyramid node,
-/// or wholly on one outer side of the image, where everything is empty.
-#[derive(Clone, Copy, Debug)]
-enum SkipRegion {
-    /// The node's image box `[lo, hi)`.
-    Node { lo: DVec2, hi: DVec2 },
-    /// Left of the column `x`.
-    LeftOf(f64),
-    /// At or right of the column `x`.
-    RightOf(f64),
-    /// Above the row `y`.
-    Above(f64),
-    /// At or below the row `y`.
-    Below(f64),
-}
-
-impl SkipRegion {
-    /// Whether the image box `[min, max]` lies in the region.
-    fn holds(&self, min: DVec2, max: DVec2) -> bool {
-        match *self {
-            SkipRegion::Node { lo, hi } => min.cmpge(lo).all() && max.cmplt(hi).all(),
-            SkipRegion::LeftOf(x) => max.x < x,
-            SkipRegion::RightOf(x) => min.x >= x,
-            SkipRegion::Above(y) => max.y < y,
-            SkipRegion::Below(y) => min.y >= y,
-        }
-    }
-}
-
 impl Impostor {
-    /// The first hit of `ray` with `0 < t < t_max`, and the work it took: the exact straight
-    /// walk for projective cameras; for the SPOC the hierarchical walk from
-    /// [`HIERARCHICAL_MIN_SIDE`] texels up, the linear one below (the same hits either way).
+    /// The first hit of `ray` with `0 < t < t_max`, and the work it took: the texel walk
+    /// with the pyramid ([`WalkMode::Pyramid`]).
     pub fn walk(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, WalkStats) {
-        let mode = if self.camera.is_curved() {
-            if self.gd.size().0.max(self.gd.size().1) >= HIERARCHICAL_MIN_SIDE {
-                WalkMode::Hierarchical
-            } else {
-                WalkMode::Linear
-            }
-        } else {
-            // Pinhole, orthographic, and the graph camera (algorithm 2).
-            WalkMode::Exact
-        };
-        self.walk_unchecked(ray, t_max, mode)
+        self.walk_mode(ray, t_max, WalkMode::Pyramid)
     }
 
     /// The stretch `[t0, t1]` of `ray` a walk covers: from where it enters the box of the
@@ -159,30 +100,22 @@ impl Impostor {
         Some((t0, t1))
     }
 
-    /// [`Impostor::walk`] with a chosen mode; [`WalkMode::Exact`] is refused for a curved
-    /// camera.
-    pub fn walk_mode(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mode: WalkMode,
-    ) -> Result<(Option<Hit>, WalkStats), WalkError> {
-        if mode == WalkMode::Exact && self.camera.is_curved() {
-            return Err(WalkError::ExactOnCurved {
-                camera: self.camera.kind(),
-            });
+    /// [`Impostor::walk`] with a chosen mode.
+    pub fn walk_mode(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
+        match mode {
+            WalkMode::Linear => self.walk_linear(ray, t_max),
+            WalkMode::Exact => self.walk_exact(ray, t_max, false),
+            WalkMode::Pyramid => self.walk_exact(ray, t_max, true),
         }
-        Ok(self.walk_unchecked(ray, t_max, mode))
     }
 
-    /// The walk in `mode`, which goes with the camera, through every layer: the nearest
-    /// crossing of any layer's surface wins. Each deeper layer is walked only up to the best
-    /// hit so far (it can only answer nearer).
-    fn walk_unchecked(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
-        let (mut best, mut stats) = self.walk_layer(ray, t_max, mode);
+    /// The linear walk through every layer: the nearest crossing of any layer's surface wins.
+    /// Each deeper layer is walked only up to the best hit so far (it can only answer nearer).
+    fn walk_linear(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, WalkStats) {
+        let (mut best, mut stats) = self.walk_layer(ray, t_max);
         for layer in &self.deeper {
             let limit = best.map_or(t_max, |h| h.t.min(t_max));
-            let (hit, more) = layer.walk_layer(ray, limit, mode);
+            let (hit, more) = layer.walk_layer(ray, limit);
             stats.texel_visits += more.texel_visits;
             stats.projection_length = stats.projection_length.max(more.projection_length);
             if let Some(h) = hit
@@ -194,32 +127,65 @@ impl Impostor {
         (best, stats)
     }
 
-    /// The walk in `mode` through this layer alone.
-    fn walk_layer(&self, ray: &Ray, t_max: f32, mode: WalkMode) -> (Option<Hit>, WalkStats) {
+    /// The linear walk through this layer alone.
+    fn walk_layer(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, WalkStats) {
         match &self.camera {
-            ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max, mode),
-            ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max, mode),
+            ImpostorCamera::Pinhole(c) => self.walk_with(c, 1.0, ray, t_max),
+            ImpostorCamera::Orthographic(c) => self.walk_with(c, 1.0, ray, t_max),
             // A curved image path is longer than its chord: sample twice as densely (§3.4).
-            ImpostorCamera::Spoc(c) => self.walk_with(c, 2.0, ray, t_max, mode),
-            ImpostorCamera::Graph(g) => match mode {
-                WalkMode::Exact => self.walk_graph_pieces(g, ray, t_max),
-                _ => self.walk_graph_uniform(g, ray, t_max),
-            },
+            ImpostorCamera::Spoc(c) => self.walk_with(c, 2.0, ray, t_max),
+            ImpostorCamera::Graph(g) => self.walk_graph_uniform(g, ray, t_max),
         }
     }
 
-    /// Algorithm 2 of §4.6: clip the ray to every frustum, order the pieces along the ray, and
-    /// walk each piece exactly with its frustum's matrix (a straight image segment).
-    fn walk_graph_pieces(
-        &self,
-        g: &crate::camera::GraphCamera,
-        ray: &Ray,
-        t_max: f32,
-    ) -> (Option<Hit>, WalkStats) {
+    /// The texel walk (`texels.rs`) of the ray's segment in the walk span, every layer at once.
+    fn walk_exact(&self, ray: &Ray, t_max: f32, skip: bool) -> (Option<Hit>, WalkStats) {
         let mut stats = WalkStats::default();
         let Some((t0, t1)) = self.walk_span(ray, t_max) else {
             return (None, stats);
         };
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        let (c, e) = (o + d * t0 as f64, o + d * t1 as f64);
+        let hit = match &self.camera {
+            ImpostorCamera::Pinhole(cam) => {
+                self.walk_projective(cam, ray, (c, e), skip, &mut stats)
+            }
+            ImpostorCamera::Orthographic(cam) => {
+                self.walk_projective(cam, ray, (c, e), skip, &mut stats)
+            }
+            ImpostorCamera::Spoc(cam) => clip_to_domain(cam, c, e)
+                .and_then(|(c, e)| ImagePath::spoc(cam, c, e))
+                .and_then(|path| self.walk_texels(ray, &path, skip, &mut stats)),
+            ImpostorCamera::Graph(g) => self.walk_graph_pieces(g, ray, (t0, t1), &mut stats),
+        };
+        (hit, stats)
+    }
+
+    /// The texel walk of the world segment `[c, e]` of `ray` through a projective camera.
+    fn walk_projective<P: Projection>(
+        &self,
+        camera: &P,
+        ray: &Ray,
+        (c, e): (DVec3, DVec3),
+        skip: bool,
+        stats: &mut WalkStats,
+    ) -> Option<Hit> {
+        let (c, e) = clip_to_domain(camera, c, e)?;
+        let (pc, pe) = (camera.project(c)?, camera.project(e)?);
+        let path = ImagePath::projective(c, e, pc, pe);
+        self.walk_texels(ray, &path, skip, stats)
+    }
+
+    /// Algorithm 2 of §4.6: clip the ray to every frustum, order the pieces along the ray, and
+    /// walk each piece texel by texel with its frustum's matrix (a straight image segment). A
+    /// graph camera's texels have no front bounds: no node is stepped over.
+    fn walk_graph_pieces(
+        &self,
+        g: &crate::camera::GraphCamera,
+        ray: &Ray,
+        (t0, t1): (f32, f32),
+        stats: &mut WalkStats,
+    ) -> Option<Hit> {
         let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
         let mut pieces: Vec<(f64, f64, usize)> = (0..g.frusta().len())
             .filter_map(|j| {
@@ -228,16 +194,9 @@ impl Impostor {
             })
             .collect();
         pieces.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
-        for (a, b, j) in pieces {
-            let mut piece = WalkStats::default();
-            let hit = self.walk_straight(&g.frustum(j), ray, o + d * a, o + d * b, &mut piece);
-            stats.texel_visits += piece.texel_visits;
-            stats.projection_length += piece.projection_length;
-            if hit.is_some() {
-                return (hit, stats);
-            }
-        }
-        (None, stats)
+        pieces.into_iter().find_map(|(a, b, j)| {
+            self.walk_projective(&g.frustum(j), ray, (o + d * a, o + d * b), false, stats)
+        })
     }
 
     /// Algorithm 1 of §4.6: uniform steps in 3-D, each sample `locate`d and projected with
@@ -319,7 +278,6 @@ impl Impostor {
         density: f64,
         ray: &Ray,
         t_max: f32,
-        mode: WalkMode,
     ) -> (Option<Hit>, WalkStats) {
         let mut stats = WalkStats::default();
         let Some((t0, t1)) = self.walk_span(ray, t_max) else {
@@ -332,63 +290,22 @@ impl Impostor {
         let (Some(pc), Some(pe)) = (camera.project(c), camera.project(e)) else {
             return (None, stats);
         };
-        if mode == WalkMode::Exact {
-            let hit = self.walk_straight(camera, ray, c, e, &mut stats);
-            return (hit, stats);
-        }
         let chord = (pe.uv - pc.uv).length();
         stats.projection_length = chord.ceil() as u64;
         let n = ((chord * density).ceil() as usize).clamp(1, MAX_STEPS);
         let Some(mut prev) = self.sample(camera, c, &mut stats) else {
             return (None, stats);
         };
-        let at = |k: usize| c + (e - c) * (k as f64 / n as f64);
-        let mut k = 0;
-        // The pyramid level the last skip attempt reached (where the next one starts looking).
-        let mut level_hint = 2;
-        // The 2 × 2 node where a skip last failed: no second attempt while in it.
-        let mut failed_at: Option<Option<(u32, u32)>> = None;
-        while k < n {
-            // Skipping is attempted from a sample in front of its texel's front bound (every
-            // empty texel, and covered texels the ray passes well in front of).
-            let node = prev.texel.map(|(x, y)| (x >> 1, y >> 1));
-            if mode == WalkMode::Hierarchical
-                && n - k > MIN_SKIP_REMAINING
-                && failed_at != Some(node)
-                && self.in_front_of_bound(&prev)
-            {
-                let skip = self.front_run(camera, &at, (k, n), &prev, &mut level_hint, &mut stats);
-                if skip > 0 {
-                    // Samples k+1 ..= k+skip are all in front of their texels' planes: none
-                    // can end a crossing, and the linear walk arrives at sample k+skip in the
-                    // same state. That sample's texel is read only if the next sample ends a
-                    // crossing (`accept` needs it).
-                    k += skip;
-                    let Some(p) = camera.project(at(k)) else {
-                        return (None, stats);
-                    };
-                    prev = Sample {
-                        p,
-                        texel: self.texel(p.uv),
-                        stored: f32::NAN,
-                        delta: f64::INFINITY,
-                    };
-                    continue;
-                }
-                failed_at = Some(node);
-            }
-            k += 1;
-            let Some(cur) = self.sample(camera, at(k), &mut stats) else {
+        for k in 1..=n {
+            let Some(cur) = self.sample(camera, c + (e - c) * (k as f64 / n as f64), &mut stats)
+            else {
                 return (None, stats);
             };
-            if prev.delta > 0.0 && cur.delta <= 0.0 {
-                if prev.stored.is_nan() {
-                    // The landing sample of a skip: read it now, as the linear walk did.
-                    prev = self.sample(camera, at(k - 1), &mut stats).unwrap_or(prev);
-                }
-                if let Some(hit) = self.accept(ray, &prev, &cur) {
-                    return (Some(hit), stats);
-                }
+            if prev.delta > 0.0
+                && cur.delta <= 0.0
+                && let Some(hit) = self.accept(ray, &prev, &cur)
+            {
+                return (Some(hit), stats);
             }
             prev = cur;
         }
@@ -407,150 +324,6 @@ impl Impostor {
         } else {
             (0.0, f64::INFINITY)
         }
-    }
-
-    /// Whether sample `s` lies in front of its texel's front bound (outside the image, always).
-    /// The bound is part of the texel the sample already read: no extra visit.
-    fn in_front_of_bound(&self, s: &Sample) -> bool {
-        if s.stored.is_nan() {
-            // The landing sample of a skip: its run proved it.
-            return true;
-        }
-        match s.texel {
-            None => true,
-            // An empty texel's bound is 0, below every sample's `gd`; a covered one's is in
-            // the record the sample just read.
-            Some((x, y)) => s.stored <= 0.0 || s.p.gd > self.texel_planes().get(x, y).front as f64,
-        }
-    }
-
-    /// The longest run of samples after `k` that provably lie in front of their texels' planes,
-    /// given that sample `k` (`at_k`) lies in front of its texel's front bound.
-    ///
-    /// Climbs the pyramid of front bounds from that texel to the largest node whose bound the
-    /// ray's `gd` at sample `k` exceeds (one read per level), then searches — doubling, then
-    /// halving — for the longest run whose conservative image box
-    /// ([`ImpostorCamera::segment_image_bounds`]) stays inside the node while the ray's `gd`
-    /// at the run's end (the smaller one: `gd` is monotone along a segment) still exceeds the
-    /// node's bound. Outside the image everything is empty: the run must stay on the same outer
-    /// side. Runs cost projections, not texel reads.
-    fn front_run<P: Projection>(
-        &self,
-        camera: &P,
-        at: &impl Fn(usize) -> DVec3,
-        (k, n): (usize, usize),
-        at_k: &Sample,
-        level_hint: &mut usize,
-        stats: &mut WalkStats,
-    ) -> usize {
-        let (w, h) = self.gd.size();
-        let (wf, hf) = (w as f64, h as f64);
-        let uv = at_k.p.uv;
-        // The region around sample k, as a test on an image box, and the bound over it.
-        let (region, bound) = match at_k.texel {
-            None => {
-                let side = if uv.x < 0.0 {
-                    SkipRegion::LeftOf(0.0)
-                } else if uv.x >= wf {
-                    SkipRegion::RightOf(wf)
-                } else if uv.y < 0.0 {
-                    SkipRegion::Above(0.0)
-                } else {
-                    SkipRegion::Below(hf)
-                };
-                (side, 0.0)
-            }
-            Some((x, y)) => {
-                // Bounds grow up the pyramid, so "the node's bound is below the ray's gd" holds
-                // up to some level and fails above it: find that level by galloping from the
-                // level the last attempt reached (usually one or two reads).
-                let pyramid = self.pyramid();
-                let top = pyramid.level_count() - 1;
-                let node = |l: usize| pyramid.node(l, x >> l, y >> l) as f64;
-                let mut safe = |l: usize| {
-                    stats.texel_visits += 1;
-                    node(l) < at_k.p.gd
-                };
-                let start = (*level_hint).clamp(1, top.max(1));
-                let level = if top == 0 {
-                    0
-                } else if safe(start) {
-                    let mut l = start;
-                    while l < top && safe(l + 1) {
-                        l += 1;
-                    }
-                    l
-                } else {
-                    let mut l = start - 1;
-                    while l >= 1 && !safe(l) {
-                        l -= 1;
-                    }
-                    l
-                };
-                *level_hint = level.max(1);
-                let bound = node(level);
-                if level == 0 {
-                    // A run inside one texel is rarely longer than a sample or two.
-                    return 0;
-                }
-                let size = (1u32 << level) as f64;
-                let lo = DVec2::new(
-                    ((x >> level) << level) as f64,
-                    ((y >> level) << level) as f64,
-                );
-                (
-                    SkipRegion::Node {
-                        lo,
-                        hi: lo + DVec2::splat(size),
-                    },
-                    bound,
-                )
-            }
-        };
-        // Through a SPOC, a run's image box and its end's `gd` both come from the images of its
-        // ends through the reference pinhole (the SPOC's `gd` is the pinhole's), and each end
-        // was usually the other end of the attempt before: the last two are kept.
-        let spoc = match &self.camera {
-            ImpostorCamera::Spoc(s) => Some(s),
-            _ => None,
-        };
-        let mut recent: [Option<(usize, ImagePoint)>; 2] = [None, None];
-        let mut pinhole_image = |i: usize, spoc: &crate::camera::Spoc| {
-            if let Some((_, q)) = recent.iter().flatten().find(|(j, _)| *j == i) {
-                return Some(*q);
-            }
-            let q = spoc.pinhole().project(at(i))?;
-            recent = [Some((i, q)), recent[0]];
-            Some(q)
-        };
-        let mut fits = |from: usize, to: usize| match spoc {
-            Some(s) => match (pinhole_image(from, s), pinhole_image(to, s)) {
-                (Some(qa), Some(qb)) => {
-                    let (min, max) = s.pinhole_segment_bounds(qa, qb);
-                    region.holds(min, max) && qb.gd > bound
-                }
-                _ => false,
-            },
-            None => {
-                self.camera
-                    .segment_image_bounds(at(from), at(to))
-                    .is_some_and(|(min, max)| region.holds(min, max))
-                    && camera.project(at(to)).is_some_and(|p| p.gd > bound)
-            }
-        };
-        let (mut run, mut step) = (0usize, 1usize);
-        // Double while the run fits, then halve back down to single samples.
-        while k + run + step <= n && fits(k + run, k + run + step) {
-            run += step;
-            step *= 2;
-        }
-        while step > 1 {
-            step /= 2;
-            if k + run + step <= n && fits(k + run, k + run + step) {
-                run += step;
-            }
-        }
-        run
     }
 
     /// Places the hit on the stored surface where the ray crosses it within one sub-segment,

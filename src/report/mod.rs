@@ -40,9 +40,6 @@ pub enum ReportError {
     /// A shipped mesh failed to load.
     #[error(transparent)]
     Mesh(#[from] crate::geom::MeshError),
-    /// A walk was asked of a camera it does not go with.
-    #[error(transparent)]
-    Walk(#[from] crate::impostor::WalkError),
     /// A capture or a blend of calibrated views failed.
     #[error(transparent)]
     Views(#[from] crate::views::ViewsError),

@@ -50,3 +50,87 @@ pub fn fails_cleanly(o: &Output, expect: &str) {
     assert!(!e.contains("panicked"), "panicked: {e}");
     assert!(e.contains(expect), "expected {expect:?} in: {e}");
 }
+
+/// How the texel walk ([`trompe::impostor::WalkMode::Exact`]) answers rays against the linear
+/// walk of paper 1 §3.2 ([`trompe::impostor::WalkMode::Linear`]), ray by ray. The two test the
+/// ray against the stored planes at different points — the texel walk where the ray enters and
+/// leaves every texel, the linear walk every half pixel of image path — so where the stored
+/// surface is smooth both accept the crossing in the same texel, or in neighbouring texels of
+/// one surface, and where it is not (a silhouette, a plane seen edge-on) their samples can meet
+/// different texels there and decide differently. Every ray falls in one count.
+#[derive(Debug, Default)]
+pub struct WalkComparison {
+    pub rays: usize,
+    /// Rays the texel walk answers with a hit.
+    pub hits: usize,
+    /// Both miss, or both hit in the same texel.
+    pub same: usize,
+    /// Both hit, in different texels, within one texel footprint of each other.
+    pub same_surface: usize,
+    /// The texel walk hits where the linear walk misses, or more than a footprint nearer: a
+    /// crossing the linear walk's samples stepped over.
+    pub texel_nearer: usize,
+    /// The linear walk hits where the texel walk misses, or more than a footprint nearer.
+    pub linear_nearer: usize,
+    /// The pyramid walk differs from the texel walk (it must not: it skips only stretches in
+    /// front of every plane).
+    pub pyramid_differs: usize,
+    /// Rays each walk answers as the BVH does (within 1.5 footprints).
+    pub texel_agrees: usize,
+    pub linear_agrees: usize,
+}
+
+impl WalkComparison {
+    /// What every comparison must show: the pyramid changes nothing; at least 97 % of rays
+    /// get the same hit (texel, or point on one surface) from both walks; and the texel walk
+    /// agrees with the exact BVH at least as often as the linear walk.
+    pub fn holds(&self) {
+        assert_eq!(self.pyramid_differs, 0, "{self:?}");
+        assert!(
+            (self.same + self.same_surface) as f64 >= 0.97 * self.rays as f64,
+            "{self:?}"
+        );
+        assert!(self.texel_agrees >= self.linear_agrees, "{self:?}");
+    }
+}
+
+pub fn compare_walks(
+    imp: &trompe::impostor::Impostor,
+    exact: &trompe::trace::Bvh,
+    rays: &[trompe::geom::Ray],
+) -> WalkComparison {
+    use trompe::impostor::WalkMode;
+    use trompe::trace::{Hit, RayQuery};
+    let footprint = |h: &Hit| {
+        imp.camera()
+            .project(h.position.as_dvec3())
+            .map_or(f64::INFINITY, |p| imp.footprint(p.uv, p.gd))
+    };
+    let near = |a: &Hit, b: &Hit| a.position.distance(b.position) as f64 <= footprint(a);
+    let mut c = WalkComparison::default();
+    for r in rays {
+        let linear = imp.walk_mode(r, f32::INFINITY, WalkMode::Linear).0;
+        let texel = imp.walk_mode(r, f32::INFINITY, WalkMode::Exact).0;
+        let pyramid = imp.walk_mode(r, f32::INFINITY, WalkMode::Pyramid).0;
+        let e = exact.closest_hit(r, f32::INFINITY);
+        let agrees = |i: &Option<Hit>| match (&e, i) {
+            (None, None) => true,
+            (Some(e), Some(i)) => e.position.distance(i.position) as f64 <= 1.5 * footprint(e),
+            _ => false,
+        };
+        c.rays += 1;
+        c.hits += texel.is_some() as usize;
+        c.pyramid_differs += (pyramid != texel) as usize;
+        c.texel_agrees += agrees(&texel) as usize;
+        c.linear_agrees += agrees(&linear) as usize;
+        match (&texel, &linear) {
+            (None, None) => c.same += 1,
+            (Some(a), Some(b)) if a.uv == b.uv => c.same += 1,
+            (Some(a), Some(b)) if near(a, b) => c.same_surface += 1,
+            (Some(a), Some(b)) if a.t < b.t => c.texel_nearer += 1,
+            (Some(_), None) => c.texel_nearer += 1,
+            _ => c.linear_nearer += 1,
+        }
+    }
+    c
+}
