@@ -1,7 +1,7 @@
 //! Impostor construction and ray walks: a SPOC impostor of the bunny beside a pinhole
 //! impostor, a plain rasterization and a raster-method render of the same mesh, framed on its
 //! bounding sphere and, as `trompe impostor bake` frames them, on the mesh; walks of reflected
-//! rays per resolution; a SPOC impostor of a textured mesh (the Duck) beside the same build
+//! rays through SPOC impostors of the bunny per resolution, beside the bunny's BVH; a SPOC impostor of a textured mesh (the Duck) beside the same build
 //! without its texture; the graph-camera impostor of the demo maze with four bunnies beside a
 //! rasterization through its root.
 
@@ -141,11 +141,13 @@ fn impostor(c: &mut Criterion) {
     });
     group.finish();
 
-    let setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 512).expect("valid setup");
+    // As `trompe bench walks`: reflected rays of a teapot mirror that enter the bunny's box,
+    // walked through SPOC impostors of the bunny, beside the bunny's BVH on the same rays.
+    let setup = ReflectorSetup::new(&bunny, &teapot, 1.4, 512).expect("valid setup");
     let rays = setup.rays();
     let mut group = c.benchmark_group("SPOC walk, reflected rays");
     group.throughput(Throughput::Elements(rays.len() as u64));
-    for res in [128u32, 256, 512, 1024] {
+    for res in [128u32, 256, 512, 1024, 2048] {
         let imp = build(
             setup.camera(ViewCamera::Spoc(None), res).expect("camera"),
             &setup.target,
@@ -153,6 +155,7 @@ fn impostor(c: &mut Criterion) {
             &albedo_of(&setup.target),
         )
         .expect("valid");
+        imp.prepare_walks();
         group.bench_function(format!("{res}²"), |bch| {
             bch.iter(|| {
                 rays.iter()
@@ -161,6 +164,16 @@ fn impostor(c: &mut Criterion) {
             })
         });
     }
+    let exact = trompe::trace::Bvh::build(vec![setup.target.clone()]);
+    group.bench_function("peer: the bunny's BVH", |bch| {
+        bch.iter(|| {
+            rays.iter()
+                .filter(|r| {
+                    trompe::trace::RayQuery::closest_hit(&exact, r, f32::INFINITY).is_some()
+                })
+                .count()
+        })
+    });
     group.finish();
 
     // Paper 1 §4.5 / §6: the maze with four bunnies, through its graph camera.

@@ -215,9 +215,18 @@ fn texel_walks_return_the_linear_walks_hits() {
     use trompe::eval::fidelity::sphere_rays;
     let s = setup();
     let b = s.target.bounds();
+    // Random rays around the teapot, and the reflected rays of two reflectors beside it (the
+    // bunny, and a sphere in the same place).
     let mut rays = sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 11);
     rays.extend(s.rays());
-    assert!(rays.len() >= 100_000);
+    let teapot = load(&shared("meshes/teapot.obj")).unwrap().mesh;
+    let sphere = trompe::geom::icosphere(4);
+    rays.extend(
+        ReflectorSetup::new(&teapot, &sphere, 1.4, 512)
+            .unwrap()
+            .rays(),
+    );
+    assert!(rays.len() >= 110_000, "{}", rays.len());
     let exact = Bvh::build(vec![s.target.clone()]);
     for kind in [
         ViewCamera::Pinhole,

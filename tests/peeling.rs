@@ -165,6 +165,27 @@ fn layers_raise_the_dragons_agreement_with_the_bvh_well_above_one_layer() {
 }
 
 #[test]
+fn the_layered_texel_walk_returns_the_layer_by_layer_linear_walks_hits() {
+    // One texel walk through every layer at once, under one pyramid bounding them all, against
+    // paper 1's linear walk run layer by layer (nearest wins), on the dragon's automatic
+    // layers: random rays around it.
+    let mesh = load(&common::asset("meshes/dragon_res4.obj")).unwrap().mesh;
+    let imp = trompe::Impostor::spoc(&mesh)
+        .resolution(256)
+        .layers(Layers::Auto)
+        .build()
+        .unwrap();
+    assert!(imp.layer_count() >= 3, "{}", imp.layer_count());
+    let bvh = trompe::Bvh::build(vec![std::sync::Arc::new(mesh.clone())]);
+    let b = mesh.bounds();
+    let rays = trompe::eval::fidelity::sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 5);
+    let c = common::compare_walks(&imp, &bvh, &rays);
+    eprintln!("{} layers: {c:?}", imp.layer_count());
+    c.holds();
+    assert!(c.hits > 20_000, "{c:?}");
+}
+
+#[test]
 fn a_layered_impostor_saves_and_loads_exactly_and_a_wrong_layer_count_is_refused() {
     let mesh = load(&common::asset("meshes/dragon_res4.obj")).unwrap().mesh;
     let mut imp = trompe::Impostor::spoc(&mesh)

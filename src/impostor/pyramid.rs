@@ -7,7 +7,6 @@
 //! Invariant: a node's value is at least the value of every texel it covers.
 
 use crate::frame::Image;
-use glam::DVec2;
 
 /// Writes into `next` (half the size of `level`, rounded up) the maximum of each 2 × 2 block.
 fn reduce(level: &Image<f32>, next: &mut Image<f32>) {
@@ -34,22 +33,6 @@ pub struct MaxPyramid {
 }
 
 impl MaxPyramid {
-    /// Builds the pyramid again from a level 0 that `fill` writes (row-major, `width × height`),
-    /// reusing the levels' memory when the size is unchanged.
-    pub fn rebuild_with(&mut self, width: u32, height: u32, fill: impl FnOnce(&mut [f32])) {
-        if self.levels.first().map(|l| l.size()) != Some((width, height)) {
-            let mut base = Image::new(width, height, 0.0f32).expect("an impostor's size");
-            fill(base.pixels_mut());
-            *self = MaxPyramid::new(&base);
-            return;
-        }
-        fill(self.levels[0].pixels_mut());
-        for k in 1..self.levels.len() {
-            let (done, rest) = self.levels.split_at_mut(k);
-            reduce(&done[k - 1], &mut rest[0]);
-        }
-    }
-
     /// Builds every level down to 1 × 1.
     pub fn new(gd: &Image<f32>) -> MaxPyramid {
         let mut levels = vec![gd.clone()];
@@ -80,37 +63,6 @@ impl MaxPyramid {
     pub fn node(&self, level: usize, x: u32, y: u32) -> f32 {
         self.levels[level].get(x, y)
     }
-
-    /// An upper bound of `gd` over the texels meeting the image box `[min, max]` (0 when the box
-    /// lies outside the image), reading at most four nodes; `visits` counts them.
-    pub fn max_over(&self, min: DVec2, max: DVec2, visits: &mut u64) -> f32 {
-        let (w, h) = self.levels[0].size();
-        let (x0, y0) = (min.x.floor(), min.y.floor());
-        let (x1, y1) = (max.x.floor(), max.y.floor());
-        if !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
-            return f32::INFINITY;
-        }
-        if x1 < 0.0 || y1 < 0.0 || x0 >= w as f64 || y0 >= h as f64 {
-            return 0.0;
-        }
-        let clamp = |v: f64, n: u32| v.clamp(0.0, (n - 1) as f64) as u32;
-        let (x0, x1, y0, y1) = (clamp(x0, w), clamp(x1, w), clamp(y0, h), clamp(y1, h));
-        let mut level = 0;
-        while level + 1 < self.levels.len()
-            && ((x1 >> level) - (x0 >> level) > 1 || (y1 >> level) - (y0 >> level) > 1)
-        {
-            level += 1;
-        }
-        let img = &self.levels[level];
-        let mut m = 0.0f32;
-        for y in (y0 >> level)..=(y1 >> level) {
-            for x in (x0 >> level)..=(x1 >> level) {
-                *visits += 1;
-                m = m.max(img.get(x, y));
-            }
-        }
-        m
-    }
 }
 
 #[cfg(test)]
@@ -118,36 +70,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn max_over_bounds_every_texel_in_the_box() {
+    fn every_node_is_the_largest_texel_it_covers() {
+        // An odd size, so the last row and column of each level cover fewer texels.
         let (w, h) = (37u32, 23u32);
         let data: Vec<f32> = (0..w * h)
             .map(|i| if i % 7 == 0 { (i % 13) as f32 } else { 0.0 })
             .collect();
         let img = Image::from_vec(w, h, data).unwrap();
         let p = MaxPyramid::new(&img);
-        let mut visits = 0;
-        for (a, b) in [
-            ((0.0, 0.0), (36.9, 22.9)),
-            ((3.2, 4.7), (9.1, 5.0)),
-            ((-5.0, -5.0), (2.0, 2.0)),
-            ((40.0, 1.0), (50.0, 3.0)),
-        ] {
-            let (min, max) = (DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
-            let got = p.max_over(min, max, &mut visits);
-            let mut want = 0.0f32;
-            for y in 0..h {
-                for x in 0..w {
-                    let inside = (x as f64) <= max.x
-                        && (x as f64 + 1.0) > min.x
-                        && (y as f64) <= max.y
-                        && (y as f64 + 1.0) > min.y;
-                    if inside {
+        assert_eq!(p.level(p.level_count() - 1).size(), (1, 1));
+        for l in 0..p.level_count() {
+            let (nw, nh) = p.level(l).size();
+            for (nx, ny) in (0..nh).flat_map(|y| (0..nw).map(move |x| (x, y))) {
+                let mut want = 0.0f32;
+                for y in (ny << l)..((ny + 1) << l).min(h) {
+                    for x in (nx << l)..((nx + 1) << l).min(w) {
                         want = want.max(img.get(x, y));
                     }
                 }
+                assert_eq!(p.node(l, nx, ny), want, "level {l} node {nx} {ny}");
             }
-            assert!(got >= want, "{min} {max}: {got} < {want}");
         }
-        assert!(visits <= 16);
     }
 }

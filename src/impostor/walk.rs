@@ -71,8 +71,7 @@ pub(super) struct Sample {
     pub p: ImagePoint,
     /// The sample's texel, if inside the image.
     pub texel: Option<(u32, u32)>,
-    /// Stored `gd` at the sample's texel (0 when empty or outside; NaN when not read yet — the
-    /// landing sample of a skip, known to be in front).
+    /// Stored `gd` at the sample's texel (0 when empty or outside).
     pub stored: f32,
     /// Signed distance from the sample to its texel's plane, positive on the camera's side
     /// (+∞ over empty texels): positive while the ray is in front of the stored surface.
