@@ -43,8 +43,11 @@
 //!   editable OpenRaster image layers, rendering through each layer's sub-frustum.
 //! * [`master`] — Master Texture Space: many views of a mesh encoded in pixel-aligned atlases
 //!   with one UV set, rendered view-dependently, edited once for every view.
+//! * [`methods`] — the one list of methods: every way trompe makes a frame, prepared once
+//!   over a scene, then a frame at a time and a camera.
 //! * [`eval`] — experiments: an impostor against the exact BVH, the rasterizer against the BVH.
 //! * [`progress`] — progress reports and step timings of long work.
+//! * [`sidecar`] — which kind of impostor a JSON sidecar describes.
 //! * [`memory`] — the memory budget every input-sized allocation is checked against.
 //!
 //! ## Conventions (said once, here)
@@ -74,23 +77,17 @@ pub mod impostor;
 pub mod layers;
 pub mod master;
 pub mod memory;
+pub mod methods;
 pub mod octahedral;
 pub mod progress;
 pub mod raster;
 pub mod relief;
 pub mod render;
 pub mod scene;
+pub mod sidecar;
 pub mod trace;
-pub mod viewer;
 pub mod views;
 
-/// The workloads of `trompe bench` and `cargo bench`: for the command line and the benches,
-/// not a library interface.
-#[doc(hidden)]
-pub mod bench;
-/// The `trompe demo` report: for the command line, not a library interface.
-#[doc(hidden)]
-pub mod report;
 
 mod prefetch;
 #[cfg(test)]

@@ -63,6 +63,12 @@ pub enum FrameError {
     /// An image the memory budget refuses ([`crate::memory`]).
     #[error(transparent)]
     Memory(#[from] crate::memory::OverBudget),
+    /// An image size written other than `WIDTHxHEIGHT`.
+    #[error("{text:?}: expected an image size WIDTHxHEIGHT, e.g. 640x480")]
+    SizeText {
+        /// What was written.
+        text: String,
+    },
     /// Two images that must have the same size do not.
     #[error("image sizes differ: {a:?} vs {b:?}")]
     SizeMismatch {
@@ -71,6 +77,26 @@ pub enum FrameError {
         /// Second size.
         b: (u32, u32),
     },
+}
+
+/// Parses an image size written `WIDTHxHEIGHT` (`x`, `X` or `×` between the sides), checked by
+/// [`check_size`].
+///
+/// ```
+/// assert_eq!(trompe::frame::parse_size("640x480").unwrap(), (640, 480));
+/// assert!(trompe::frame::parse_size("640").is_err());
+/// assert!(trompe::frame::parse_size("0x480").is_err());
+/// ```
+pub fn parse_size(text: &str) -> Result<(u32, u32), FrameError> {
+    let bad = || FrameError::SizeText {
+        text: text.to_owned(),
+    };
+    let (w, h) = text.split_once(['x', 'X', '×']).ok_or_else(bad)?;
+    let (w, h): (u64, u64) = (
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    );
+    check_size(w, h)
 }
 
 /// Checks a requested image size against the allocation limits.

@@ -248,6 +248,31 @@ impl HybridReflections {
         })
     }
 
+    /// What the points and trees are, with one frame's statistics: the report of
+    /// `trompe render --method c3rc`.
+    pub fn report(&self, scene: &Scene, frame: FrameStats) -> HybridReport {
+        let objects = self
+            .clouds
+            .iter()
+            .map(|c| CloudReport {
+                name: scene
+                    .objects
+                    .get(c.object as usize)
+                    .map_or_else(|| format!("object {}", c.object), |o| o.name.clone()),
+                points: c.points.len(),
+                spacing: c.spacing,
+                tree: c.tree.stats(),
+                sample_time: c.sample_time,
+                build_time: c.build_time,
+            })
+            .collect();
+        HybridReport {
+            objects,
+            thinned: self.thinned,
+            frame,
+        }
+    }
+
     /// All points.
     pub fn point_count(&self) -> usize {
         self.clouds.iter().map(|c| c.points.len()).sum()
@@ -274,26 +299,7 @@ pub fn render(
 ) -> Result<(crate::frame::Frame, HybridReport), RenderError> {
     let clouds = HybridReflections::prepare(scene, settings)?;
     let HybridFrame { frame, stats, .. } = clouds.render_at(scene, t, progress)?;
-    let objects = clouds
-        .clouds
-        .iter()
-        .map(|c| CloudReport {
-            name: scene.objects[c.object as usize].name.clone(),
-            points: c.points.len(),
-            spacing: c.spacing,
-            tree: c.tree.stats(),
-            sample_time: c.sample_time,
-            build_time: c.build_time,
-        })
-        .collect();
-    Ok((
-        frame,
-        HybridReport {
-            objects,
-            thinned: clouds.thinned,
-            frame: stats,
-        },
-    ))
+    Ok((frame, clouds.report(scene, stats)))
 }
 
 /// One object's points and tree, as a report gives them.

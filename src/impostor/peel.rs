@@ -15,7 +15,7 @@
 //! `l + 1` is covered in layer `l`, with a larger `gd` there (as drawn, before a SPOC's resolve
 //! moves `gd` onto the stored plane); no layer is empty.
 
-use super::build::{Barycentrics, MapsBefore, Visible, full_barycentrics, resolve, to_source};
+use super::builder::{Barycentrics, MapsBefore, Visible, full_barycentrics, resolve, to_source};
 use super::{Impostor, ImpostorCamera, SurfaceSample, tessellate};
 use crate::camera::Projection;
 use crate::frame::{FrameError, Image};
@@ -215,7 +215,7 @@ impl Impostor {
             if !enough {
                 break;
             }
-            let mut layer = super::build::zeroed_impostor(self.camera.clone())?;
+            let mut layer = super::builder::zeroed_impostor(self.camera.clone())?;
             layer.gd = target.gd.clone();
             above = target.gd;
             let (items, bary) = (target.item.pixels(), target.attributes.pixels());

@@ -301,11 +301,12 @@ impl LayerSet {
     }
 }
 
-/// A scene's objects at time 0 as the layers take them: world-space meshes and names.
+/// A scene's objects at its time (`render.time`, when a capture photographs it) as the layers
+/// take them: world-space meshes and names.
 pub fn scene_objects(
     scene: &crate::scene::Scene,
 ) -> Result<(Vec<Mesh>, Vec<String>), crate::camera::CameraError> {
-    let view = scene.view(0.0)?;
+    let view = scene.view(scene.render.time)?;
     let meshes = view.meshes.iter().map(|m| (**m).clone()).collect();
     let names = scene.objects.iter().map(|o| o.name.clone()).collect();
     Ok((meshes, names))

@@ -27,7 +27,19 @@ use rayon::prelude::*;
 /// frame's own buffers beside them.
 pub const BYTES_PER_TEXEL: u64 = 64;
 
-/// How to bake.
+/// Texels of dilation around the object in every frame by default: enough for bilinear reads
+/// and the first mip levels a runtime samples at the silhouette.
+pub const DEFAULT_DILATION: u32 = 4;
+
+/// How to bake. [`BakeSettings::new`] gives the defaults; [`bake`] checks every field.
+///
+/// ```
+/// use trompe::octahedral::{BakeSettings, Coverage, DEFAULT_DILATION, Grid};
+/// let grid = Grid { n: 8, coverage: Coverage::Sphere };
+/// let settings = BakeSettings::new(grid, 64);
+/// assert_eq!(settings.dilation, DEFAULT_DILATION);
+/// assert!(settings.with_dilation(65).is_err());
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BakeSettings {
     /// The frame grid.
@@ -55,6 +67,41 @@ pub enum FrameProjection {
         /// Eye distance from the sphere's centre, in radii.
         distance: f32,
     },
+}
+
+impl BakeSettings {
+    /// Orthographic frames of `frame_size` texels a side on `grid`, dilated by
+    /// [`DEFAULT_DILATION`] texels.
+    pub fn new(grid: Grid, frame_size: u32) -> Self {
+        Self {
+            grid,
+            frame_size,
+            dilation: DEFAULT_DILATION,
+            projection: FrameProjection::Orthographic,
+        }
+    }
+
+    /// The same, each frame seen through `projection`.
+    pub fn with_projection(self, projection: FrameProjection) -> Self {
+        Self { projection, ..self }
+    }
+
+    /// The same, dilated by `dilation` texels: at most a frame's side.
+    pub fn with_dilation(self, dilation: u32) -> Result<Self, BakeError> {
+        let settings = Self { dilation, ..self };
+        settings.check_dilation()?;
+        Ok(settings)
+    }
+
+    fn check_dilation(&self) -> Result<(), BakeError> {
+        if self.dilation > self.frame_size {
+            return Err(BakeError::Dilation {
+                dilation: self.dilation,
+                frame_size: self.frame_size,
+            });
+        }
+        Ok(())
+    }
 }
 
 impl FrameProjection {
@@ -99,6 +146,14 @@ pub enum BakeError {
         "pinhole frames at {0} bounding radii: the eye must be outside the sphere (more than 1, at most 10 000)"
     )]
     Distance(f32),
+    /// A dilation wider than a frame.
+    #[error("a dilation of {dilation} texels is wider than a frame ({frame_size} texels a side)")]
+    Dilation {
+        /// Texels of dilation asked for.
+        dilation: u32,
+        /// Texels a frame side.
+        frame_size: u32,
+    },
 }
 
 /// A baked atlas, in the object's own space.
@@ -255,6 +310,7 @@ pub fn bake(
         }
         .into());
     }
+    settings.check_dilation()?;
     if let FrameProjection::Pinhole { distance } = settings.projection
         && !(distance.is_finite() && distance > 1.0 && distance <= 1e4)
     {

@@ -76,6 +76,57 @@ pub enum OctahedralFileError {
     NotAFile(PathBuf),
 }
 
+/// Reads and checks the sidecar of an octahedral atlas (its maps are not read).
+pub fn read_sidecar(path: &Path) -> Result<Sidecar, OctahedralFileError> {
+    let invalid = |reason: String| OctahedralFileError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, reason),
+    };
+    let text = std::fs::read_to_string(path).map_err(|source| OctahedralFileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let sidecar: Sidecar = serde_json::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+    if sidecar.format != FORMAT {
+        return Err(invalid(format!(
+            "format {:?} is not an octahedral impostor's ({FORMAT:?})",
+            sidecar.format
+        )));
+    }
+    Ok(sidecar)
+}
+
+impl std::fmt::Display for Sidecar {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let side = self.grid.n * self.frame_size;
+        writeln!(f, "octahedral impostor (layout version {})", self.version)?;
+        writeln!(
+            f,
+            "  frames: {n} × {n} ({coverage:?}), {fs} texels a side, atlas {side} × {side}",
+            n = self.grid.n,
+            coverage = self.grid.coverage,
+            fs = self.frame_size,
+        )?;
+        writeln!(f, "  dilation: {} texels", self.dilation)?;
+        match self.projection {
+            super::FrameProjection::Orthographic => writeln!(f, "  frames: orthographic")?,
+            super::FrameProjection::Pinhole { distance } => {
+                writeln!(f, "  frames: pinhole, {distance} bounding radii out")?
+            }
+        }
+        writeln!(
+            f,
+            "  bounding sphere: centre ({:.4}, {:.4}, {:.4}), radius {:.4}",
+            self.centre[0], self.centre[1], self.centre[2], self.radius
+        )?;
+        write!(f, "  maps: {}, {}, {}", self.color, self.normal, self.depth)?;
+        if let Some(orm) = &self.orm {
+            write!(f, ", {orm}")?;
+        }
+        Ok(())
+    }
+}
+
 /// The five files of an atlas whose sidecar is `json`.
 pub fn files(json: &Path) -> [PathBuf; 5] {
     let stem = json

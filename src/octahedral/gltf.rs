@@ -125,23 +125,7 @@ pub fn export(sidecar_path: &Path, out: &Path) -> Result<(), super::file::Octahe
         let path = path.to_path_buf();
         move |source| E::Io { path, source }
     };
-    let text = std::fs::read_to_string(sidecar_path).map_err(io(sidecar_path))?;
-    let sidecar: Sidecar = serde_json::from_str(&text).map_err(|e| E::Io {
-        path: sidecar_path.to_path_buf(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
-    })?;
-    if sidecar.format != super::file::FORMAT {
-        return Err(E::Io {
-            path: sidecar_path.to_path_buf(),
-            source: std::io::Error::new(
-                std::io::ErrorKind::InvalidData,
-                format!(
-                    "format {:?} is not an octahedral impostor (only octahedral impostors export to glTF)",
-                    sidecar.format
-                ),
-            ),
-        });
-    }
+    let sidecar = super::file::read_sidecar(sidecar_path)?;
     let dir = sidecar_path.parent().unwrap_or(Path::new(""));
     let color = dir.join(&sidecar.color);
     let png = std::fs::read(&color).map_err(io(&color))?;

@@ -17,6 +17,8 @@ pub mod render;
 pub mod scene;
 pub mod turntable;
 
-pub use bake::{BakeError, BakeSettings, FrameCamera, FrameProjection, OctahedralAtlas, bake};
+pub use bake::{
+    BakeError, BakeSettings, DEFAULT_DILATION, FrameCamera, FrameProjection, OctahedralAtlas, bake,
+};
 pub use mapping::{Coverage, Grid};
 pub use turntable::{TurntableView, turntable};

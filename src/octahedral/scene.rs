@@ -90,10 +90,20 @@ impl SceneAtlases {
         progress: &dyn Progress,
     ) -> Result<Frame, SceneAtlasError> {
         let camera = scene.camera.at(t)?;
-        let (w, h) = crate::camera::Projection::resolution(&camera);
+        self.render_through(&camera, &scene.lighting, progress)
+    }
+
+    /// The frame through `camera` under `lighting`, every object drawn from its atlas
+    /// (`progress` advances a row at a time).
+    pub fn render_through(
+        &self,
+        camera: &crate::camera::Pinhole,
+        lighting: &crate::scene::Lighting,
+        progress: &dyn Progress,
+    ) -> Result<Frame, SceneAtlasError> {
+        let (w, h) = crate::camera::Projection::resolution(camera);
         let mut frame = Frame::new(w, h)?;
         let eye = camera.position();
-        let lighting = &scene.lighting;
         // Each atlas's three frames, chosen by its direction toward the eye.
         let frames: Vec<_> = self
             .atlases

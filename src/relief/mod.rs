@@ -79,6 +79,16 @@ pub enum ReliefError {
     /// The relief images would need more memory than the budget allows.
     #[error(transparent)]
     Memory(#[from] crate::memory::OverBudget),
+    /// A pipeline setting out of its range: a share or angle that is not a positive number.
+    #[error("relief setting {name} = {value}: {reason}")]
+    Setting {
+        /// The setting's name (`threshold`, `fallback` …).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The range it must lie in.
+        reason: &'static str,
+    },
     /// The rendering thread stopped unexpectedly.
     #[error("the relief rendering thread stopped: {0}")]
     Worker(&'static str),

@@ -72,6 +72,45 @@ pub struct PipelineSettings {
     pub deterministic: Option<u32>,
 }
 
+impl PipelineSettings {
+    /// Checks every setting against its range: shares and angles must be finite and positive
+    /// (a NaN threshold would never call an impostor obsolete), resolutions within
+    /// [`super::RESOLUTION_RANGE`]. [`Pipeline::new`] checks the settings it is given.
+    pub fn validate(&self) -> Result<(), ReliefError> {
+        let positive = |name, value: f64, reason| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ReliefError::Setting {
+                    name,
+                    value,
+                    reason,
+                })
+            }
+        };
+        positive("threshold", self.threshold, "must be a positive share, e.g. 0.2")?;
+        positive("fallback", self.fallback, "must be a positive share, e.g. 0.6")?;
+        positive("prefetch", self.prefetch, "must be a positive factor, e.g. 0.75")?;
+        positive("max_angle", self.max_angle, "must be a positive angle in degrees")?;
+        if !(self.skip_move.is_finite() && self.skip_move >= 0.0) {
+            return Err(ReliefError::Setting {
+                name: "skip_move",
+                value: self.skip_move,
+                reason: "must be a distance in texels, 0 or more",
+            });
+        }
+        for r in [Some(self.resolution), self.first_resolution]
+            .into_iter()
+            .flatten()
+        {
+            if !(super::RESOLUTION_RANGE.0..=super::RESOLUTION_RANGE.1).contains(&r) {
+                return Err(ReliefError::Resolution(r));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for PipelineSettings {
     fn default() -> Self {
         Self {
@@ -138,6 +177,35 @@ pub struct ObjectFrame {
     pub regenerating: bool,
     /// Resolution of the impostor shown (0 in fallback).
     pub resolution: u32,
+}
+
+impl ObjectFrame {
+    /// The object's line of state, `name` its name: what was done (valid, warping, stale or
+    /// fallback, and whether a new impostor is being made), the impostor's resolution, and the
+    /// validity measure — the interpolated share of the pre-warp the critical-point heuristic
+    /// predicts, against `threshold`, past which the impostor is obsolete.
+    pub fn line(&self, name: &str, threshold: f64) -> String {
+        let mut line = format!("  {name}: {}", self.state);
+        if self.regenerating {
+            line.push_str(" + regenerating");
+        }
+        if self.resolution > 0 {
+            line.push_str(&format!(" {}^2", self.resolution));
+        }
+        if self.predicted.is_finite() {
+            line.push_str(&format!(
+                "  predicted {:.3} of limit {threshold:.3}",
+                self.predicted
+            ));
+        }
+        if let Some(ratio) = self.ratio {
+            line.push_str(&format!("  interpolated {ratio:.3}"));
+        }
+        if self.cache_hit {
+            line.push_str("  from cache");
+        }
+        line
+    }
 }
 
 /// One frame of the pipeline.
@@ -247,16 +315,9 @@ impl Pipeline {
         relief: &[usize],
         settings: PipelineSettings,
     ) -> Result<Self, ReliefError> {
+        settings.validate()?;
         for &o in relief {
             shader.bounds(o)?;
-        }
-        for r in [Some(settings.resolution), settings.first_resolution]
-            .into_iter()
-            .flatten()
-        {
-            if !(super::RESOLUTION_RANGE.0..=super::RESOLUTION_RANGE.1).contains(&r) {
-                return Err(ReliefError::Resolution(r));
-            }
         }
         let shared = Arc::new(Shared::default());
         let (tx, rx) = channel();

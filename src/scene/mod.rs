@@ -65,6 +65,16 @@ pub enum SceneError {
         /// The cause.
         source: Box<MeshError>,
     },
+    /// No object of the scene has the name asked for.
+    #[error("{path}: no object named {name:?} (it has {available})")]
+    NoObject {
+        /// The scene file.
+        path: PathBuf,
+        /// The name asked for.
+        name: String,
+        /// The names it has, comma-separated.
+        available: String,
+    },
     /// A floor plan (`.maze`) an object names could not be read.
     #[error("{path}: {key}: {source}")]
     Maze {
@@ -418,6 +428,24 @@ impl Scene {
             warnings,
             files,
         })
+    }
+
+    /// The index (object id) of the object named `name`, or an error that lists the names the
+    /// scene has.
+    pub fn object_named(&self, name: &str) -> Result<usize, SceneError> {
+        self.objects
+            .iter()
+            .position(|o| o.name == name)
+            .ok_or_else(|| SceneError::NoObject {
+                path: self.path.clone(),
+                name: name.to_owned(),
+                available: self
+                    .objects
+                    .iter()
+                    .map(|o| o.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
     }
 
     /// The scene at time `t` (seconds): camera along its path, objects animated.

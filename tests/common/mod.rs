@@ -2,39 +2,49 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
-/// A file under `../shared/data` (the test models, beside the repository).
+/// The repository's root: the workspace folder, which holds `Cargo.lock`, `assets/` and
+/// `scenes/` (the tests of every crate of the workspace read from there).
+pub fn root() -> PathBuf {
+    let crate_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    crate_dir
+        .ancestors()
+        .find(|dir| dir.join("Cargo.lock").is_file() && dir.join("scenes").is_dir())
+        .map(PathBuf::from)
+        .unwrap_or(crate_dir)
+}
+
+/// A file under `../shared/data` (the test models, beside the repository). A test that needs
+/// it fails here, saying so, when the folder is missing.
+#[track_caller]
 pub fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(rel)
+    let data = root().join("../shared/data");
+    assert!(
+        data.is_dir(),
+        "this test reads the shared test models in {} (the `shared/data` folder beside the \
+         checkout, see README.md), and that folder is missing",
+        data.display()
+    );
+    data.join(rel)
 }
 
 /// A file under the repository's `assets/` (what the demo ships).
 pub fn asset(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("assets")
-        .join(rel)
+    root().join("assets").join(rel)
+}
+
+/// A file of the repository: `scenes/…`, `shaders/…`, `tests/fixtures/…`.
+pub fn repo(rel: &str) -> PathBuf {
+    root().join(rel)
 }
 
 /// A fresh scratch directory under `target/` for one test.
 pub fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target/test-scratch")
-        .join(name);
+    let dir = root().join("target/test-scratch").join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir
-}
-
-/// Runs the `trompe` binary from the repository's root.
-pub fn trompe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_trompe"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("runs")
 }
 
 /// What a run wrote to standard error.

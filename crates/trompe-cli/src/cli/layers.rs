@@ -1,0 +1,234 @@
+//! `trompe layers build | render`: layered view-dependent projective textures (paper 4) on the
+//! command line — parse, call `trompe::layers`, print its report.
+
+use super::views::{RigArg, WeightsArg, parse_size};
+use super::{bar, check_plan, refuse_foreign_folder};
+use anyhow::{Context, Result, bail};
+use clap::{Subcommand, ValueEnum};
+use std::path::PathBuf;
+use trompe::files::OutputPlan;
+use trompe::frame::io;
+use trompe::layers::{self, BuildSettings, OrderSettings, Ordering, RenderSettings};
+use trompe::scene::Scene;
+
+/// `trompe layers …`.
+#[derive(Subcommand, Debug)]
+pub enum LayersCommand {
+    /// Capture views of a scene (or read a COLMAP model of it), sort its objects into
+    /// visibility layers per view, cut the photographs into image layers and write one
+    /// OpenRaster file a view (GIMP and Krita open and save them), layers.json and the
+    /// cameras.
+    Build(BuildArgs),
+    /// Render the scene from its camera textured by the layers (as saved, or as an artist
+    /// edited them), or by plain projective texturing of the whole photographs.
+    Render(RenderArgs),
+}
+
+impl LayersCommand {
+    pub(super) fn run(&self) -> Result<()> {
+        match self {
+            LayersCommand::Build(args) => args.build(),
+            LayersCommand::Render(args) => args.render(),
+        }
+    }
+}
+
+/// `--ordering`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum OrderingArg {
+    /// The paper's item-buffer passes with the authors' fix.
+    ItemBuffer,
+    /// The exact per-pixel criterion.
+    Exact,
+}
+
+/// `trompe layers build`.
+#[derive(clap::Args, Debug)]
+pub struct BuildArgs {
+    /// The scene (its objects are what the layers sort).
+    scene: PathBuf,
+    /// A COLMAP model of the scene (text or binary) instead of a synthetic capture.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// The model's images folder (default: the model's folder, or its images/).
+    #[arg(long, requires = "model")]
+    images: Option<PathBuf>,
+    /// Views to capture (without --model).
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    views: u32,
+    /// Where the captured cameras stand.
+    #[arg(long, value_enum, default_value_t = RigArg::Ring)]
+    rig: RigArg,
+    /// Captured image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera distance from the scene's centre, in bounding radii.
+    #[arg(long, default_value_t = 1.4)]
+    distance: f64,
+    /// Vertical field of view of the captured views, degrees.
+    #[arg(long, default_value_t = 50.0)]
+    fov: f64,
+    /// The visibility ordering.
+    #[arg(long, value_enum, default_value_t = OrderingArg::ItemBuffer)]
+    ordering: OrderingArg,
+    /// One image layer an object a visibility layer (no power-of-two clustering).
+    #[arg(long)]
+    no_clustering: bool,
+    /// Fill hidden texels by push-pull (otherwise they are left transparent for an artist).
+    #[arg(long)]
+    fill: bool,
+    /// Output folder (made if missing; must be empty or hold earlier layers).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+impl BuildArgs {
+    fn build(&self) -> Result<()> {
+        let out = &self.output;
+        refuse_foreign_folder(out, layers::file::PROJECT, "layers")?;
+        let scene = Scene::load(&self.scene)?;
+        let mut plan = OutputPlan::new();
+        plan.reads(scene.files.iter().cloned())
+            .writes(out.join(layers::file::PROJECT), &["json"])
+            .creating_folders();
+        if let Some(m) = &self.model {
+            plan.reads([m.join("cameras.txt"), m.join("images.txt")]);
+        }
+        check_plan(&plan)?;
+        let views = match &self.model {
+            Some(model) => {
+                let mut set = trompe::views::ViewSet::load(model, self.images.as_deref())?;
+                for w in &set.warnings {
+                    eprintln!("warning: {w}");
+                }
+                set.load_images()?;
+                set.views
+            }
+            None => {
+                use trompe::views::capture::{CaptureSettings, Rig, capture_of};
+                let settings = CaptureSettings {
+                    rig: match self.rig {
+                        RigArg::Sphere => Rig::Sphere,
+                        RigArg::Hemisphere => Rig::Hemisphere,
+                        RigArg::Ring => Rig::Ring,
+                    },
+                    count: self.views as usize,
+                    size: self.size,
+                    distance: self.distance,
+                    fov_y: self.fov,
+                    ..CaptureSettings::default()
+                };
+                let progress = bar("capturing", self.views as u64);
+                capture_of(scene.clone(), &settings, progress.as_ref())?.views
+            }
+        };
+        let (meshes, names) = layers::scene_objects(&scene)?;
+        let settings = BuildSettings {
+            order: OrderSettings {
+                ordering: match self.ordering {
+                    OrderingArg::ItemBuffer => Ordering::ItemBuffer,
+                    OrderingArg::Exact => Ordering::Exact,
+                },
+                ..OrderSettings::default()
+            },
+            clustering: !self.no_clustering,
+            fill: self.fill,
+        };
+        let progress = bar("layering", views.len() as u64);
+        let set = layers::build(meshes, names, &views, &settings, progress.as_ref())?;
+        drop(progress);
+        plan.make_folders()
+            .with_context(|| format!("making {}", out.display()))?;
+        layers::file::save(out, &set)?;
+        println!("{}", layers::REPORT_HEADER);
+        for r in &set.reports {
+            println!("{r}");
+        }
+        println!(
+            "{} views, {} objects: layers.json, cameras and one .ora a view written to {}",
+            set.views.len(),
+            set.names.len(),
+            out.display()
+        );
+        Ok(())
+    }
+}
+
+/// `--method` of `trompe layers render`.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum TextureArg {
+    /// Each object through the image layers that hold it (the paper's method).
+    Layered,
+    /// The whole photographs projected on everything, hidden or not (the baseline).
+    Projective,
+}
+
+/// `trompe layers render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// The scene the layers were built from (its camera is the new viewpoint).
+    scene: PathBuf,
+    /// The layers' folder (from `trompe layers build`, possibly edited).
+    #[arg(long)]
+    layers: PathBuf,
+    /// How to texture.
+    #[arg(long, value_enum, default_value_t = TextureArg::Layered)]
+    method: TextureArg,
+    /// Fill the layers' hidden texels by push-pull before rendering (in memory only).
+    #[arg(long)]
+    fill: bool,
+    /// View weighting.
+    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
+    weights: WeightsArg,
+    /// Most views blended at a point.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    k: u32,
+    /// Output image (.png or .exr); pixels nothing textures are transparent.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+impl RenderArgs {
+    fn render(&self) -> Result<()> {
+        if self.weights == WeightsArg::ViewMap || self.weights == WeightsArg::BestFace {
+            bail!("--weights: layered rendering blends per point: use ulr or vdtm");
+        }
+        let scene = Scene::load(&self.scene)?;
+        let mut plan = OutputPlan::new();
+        plan.reads(scene.files.iter().cloned())
+            .reads([self.layers.join(layers::file::PROJECT)])
+            .writes(&self.output, &["png", "exr"]);
+        check_plan(&plan)?;
+        let (meshes, names) = layers::scene_objects(&scene)?;
+        let mut set = layers::file::load(&self.layers, meshes, names)
+            .with_context(|| format!("loading the layers in {}", self.layers.display()))?;
+        if self.fill {
+            let n = set.fill();
+            eprintln!("filled {n} hidden texels");
+        }
+        let camera = scene.camera.at(scene.render.time)?;
+        let settings = RenderSettings {
+            weighting: self.weights.weighting(),
+            k: self.k as usize,
+            ..RenderSettings::default()
+        };
+        let start = std::time::Instant::now();
+        let blend = match self.method {
+            TextureArg::Layered => layers::render::render(&camera, &set, &settings)?,
+            TextureArg::Projective => {
+                let views = layers::file::photographs(&self.layers, &set)?;
+                layers::render::render_projective(&camera, &set.mesh_refs(), &views, &settings)?
+            }
+        };
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        io::write_color(&self.output, &blend.image)?;
+        println!(
+            "{}: {} pixels covered, {} holes ({:.2} %), {ms:.1} ms",
+            self.output.display(),
+            blend.covered,
+            blend.holes,
+            100.0 * blend.holes as f64 / blend.covered.max(1) as f64
+        );
+        Ok(())
+    }
+}

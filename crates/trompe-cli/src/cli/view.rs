@@ -1,0 +1,409 @@
+//! `trompe view SCENE`: the interactive viewer. A window (winit for the window and input,
+//! softbuffer to show a CPU frame — no GPU) over `crate::viewer::Viewer`; or, with `--frames`,
+//! headless: a script's inputs replayed at fixed time steps and every frame written.
+
+use super::{check_plan, refuse_foreign_folder};
+use anyhow::{Context, Result, bail};
+use std::num::NonZeroU32;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::time::Instant;
+use trompe::files::OutputPlan;
+use trompe::frame::io;
+use trompe::scene::Scene;
+use crate::viewer::script::{self, Script};
+use crate::viewer::{Input, Request, Viewer, hud};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// The file that marks a folder as a viewer's output (so a later run may write into it).
+const MARKER: &str = "trompe-view.txt";
+
+/// `trompe view`.
+#[derive(clap::Args, Debug)]
+pub struct ViewArgs {
+    /// Scene file.
+    scene: PathBuf,
+    /// Frame size, WIDTHxHEIGHT (default: the scene camera's).
+    #[arg(long, value_parser = super::views::parse_size)]
+    size: Option<(u32, u32)>,
+    /// Impostor resolution of the impostor methods.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
+    impostor_resolution: u32,
+    /// Inputs to replay (see `crate::viewer::script`): headless with --frames, or fed to the
+    /// window on its own clock.
+    #[arg(long)]
+    script: Option<PathBuf>,
+    /// Headless: render this many frames, 1/--fps seconds apart, into -o.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: Option<u32>,
+    /// Time steps a second, headless.
+    #[arg(long, default_value_t = 30.0)]
+    fps: f32,
+    /// Where frames (headless), screenshots and saved cameras go: an empty or new folder, or
+    /// one the viewer wrote before.
+    #[arg(short, long, default_value = "out/view")]
+    output: PathBuf,
+    /// Window: close after this many seconds (for scripted runs).
+    #[arg(long)]
+    quit_after: Option<f32>,
+}
+
+impl ViewArgs {
+    /// Runs the viewer: headless with --frames, else in a window.
+    pub(super) fn run(self) -> Result<()> {
+        let scene = Scene::load(&self.scene).context("loading the scene")?;
+        scene
+            .warnings
+            .iter()
+            .for_each(|w| eprintln!("warning: {w}"));
+        let size = self
+            .size
+            .unwrap_or((scene.camera.width, scene.camera.height));
+        let script = match &self.script {
+            Some(p) => Script::load(p)?,
+            None => Script::default(),
+        };
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            bail!("--fps {}: must be a positive number", self.fps);
+        }
+        let mut plan = OutputPlan::new();
+        plan.creating_folders().reads([&self.scene]);
+        plan.reads(scene.files.iter().cloned());
+        plan.reads(self.script.iter().cloned());
+        check_plan(&plan)?;
+        refuse_foreign_folder(&self.output, MARKER, "a viewer's frames and screenshots")?;
+        std::fs::create_dir_all(&self.output)
+            .with_context(|| format!("creating {}", self.output.display()))?;
+        let marker = self.output.join(MARKER);
+        std::fs::write(&marker, format!("trompe view {}\n", self.scene.display()))
+            .with_context(|| format!("writing {}", marker.display()))?;
+        let viewer = Viewer::new(&scene, self.impostor_resolution);
+        match self.frames {
+            Some(frames) => headless(viewer, &script, frames, self.fps, size, &self.output),
+            None => window(viewer.live(), script, size, &self.output, self.quit_after),
+        }
+    }
+}
+
+/// Replays `script` at `fps` steps a second for `frames` frames, writing each.
+fn headless(
+    mut viewer: Viewer<'_>,
+    script: &Script,
+    frames: u32,
+    fps: f32,
+    size: (u32, u32),
+    out: &Path,
+) -> Result<()> {
+    let dt = 1.0 / fps;
+    let mut last = None;
+    for i in 0..frames {
+        let (from, to) = (i as f32 * dt, (i + 1) as f32 * dt);
+        for input in script.between(from, to) {
+            if let Some(request) = viewer.input(input) {
+                handle(request, &viewer, last.as_ref(), size, out, i)?;
+            }
+        }
+        let frame = viewer.frame(size, 1.0)?;
+        let path = out.join(format!("frame_{i:04}.png"));
+        io::write_png(&path, &frame.image)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("frame {i:>5}  {:>7.1} ms  {}", frame.ms, frame.hud[0]);
+        last = Some(frame.image);
+        viewer.step(dt);
+    }
+    Ok(())
+}
+
+/// Saves a screenshot (the last frame, without the overlay) or the camera block.
+fn handle(
+    request: Request,
+    viewer: &Viewer<'_>,
+    last: Option<&trompe::Image<trompe::Rgba>>,
+    size: (u32, u32),
+    out: &Path,
+    n: u32,
+) -> Result<()> {
+    match request {
+        Request::Screenshot => {
+            if let Some(image) = last {
+                let path = out.join(format!("screenshot_{n:04}.png"));
+                io::write_png(&path, image)?;
+                eprintln!("wrote {}", path.display());
+            }
+        }
+        Request::SaveCamera => {
+            let path = out.join(format!("camera_{n:04}.toml"));
+            std::fs::write(&path, viewer.camera_block(size))
+                .with_context(|| format!("writing {}", path.display()))?;
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+/// The key a window key code stands for, by its name in scripts.
+fn key_of(code: KeyCode) -> Option<crate::viewer::Key> {
+    let name = match code {
+        KeyCode::KeyW => "W",
+        KeyCode::KeyA => "A",
+        KeyCode::KeyS => "S",
+        KeyCode::KeyD => "D",
+        KeyCode::KeyQ => "Q",
+        KeyCode::KeyE => "E",
+        KeyCode::Tab => "Tab",
+        KeyCode::KeyP => "P",
+        KeyCode::KeyV => "V",
+        KeyCode::F12 => "F12",
+        KeyCode::KeyC => "C",
+        KeyCode::KeyH => "H",
+        KeyCode::Digit1 => "1",
+        KeyCode::Digit2 => "2",
+        KeyCode::Digit3 => "3",
+        KeyCode::Digit4 => "4",
+        KeyCode::Digit5 => "5",
+        KeyCode::Digit6 => "6",
+        KeyCode::Digit7 => "7",
+        KeyCode::Digit8 => "8",
+        KeyCode::KeyO => "O",
+        _ => return None,
+    };
+    script::key(name)
+}
+
+/// What the frame is drawn into.
+type Surface = softbuffer::Surface<Rc<Window>, Rc<Window>>;
+
+/// The window's state.
+struct App<'a> {
+    viewer: Viewer<'a>,
+    script: Script,
+    size: (u32, u32),
+    out: PathBuf,
+    quit_after: Option<f32>,
+    window: Option<(Rc<Window>, Surface)>,
+    start: Instant,
+    last_step: Instant,
+    /// Seconds of the script already fed.
+    fed: f32,
+    /// The last frame, without the overlay.
+    last: Option<trompe::Image<trompe::Rgba>>,
+    /// Render scale: below 1 while the camera moves, 1 when it rests.
+    scale: f32,
+    moving: bool,
+    /// When the oldest input not yet shown arrived.
+    pending: Option<Instant>,
+    latency_ms: f64,
+    cursor: Option<(f64, f64)>,
+    looking: bool,
+    frames: u32,
+    error: Option<anyhow::Error>,
+}
+
+impl App<'_> {
+    fn input(&mut self, input: Input) {
+        self.pending.get_or_insert_with(Instant::now);
+        self.moving = true;
+        if let Some(request) = self.viewer.input(input)
+            && let Err(e) = handle(
+                request,
+                &self.viewer,
+                self.last.as_ref(),
+                self.size,
+                &self.out,
+                self.frames,
+            )
+        {
+            self.error = Some(e);
+        }
+    }
+
+    fn redraw(&mut self) -> Result<()> {
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_step).as_secs_f32();
+        self.last_step = now;
+        let clock = now.duration_since(self.start).as_secs_f32();
+        let events: Vec<Input> = self.script.between(self.fed, clock).collect();
+        self.fed = clock;
+        for e in events {
+            self.input(e);
+        }
+        self.viewer.step(dt);
+        let Some((window, surface)) = self.window.as_mut() else {
+            return Ok(());
+        };
+        let inner = window.inner_size();
+        let size = (inner.width.max(1), inner.height.max(1));
+        self.size = size;
+        let scale = if self.moving { self.scale } else { 1.0 };
+        let frame = self.viewer.frame(size, scale)?;
+        // Hold about 30 frames a second while moving.
+        if self.moving {
+            self.scale = (self.scale * (33.0 / frame.ms.max(1.0)).sqrt() as f32).clamp(0.2, 1.0);
+        }
+        self.moving = false;
+        surface
+            .resize(
+                NonZeroU32::new(size.0).unwrap_or(NonZeroU32::MIN),
+                NonZeroU32::new(size.1).unwrap_or(NonZeroU32::MIN),
+            )
+            .map_err(|e| anyhow::anyhow!("resizing the window's buffer: {e}"))?;
+        let mut buffer = surface
+            .buffer_mut()
+            .map_err(|e| anyhow::anyhow!("the window's buffer: {e}"))?;
+        for (px, c) in buffer.iter_mut().zip(frame.image.pixels()) {
+            let [r, g, b] =
+                [c.x, c.y, c.z].map(|v| (trompe::frame::linear_to_srgb(v) * 255.0 + 0.5) as u32);
+            *px = (r.min(255) << 16) | (g.min(255) << 8) | b.min(255);
+        }
+        let mut lines = frame.hud.clone();
+        lines.insert(1, format!("input to screen {:.0} ms", self.latency_ms));
+        hud::draw(&mut buffer, size.0 as usize, &lines);
+        buffer
+            .present()
+            .map_err(|e| anyhow::anyhow!("presenting the frame: {e}"))?;
+        if let Some(at) = self.pending.take() {
+            self.latency_ms = at.elapsed().as_secs_f64() * 1e3;
+        }
+        self.last = Some(frame.image);
+        self.frames += 1;
+        Ok(())
+    }
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        let attributes = Window::default_attributes()
+            .with_title("trompe view")
+            .with_inner_size(winit::dpi::PhysicalSize::new(self.size.0, self.size.1));
+        let made = event_loop
+            .create_window(attributes)
+            .map_err(|e| anyhow::anyhow!("opening a window: {e}"))
+            .and_then(|w| {
+                let w = Rc::new(w);
+                let context = softbuffer::Context::new(w.clone())
+                    .map_err(|e| anyhow::anyhow!("the display: {e}"))?;
+                let surface = softbuffer::Surface::new(&context, w.clone())
+                    .map_err(|e| anyhow::anyhow!("the window's surface: {e}"))?;
+                Ok((w, surface))
+            });
+        match made {
+            Ok(made) => {
+                made.0.request_redraw();
+                self.window = Some(made);
+            }
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else {
+                    return;
+                };
+                if code == KeyCode::Escape {
+                    event_loop.exit();
+                    return;
+                }
+                if let Some(key) = key_of(code) {
+                    match event.state {
+                        ElementState::Pressed if !event.repeat => self.input(Input::Down(key)),
+                        ElementState::Released => self.input(Input::Up(key)),
+                        _ => {}
+                    }
+                }
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                self.looking = state == ElementState::Pressed;
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if let (true, Some((x, y))) = (self.looking, self.cursor) {
+                    self.input(Input::Look(
+                        (position.x - x) as f32,
+                        (position.y - y) as f32,
+                    ));
+                }
+                self.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => (p.y / 40.0) as f32,
+                };
+                self.input(Input::Scroll(notches));
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw() {
+                    self.error = Some(e);
+                    event_loop.exit();
+                    return;
+                }
+                let done = self
+                    .quit_after
+                    .is_some_and(|s| self.start.elapsed().as_secs_f32() >= s);
+                if done || self.error.is_some() {
+                    event_loop.exit();
+                } else if let Some((w, _)) = &self.window {
+                    w.request_redraw();
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Opens the window and runs until it closes (or --quit-after).
+fn window(
+    viewer: Viewer<'_>,
+    script: Script,
+    size: (u32, u32),
+    out: &Path,
+    quit_after: Option<f32>,
+) -> Result<()> {
+    let event_loop = EventLoop::new()
+        .context("opening the display (is there an X server or Wayland compositor?)")?;
+    let now = Instant::now();
+    let mut app = App {
+        viewer,
+        script,
+        size,
+        out: out.to_path_buf(),
+        quit_after,
+        window: None,
+        start: now,
+        last_step: now,
+        fed: 0.0,
+        last: None,
+        scale: 0.5,
+        moving: false,
+        pending: None,
+        latency_ms: 0.0,
+        cursor: None,
+        looking: false,
+        frames: 0,
+        error: None,
+    };
+    event_loop.run_app(&mut app).context("running the window")?;
+    match app.error {
+        Some(e) => Err(e),
+        None => {
+            eprintln!("{} frames shown", app.frames);
+            Ok(())
+        }
+    }
+}

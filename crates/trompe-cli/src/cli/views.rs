@@ -1,0 +1,244 @@
+//! `trompe views capture | score | render`: calibrated views on the command line — parse, call
+//! `trompe::views`, print its report.
+
+use super::{bar, check_plan, load_mesh, parse_strength, refuse_foreign_folder};
+use anyhow::{Context, Result};
+use clap::ValueEnum;
+use std::path::PathBuf;
+use trompe::files::OutputPlan;
+use trompe::frame::io;
+use trompe::scene::Scene;
+
+/// `trompe views capture`.
+#[derive(clap::Args, Debug)]
+pub struct CaptureArgs {
+    /// The model (.obj, .ply, .gltf, .glb).
+    mesh: PathBuf,
+    /// Where the cameras stand.
+    #[arg(long, value_enum, default_value_t = RigArg::Ring)]
+    rig: RigArg,
+    /// Number of views.
+    #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    count: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "320x240", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera distance from the model's centre, in bounding radii.
+    #[arg(long, default_value_t = 3.0)]
+    distance: f64,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 40.0)]
+    fov: f64,
+    /// Error in the recorded camera centres, in bounding radii.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_strength)]
+    pose_noise: f64,
+    /// Noise on every linear colour channel, uniform in ±this.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_strength)]
+    colour_noise: f64,
+    /// Output folder (made if missing; must be empty or hold an earlier capture).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `--rig`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum RigArg {
+    /// Evenly over the sphere.
+    Sphere,
+    /// Over the upper hemisphere.
+    Hemisphere,
+    /// A horizontal circle, 15° up.
+    Ring,
+}
+
+/// `--weights`.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
+pub enum WeightsArg {
+    /// Unstructured Lumigraph (angle + 0.1 × resolution penalty).
+    Ulr,
+    /// VDTM (inverse angle).
+    Vdtm,
+    /// Debevec's view map: at most three views a triangle, barycentric weights.
+    ViewMap,
+    /// One view a face, the largest projected area (a single-texture baseline).
+    BestFace,
+}
+
+impl WeightsArg {
+    pub(super) fn weighting(self) -> trompe::views::Weighting {
+        match self {
+            WeightsArg::Ulr => trompe::views::Weighting::Ulr { beta: 0.1 },
+            WeightsArg::Vdtm => trompe::views::Weighting::Vdtm,
+            WeightsArg::ViewMap => trompe::views::Weighting::ViewMap,
+            WeightsArg::BestFace => trompe::views::Weighting::BestFace,
+        }
+    }
+}
+
+/// `trompe views score`.
+#[derive(clap::Args, Debug)]
+pub struct ScoreArgs {
+    /// The COLMAP model's folder (text or binary).
+    model: PathBuf,
+    /// The mesh, in the model's frame.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// The images' folder (default: the model's folder, or its images/).
+    #[arg(long)]
+    images: Option<PathBuf>,
+    /// Weightings to score (default: all four).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    weights: Vec<WeightsArg>,
+    /// Most views blended at a point.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    k: u32,
+    /// Score every N-th view (default: about 12 views in all).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    every: Option<u32>,
+}
+
+/// `trompe views render`.
+#[derive(clap::Args, Debug)]
+pub struct ViewsRenderArgs {
+    /// The COLMAP model's folder (text or binary).
+    model: PathBuf,
+    /// The mesh, in the model's frame.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// The images' folder (default: the model's folder, or its images/).
+    #[arg(long)]
+    images: Option<PathBuf>,
+    /// A scene file whose camera to render from (its objects are ignored).
+    #[arg(long)]
+    scene: PathBuf,
+    /// Weighting.
+    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
+    weights: WeightsArg,
+    /// Most views blended at a point.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    k: u32,
+    /// Output image (.png or .exr); pixels no view sees are transparent.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Parses "WIDTHxHEIGHT" for clap ([`trompe::frame::parse_size`]).
+pub(super) fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    trompe::frame::parse_size(text).map_err(|e| e.to_string())
+}
+
+impl CaptureArgs {
+    pub(super) fn capture(&self) -> Result<()> {
+        use trompe::views::capture::{CaptureSettings, Rig, capture, write_capture};
+        let out = &self.output;
+        refuse_foreign_folder(out, "cameras.txt", "a capture")?;
+        let mut plan = OutputPlan::new();
+        plan.reads([&self.mesh])
+            .writes(out.join("cameras.txt"), &["txt"])
+            .creating_folders();
+        check_plan(&plan)?;
+        plan.make_folders()
+            .with_context(|| format!("making {}", out.display()))?;
+        let settings = CaptureSettings {
+            rig: match self.rig {
+                RigArg::Sphere => Rig::Sphere,
+                RigArg::Hemisphere => Rig::Hemisphere,
+                RigArg::Ring => Rig::Ring,
+            },
+            count: self.count as usize,
+            size: self.size,
+            distance: self.distance,
+            fov_y: self.fov,
+            pose_noise: self.pose_noise,
+            colour_noise: self.colour_noise as f32,
+            seed: 1,
+        };
+        let progress = bar("capturing", self.count as u64);
+        let set = capture(&self.mesh, &settings, progress.as_ref())?;
+        write_capture(out, &set)?;
+        println!(
+            "{} views of {} at {} × {} written to {} (COLMAP text model, images/)",
+            set.views.len(),
+            self.mesh.display(),
+            self.size.0,
+            self.size.1,
+            out.display()
+        );
+        Ok(())
+    }
+}
+
+impl ScoreArgs {
+    pub(super) fn score(&self) -> Result<()> {
+        let mut set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
+        for w in &set.warnings {
+            eprintln!("warning: {w}");
+        }
+        set.load_images()?;
+        let mesh = load_mesh(&self.mesh)?;
+        let weights = if self.weights.is_empty() {
+            vec![
+                WeightsArg::Ulr,
+                WeightsArg::Vdtm,
+                WeightsArg::ViewMap,
+                WeightsArg::BestFace,
+            ]
+        } else {
+            self.weights.clone()
+        };
+        let weightings: Vec<_> = weights.iter().map(|w| w.weighting()).collect();
+        let n = set.views.len();
+        let every = self.every.map_or((n / 12).max(1), |e| e as usize);
+        let which: Vec<usize> = (0..n).step_by(every).collect();
+        let settings = trompe::views::BlendSettings {
+            k: self.k as usize,
+            ..Default::default()
+        };
+        let progress = bar("leaving out", which.len() as u64);
+        let reports = trompe::views::score::leave_one_out(
+            &set,
+            &mesh,
+            &settings,
+            &weightings,
+            &which,
+            progress.as_ref(),
+        )?;
+        println!(
+            "{n} views; each of {} left out and rendered from the others:",
+            which.len()
+        );
+        for r in reports {
+            println!("  {r}");
+        }
+        Ok(())
+    }
+}
+
+impl ViewsRenderArgs {
+    pub(super) fn render(&self) -> Result<()> {
+        let mut plan = OutputPlan::new();
+        plan.reads([&self.mesh, &self.scene, &self.model])
+            .writes(&self.output, &["png", "exr"]);
+        check_plan(&plan)?;
+        let mut set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
+        set.load_images()?;
+        let mesh = load_mesh(&self.mesh)?;
+        let scene = Scene::load(&self.scene).context("loading the scene")?;
+        let camera = scene.view(scene.render.time)?.camera;
+        let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;
+        let settings = trompe::views::BlendSettings {
+            weighting: self.weights.weighting(),
+            k: self.k as usize,
+            ..Default::default()
+        };
+        let b = trompe::views::blend::render(&camera, &mesh, &set.views, &depth, &settings, None)?;
+        io::write_color(&self.output, &b.image)?;
+        println!(
+            "wrote {}: {} pixels show the mesh, {} of them seen by no view",
+            self.output.display(),
+            b.covered,
+            b.holes
+        );
+        Ok(())
+    }
+}

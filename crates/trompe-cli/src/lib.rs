@@ -1,0 +1,14 @@
+//! # trompe-cli — the `trompe` command-line tool
+//!
+//! The application around the [`trompe`] library: the command line ([`cli`]), the demo report
+//! ([`report`]), the benchmark workloads of `trompe bench` and `cargo bench` ([`bench`]) and the
+//! interactive viewer ([`viewer`], its window in `cli/view.rs`). Each command parses its
+//! arguments, calls the library and prints what it returns; no rendering algorithm lives here.
+
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod bench;
+pub mod cli;
+pub mod report;
+pub mod viewer;

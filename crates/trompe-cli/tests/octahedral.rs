@@ -1,0 +1,164 @@
+//! `trompe impostor bake --octahedral`: atlases and their layout, batches, shards and their manifests.
+
+mod common;
+use common::{fails_cleanly, scratch, stderr, trompe};
+use std::path::Path;
+use trompe::frame::envmap::EnvMap;
+use trompe::frame::metrics;
+use trompe::glam::Vec3;
+use trompe::octahedral::{BakeSettings, Coverage, FrameProjection, Grid, bake, turntable};
+use trompe::scene::{Light, Lighting, Surface};
+
+#[test]
+fn octahedral_bakes_write_the_atlas_and_its_layout() {
+    let d = scratch("cli_octahedral");
+    let json = d.join("duck.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--octahedral",
+        "8",
+        "--resolution",
+        "256",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "duck.json",
+        "duck.png",
+        "duck-normal.exr",
+        "duck-depth.exr",
+        "duck-orm.png",
+    ] {
+        assert!(d.join(f).is_file(), "{f}");
+    }
+    let sidecar: trompe::octahedral::file::Sidecar =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!((sidecar.grid.n, sidecar.frame_size), (8, 32));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("switch distance"), "{out}");
+    let glb = d.join("duck.glb");
+    let o = trompe(&[
+        "impostor",
+        "export",
+        json.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(gltf::Gltf::open(&glb).is_ok());
+    // Any other kind of impostor exports as its surface, a textured mesh with its camera.
+    let spoc = d.join("spoc.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--resolution",
+        "32",
+        "-o",
+        spoc.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let spoc_glb = d.join("spoc.glb");
+    let o = trompe(&[
+        "impostor",
+        "export",
+        spoc.to_str().unwrap(),
+        "-o",
+        spoc_glb.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (doc, _, images) = gltf::import(&spoc_glb).unwrap();
+    assert_eq!((images[0].width, images[0].height), (32, 32));
+    assert!(doc.meshes().count() == 1);
+    // A JSON file that is no impostor's sidecar is refused, naming its format.
+    let other = d.join("other.json");
+    std::fs::write(&other, r#"{ "format": "something-else" }"#).unwrap();
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "export",
+            other.to_str().unwrap(),
+            "-o",
+            d.join("other.glb").to_str().unwrap(),
+        ]),
+        "something-else",
+    );
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            "assets/gltf/Duck.glb",
+            "--octahedral",
+            "64",
+            "--resolution",
+            "256",
+            "-o",
+            json.to_str().unwrap(),
+        ]),
+        "texels a frame",
+    );
+}
+
+#[test]
+fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
+    let d = scratch("cli_octahedral_batch");
+    let inputs = d.join("in");
+    std::fs::create_dir_all(&inputs).unwrap();
+    std::fs::copy("assets/gltf/Duck.glb", inputs.join("Duck.glb")).unwrap();
+    std::fs::copy("assets/meshes/teapot.obj", inputs.join("teapot.obj")).unwrap();
+    std::fs::write(inputs.join("broken.obj"), "v 1 2\nf 1 2 3\n").unwrap();
+    let out = d.join("out");
+    let files: Vec<String> = ["Duck.glb", "broken.obj", "teapot.obj"]
+        .iter()
+        .map(|f| inputs.join(f).to_str().unwrap().to_string())
+        .collect();
+    let mut manifests = Vec::new();
+    for k in 1..=2 {
+        let shard = format!("{k}/2");
+        let mut args = vec!["impostor", "bake"];
+        args.extend(files.iter().map(String::as_str));
+        args.extend([
+            "--octahedral",
+            "4",
+            "--resolution",
+            "64",
+            "--shard",
+            &shard,
+            "-o",
+        ]);
+        args.push(out.to_str().unwrap());
+        let o = trompe(&args);
+        let e = stderr(&o);
+        assert!(!e.contains("panicked"), "{e}");
+        // Sorted, shard 2 of 2 holds broken.obj alone: it fails, by name.
+        if k == 2 {
+            fails_cleanly(&o, "broken.obj");
+        } else {
+            assert!(o.status.success(), "{e}");
+        }
+        manifests.push(out.join(format!("manifest-{k}-of-2.json")));
+    }
+    assert!(out.join("Duck.json").is_file() && out.join("teapot.png").is_file());
+    let merged = out.join("manifest.json");
+    let mut args = vec!["impostor", "merge-manifests"];
+    args.extend(manifests.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["-o", merged.to_str().unwrap()]);
+    let o = trompe(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m: trompe::octahedral::batch::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(&merged).unwrap()).unwrap();
+    assert_eq!(m.entries.len(), 3);
+    assert_eq!(m.entries.iter().filter(|e| e.error.is_some()).count(), 1);
+    // A manifest missing a shard does not merge.
+    let o = trompe(&[
+        "impostor",
+        "merge-manifests",
+        manifests[0].to_str().unwrap(),
+        "-o",
+        d.join("partial.json").to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "shards");
+}
