@@ -2,7 +2,6 @@
 //! 3-ray cameras are exact up to point sampling, the paper's curved teapot, and determinism.
 
 mod common;
-use common::{fails_cleanly, scratch, stderr, trompe};
 use std::path::Path;
 use trompe::frame::metrics;
 use trompe::hybrid::{HybridReflections, HybridSettings};

@@ -4,9 +4,8 @@
 
 mod common;
 
-use common::{fails_cleanly, scratch, trompe};
+use common::scratch;
 use glam::{Vec3, Vec4};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, io::to_srgb8, metrics};
@@ -309,17 +308,6 @@ fn an_ora_written_and_read_back_keeps_pixels_names_and_placements_and_opens_with
 type Entry<'a> = (&'a str, Vec<u8>);
 
 /// A zip holding `entries`, `mimetype` first.
-fn zip_of(path: &Path, entries: &[Entry]) {
-    let mut z = zip::ZipWriter::new(std::fs::File::create(path).expect("create"));
-    let stored =
-        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
-    for (name, bytes) in entries {
-        z.start_file(*name, stored).expect("entry");
-        z.write_all(bytes).expect("write");
-    }
-    z.finish().expect("finished");
-}
-
 fn png(w: u32, h: u32) -> Vec<u8> {
     let img = Image::new(w, h, Vec4::ONE).expect("an image");
     trompe::frame::io::encode_png(&img, Path::new("x.png")).expect("encoded")
@@ -379,7 +367,7 @@ fn a_malformed_or_truncated_ora_is_an_error_that_names_the_entry() {
     ];
     for (file, entries, names) in cases {
         let path = dir.join(file);
-        zip_of(&path, &entries);
+        common::zip_of(&path, &entries);
         let err = ora::read(&path).expect_err(file);
         assert!(err.to_string().contains(names), "{file}: {err}");
     }
@@ -462,14 +450,8 @@ fn a_colmap_model_of_the_scene_builds_the_same_layers_as_the_capture_it_came_fro
 /// Runs Krita headless (under `xvfb-run`) on `input`, exporting `output`; `None` with the reason
 /// printed when Krita or xvfb-run is not installed (CI installs both).
 fn krita(input: &Path, output: &Path) -> Option<()> {
-    let found = |tool: &str| {
-        std::process::Command::new("sh")
-            .args(["-c", &format!("command -v {tool}")])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if !found("krita") || !found("xvfb-run") {
-        eprintln!("skipped: krita or xvfb-run is not installed (.ci/run installs them)");
+    if !common::has_command("krita") || !common::has_command("xvfb-run") {
+        common::system_package_missing("krita or xvfb-run");
         return None;
     }
     // Krita starting under a fresh virtual display can lose the race with the display's own

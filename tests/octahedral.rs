@@ -2,7 +2,6 @@
 //! against the exact render.
 
 mod common;
-use common::{fails_cleanly, scratch, stderr, trompe};
 use std::path::Path;
 use trompe::frame::envmap::EnvMap;
 use trompe::frame::metrics;

@@ -701,3 +701,57 @@ fn a_mirror_ball_in_the_maze_sees_it_through_its_graph_camera_and_keeps_it_as_it
     let (_, _, later) = sequence.frame(t + 0.5, &()).unwrap();
     assert_eq!((later.built, later.reused), (4, 1), "{later}");
 }
+
+#[test]
+fn rasterized_and_traced_primaries_shade_a_degenerate_normal_triangle_the_same() {
+    use std::sync::Arc;
+    use trompe::glam::Vec3;
+    use trompe::render::{Primary, RenderOptions, StandIns, render_view};
+    let s = scene("diffuse.toml");
+    let mut view = s.view(s.render.time).unwrap();
+    // One large triangle in front of the camera whose vertex normals are zero (a file may say
+    // so): the interpolated normal is zero everywhere, so both primaries must fall back to the
+    // face normal.
+    let camera = view.camera.clone();
+    let eye = camera.position().as_vec3();
+    let ahead = camera.forward().as_vec3();
+    let side = ahead.cross(Vec3::Y).normalize();
+    let up = side.cross(ahead);
+    let centre = eye + ahead * 3.0;
+    let mut mesh = view.meshes[0].as_ref().clone();
+    mesh.positions = vec![
+        centre - side * 2.0 - up * 1.5,
+        centre + side * 2.0 - up * 1.5,
+        centre + up * 2.0,
+    ];
+    mesh.normals = vec![Vec3::ZERO; 3];
+    mesh.uvs = None;
+    mesh.triangles = vec![[0, 1, 2]];
+    mesh.face_material = vec![0];
+    view.meshes = vec![Arc::new(mesh)];
+    view.surfaces = vec![Surface::Diffuse(None)];
+    let shade = |primary| {
+        let options = RenderOptions::new(Method::Trace).primary(primary);
+        let lighting = (&s.lighting, &s.render);
+        let mut timings = trompe::Timings::default();
+        render_view(&view, lighting, options, &StandIns::default(), &(), &mut timings).unwrap()
+    };
+    let (traced, rasterized) = (shade(Primary::Traced), shade(Primary::Rasterized));
+    let (w, h) = traced.color.size();
+    let (mut both, mut same) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            if traced.object_id.get(x, y) != 0 || rasterized.object_id.get(x, y) != 0 {
+                continue;
+            }
+            both += 1;
+            let (a, b) = (traced.color.get(x, y), rasterized.color.get(x, y));
+            let (na, nb) = (traced.normal.get(x, y), rasterized.normal.get(x, y));
+            if (a - b).abs().max_element() <= 1e-5 && (na - nb).length() <= 1e-5 {
+                same += 1;
+            }
+        }
+    }
+    assert!(both > (w * h) as usize / 10, "{both} pixels see the triangle");
+    assert_eq!(same, both, "{} of {both} pixels shaded differently", both - same);
+}

@@ -2,6 +2,8 @@
 //! validates with naga, its constants are the Rust code's, and run on a Vulkan device (Mesa's
 //! lavapipe on the CPU) it picks the frames the Rust code picks.
 
+mod common;
+
 use std::path::Path;
 
 fn source() -> String {
@@ -189,12 +191,10 @@ fn shader_frames_around(
     )
 }
 
-/// Skips a test (or fails it where CI requires a device) when no Vulkan device is found.
+/// Skips a test (or fails it where CI requires the system packages) when no Vulkan device is
+/// found.
 fn no_device() {
-    if std::env::var_os("TROMPE_REQUIRE_VULKAN").is_some() {
-        panic!("no Vulkan device, and TROMPE_REQUIRE_VULKAN is set (.ci/run sets it)");
-    }
-    eprintln!("skipped: no Vulkan device (Mesa's lavapipe runs it on the CPU)");
+    common::system_package_missing("a Vulkan device (Mesa's lavapipe runs it on the CPU)");
 }
 
 /// A compute entry over the shader's `frame_texel`: each input `(x, y, z, frame)` (frame as

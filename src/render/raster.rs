@@ -126,27 +126,12 @@ pub fn primary_hits(view: &View) -> Result<Vec<Option<crate::trace::Hit>>, Rende
             let (x, y) = (i % w as usize, i / w as usize);
             let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
             let mesh = &view.meshes[f.item.object as usize];
-            let tri = f.item.triangle as usize;
-            let [i0, i1, i2] = mesh.triangles[tri].map(|i| i as usize);
+            let c = mesh.corners(f.item.triangle as usize);
             let b = f.bary;
-            let c = mesh.corners(tri);
             let position = c[0] * b.x + c[1] * b.y + c[2] * b.z;
-            let uv = mesh
-                .uvs
-                .as_ref()
-                .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
-            Some(crate::trace::Hit {
-                t: (position - ray.origin).dot(ray.dir),
-                position,
-                normal: (mesh.normals[i0] * b.x + mesh.normals[i1] * b.y + mesh.normals[i2] * b.z)
-                    .normalize_or_zero(),
-                geometric_normal: mesh.face_normal(tri),
-                uv,
-                bary: Vec2::new(b.y, b.z),
-                object: f.item.object,
-                triangle: f.item.triangle,
-                radiance: None,
-            })
+            let t = (position - ray.origin).dot(ray.dir);
+            let id = (f.item.object, f.item.triangle);
+            Some(crate::trace::surface_point(mesh, id, t, position, b))
         })
         .collect())
 }

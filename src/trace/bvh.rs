@@ -127,7 +127,7 @@ impl RayQuery for Bvh {
     }
 }
 
-/// Fills a hit record from a triangle hit: interpolated normal and UV.
+/// The hit a ray found on `triangle` of `object` ([`surface_point`] at the ray's point).
 pub(crate) fn surface_hit(
     mesh: &Mesh,
     object: u32,
@@ -135,9 +135,25 @@ pub(crate) fn surface_hit(
     ray: &Ray,
     h: TriangleHit,
 ) -> Hit {
-    let [i0, i1, i2] = mesh.triangles[triangle as usize].map(|i| i as usize);
     let (b1, b2) = (h.bary.x, h.bary.y);
-    let b0 = 1.0 - b1 - b2;
+    let bary = glam::Vec3::new(1.0 - b1 - b2, b1, b2);
+    surface_point(mesh, (object, triangle), h.t, ray.at(h.t), bary)
+}
+
+/// The hit on `triangle` of `object` at barycentrics `bary` (of vertices 0, 1 and 2), at
+/// distance `t` and `position` along the ray that found it (traced, or rasterized: paper 1
+/// §6's primary pass): the shading normal interpolated, or the face normal where the vertex
+/// normals cancel, and the texture coordinates interpolated. Every primary and secondary hit
+/// is made here, so every way of finding a surface shades it the same.
+pub(crate) fn surface_point(
+    mesh: &Mesh,
+    (object, triangle): (u32, u32),
+    t: f32,
+    position: Vec3,
+    bary: glam::Vec3,
+) -> Hit {
+    let [i0, i1, i2] = mesh.triangles[triangle as usize].map(|i| i as usize);
+    let (b0, b1, b2) = (bary.x, bary.y, bary.z);
     let n = mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2;
     let geometric_normal = mesh.face_normal(triangle as usize);
     let uv = mesh
@@ -145,12 +161,12 @@ pub(crate) fn surface_hit(
         .as_ref()
         .map_or(Vec2::ZERO, |uv| uv[i0] * b0 + uv[i1] * b1 + uv[i2] * b2);
     Hit {
-        t: h.t,
-        position: ray.at(h.t),
+        t,
+        position,
         normal: n.try_normalize().unwrap_or(geometric_normal),
         geometric_normal,
         uv,
-        bary: h.bary,
+        bary: Vec2::new(b1, b2),
         object,
         triangle,
         radiance: None,

@@ -10,6 +10,7 @@
 mod bvh;
 
 pub use bvh::{BruteForce, Bvh};
+pub(crate) use bvh::surface_point;
 
 use crate::frame::envmap::EnvMap;
 use crate::geom::Ray;

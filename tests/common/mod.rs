@@ -146,3 +146,35 @@ pub fn compare_walks(
     }
     c
 }
+
+/// Writes a ZIP file of `entries` (name, bytes), stored uncompressed: an OpenRaster file made
+/// by hand, broken as a test wants it.
+pub fn zip_of(path: &std::path::Path, entries: &[(&str, Vec<u8>)]) {
+    use std::io::Write;
+    let mut z = zip::ZipWriter::new(std::fs::File::create(path).expect("create"));
+    let stored =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    for (name, bytes) in entries {
+        z.start_file(*name, stored).expect("entry");
+        z.write_all(bytes).expect("write");
+    }
+    z.finish().expect("finished");
+}
+
+/// Says a test cannot run because a system package is missing: the test passes, saying
+/// `skipped` on its output, or fails where `TROMPE_REQUIRE_SYSTEM` is set (`.ci/run` sets it).
+#[track_caller]
+pub fn system_package_missing(what: &str) {
+    if std::env::var_os("TROMPE_REQUIRE_SYSTEM").is_some() {
+        panic!("{what} is not installed, and TROMPE_REQUIRE_SYSTEM is set (.ci/run installs it)");
+    }
+    eprintln!("skipped: {what} is not installed (.ci/run installs it)");
+}
+
+/// Whether `tool` is a command on the `PATH`.
+pub fn has_command(tool: &str) -> bool {
+    std::process::Command::new("sh")
+        .args(["-c", &format!("command -v {tool}")])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}

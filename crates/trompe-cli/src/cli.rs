@@ -10,7 +10,8 @@ use trompe::eval::check::{BakedCheckSettings, CheckSettings, check_baked, check_
 use trompe::files::OutputPlan;
 use trompe::frame::{io, metrics};
 use trompe::impostor::{BakeSettings, CameraChoice, Subject, ViewCamera, bake};
-use trompe::render::{Method, Progress, Timings};
+use trompe::methods::MethodKind;
+use trompe::render::{Progress, Timings};
 
 mod layers;
 mod master;
@@ -336,43 +337,29 @@ fn has_extension(path: &Path, ext: &str) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case(ext))
 }
 
-/// `--method`.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum MethodArg {
-    /// Rasterize and shade (environment-mapped mirrors and glass).
-    Raster,
-    /// Whitted ray tracing through the exact BVH.
-    Trace,
-    /// Exact primary rays; rays from mirrors and glass answered by SPOC impostors of the diffuse
-    /// objects (paper 1).
-    Impostor,
-    /// As impostor, with planar (pinhole) depth images instead of SPOCs (paper 1's Fig. 6
-    /// baseline).
-    PinholeImpostor,
-    /// Exact primary rays; rays from mirrors and glass take the environment's radiance
-    /// (environment mapping, what engines do without ray tracing).
-    Envmap,
-    /// Exact primary rays; first reflections splatted from points of the diffuse objects through
-    /// continuous 3-ray cameras (paper 2).
-    C3rc,
-    /// Every object drawn from its octahedral atlas (--octahedral frames a side, --frame-size
-    /// texels each), as engines draw distant objects: relit with its normals, unshadowed;
-    /// mirrors reflect the environment.
-    Octahedral,
-}
+/// `--method`: a method of the library's one list ([`trompe::methods::MethodKind`]), its names
+/// and help taken from there.
+#[derive(Clone, Copy, Debug)]
+pub struct MethodArg(pub MethodKind);
 
-impl MethodArg {
-    /// The renderer, with the impostor resolution for `Impostor`; `None` for the hybrid and
-    /// octahedral methods, which have their own entry points.
-    fn method(self, impostor_resolution: u32) -> Option<Method> {
-        match self {
-            MethodArg::Raster => Some(Method::Raster),
-            MethodArg::Trace => Some(Method::Trace),
-            MethodArg::Impostor => Some(Method::Impostor(impostor_resolution)),
-            MethodArg::PinholeImpostor => Some(Method::PinholeImpostor(impostor_resolution)),
-            MethodArg::Envmap => Some(Method::EnvMap),
-            MethodArg::C3rc | MethodArg::Octahedral => None,
-        }
+/// Every method, for clap.
+const METHOD_ARGS: [MethodArg; MethodKind::ALL.len()] = {
+    let mut all = [MethodArg(MethodKind::Trace); MethodKind::ALL.len()];
+    let mut i = 0;
+    while i < all.len() {
+        all[i] = MethodArg(MethodKind::ALL[i]);
+        i += 1;
+    }
+    all
+};
+
+impl ValueEnum for MethodArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &METHOD_ARGS
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name()).help(self.0.about()))
     }
 }
 

@@ -2,11 +2,6 @@
 
 mod common;
 use common::{fails_cleanly, scratch, stderr, trompe};
-use std::path::Path;
-use trompe::frame::metrics;
-use trompe::hybrid::{HybridReflections, HybridSettings};
-use trompe::render::{Method, render_at};
-use trompe::scene::Scene;
 
 #[test]
 fn render_c3rc_prints_its_statistics_and_refuses_bad_settings() {

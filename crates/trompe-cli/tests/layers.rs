@@ -2,18 +2,6 @@
 
 mod common;
 use common::{fails_cleanly, scratch, trompe};
-use glam::{Vec3, Vec4};
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use trompe::camera::Pinhole;
-use trompe::frame::{Image, io::to_srgb8, metrics};
-use trompe::geom::{Material, Mesh};
-use trompe::layers::ora::{self, Ora, OraError, OraLayer};
-use trompe::layers::order::{OrderSettings, Ordering, order_view, violations};
-use trompe::layers::{self, BuildSettings, LayerSet, RenderSettings};
-use trompe::scene::Scene;
-use trompe::views::CalibratedView;
-use trompe::views::capture::{CaptureSettings, capture_of};
 
 #[test]
 fn the_command_line_builds_renders_and_refuses_a_broken_project() {
@@ -47,7 +35,7 @@ fn the_command_line_builds_renders_and_refuses_a_broken_project() {
         assert!(o.status.success(), "{method}: {}", common::stderr(&o));
     }
     // A view's file without its stack.
-    zip_of(
+    common::zip_of(
         &out.join("view0001.ora"),
         &[("mimetype", b"image/openraster".to_vec())],
     );

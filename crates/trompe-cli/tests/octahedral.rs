@@ -2,12 +2,6 @@
 
 mod common;
 use common::{fails_cleanly, scratch, stderr, trompe};
-use std::path::Path;
-use trompe::frame::envmap::EnvMap;
-use trompe::frame::metrics;
-use trompe::glam::Vec3;
-use trompe::octahedral::{BakeSettings, Coverage, FrameProjection, Grid, bake, turntable};
-use trompe::scene::{Light, Lighting, Surface};
 
 #[test]
 fn octahedral_bakes_write_the_atlas_and_its_layout() {

@@ -1,13 +1,6 @@
 //! `trompe impostor bake --layers`: depth layers baked, shown by `info`, a bad count refused.
 
 mod common;
-use glam::Vec3;
-use std::path::Path;
-use trompe::eval::check::{CheckSettings, check_built};
-use trompe::geom::Mesh;
-use trompe::geom::io::load;
-use trompe::impostor::{ImpostorCamera, Layers, Subject, ViewCamera, albedo_of, build, file};
-use trompe::{Ray, RayQuery};
 
 #[test]
 fn the_command_line_bakes_layers_shows_them_and_refuses_a_bad_count() {

@@ -1,13 +1,6 @@
 //! `trompe relief`: frames written, bad settings refused.
 
 mod common;
-use std::path::Path;
-use trompe::glam::Vec3;
-use trompe::relief::pipeline::ObjectState;
-use trompe::relief::shader::SoftwareShader;
-use trompe::relief::walk::verdicts_along;
-use trompe::relief::{PipelineSettings, WalkSettings, walk};
-use trompe::scene::Scene;
 
 #[test]
 fn the_relief_command_writes_frames_and_refuses_what_it_should() {

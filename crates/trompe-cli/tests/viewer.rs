@@ -4,7 +4,7 @@
 
 mod common;
 use common::{scratch, stderr, trompe};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use trompe::frame::metrics;
 use trompe::scene::Scene;
 use trompe_cli::viewer::script::Script;
@@ -21,7 +21,7 @@ const SIZE: (u32, u32) = (96, 72);
 
 /// The frames a script gives, `frames` steps of 1/30 s.
 fn replay(scene: &Scene, script: &Script, frames: u32) -> Vec<trompe::Image<trompe::Rgba>> {
-    let mut viewer = Viewer::new(scene, 64);
+    let mut viewer = Viewer::new(scene, 64).unwrap();
     let dt = 1.0 / 30.0;
     (0..frames)
         .map(|i| {
@@ -60,7 +60,7 @@ fn a_script_replays_the_same_frames_on_one_and_two_threads_and_across_runs() {
 #[test]
 fn a_second_forward_at_speed_s_moves_the_eye_by_s() {
     let s = scene("teapot-in-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64);
+    let mut viewer = Viewer::new(&s, 64).unwrap();
     let (start, speed) = (viewer.camera().eye, viewer.speed());
     viewer.input(Input::Down(Key::Forward));
     let dt = 1.0 / 30.0;
@@ -82,7 +82,7 @@ fn a_second_forward_at_speed_s_moves_the_eye_by_s() {
 #[test]
 fn orbiting_keeps_the_distance_to_the_target() {
     let s = scene("teapot-in-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64);
+    let mut viewer = Viewer::new(&s, 64).unwrap();
     viewer.input(Input::Down(Key::Orbit));
     let c = *viewer.camera();
     let distance = c.eye.distance(c.target);
@@ -101,7 +101,7 @@ fn orbiting_keeps_the_distance_to_the_target() {
 #[test]
 fn a_saved_camera_block_parses_as_a_scene_camera_and_reproduces_the_view() {
     let s = scene("teapot-in-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64);
+    let mut viewer = Viewer::new(&s, 64).unwrap();
     viewer.input(Input::Look(200.0, 40.0));
     viewer.input(Input::Down(Key::Left));
     viewer.step(0.4);
@@ -124,12 +124,8 @@ fn a_saved_camera_block_parses_as_a_scene_camera_and_reproduces_the_view() {
 
 #[test]
 fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
-    let found = std::process::Command::new("sh")
-        .args(["-c", "command -v xvfb-run"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !found {
-        eprintln!("skipped: xvfb-run is not installed (.ci/run installs it)");
+    if !common::has_command("xvfb-run") {
+        common::system_package_missing("xvfb-run");
         return;
     }
     let dir = scratch("viewer-window");
@@ -221,7 +217,7 @@ fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
 #[test]
 fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_away() {
     let s = scene("c3rc-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64);
+    let mut viewer = Viewer::new(&s, 64).unwrap();
     assert_eq!(viewer.methods().nth(5), Some("c3rc"));
     // The second object, the bunny.
     viewer.input(Input::Down(Key::NextObject));
@@ -250,7 +246,7 @@ fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_a
 #[test]
 fn the_layered_method_is_built_on_first_use_and_comes_close_to_tracing() {
     let s = scene("street.toml");
-    let mut viewer = Viewer::new(&s, 64);
+    let mut viewer = Viewer::new(&s, 64).unwrap();
     assert_eq!(viewer.methods().nth(6), Some("layered"));
     viewer.input(Input::Down(Key::Method(0)));
     let traced = viewer.frame(SIZE, 1.0).unwrap();
@@ -291,7 +287,7 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
             .build()
             .unwrap()
             .install(|| {
-                let mut viewer = Viewer::new(&s, 64);
+                let mut viewer = Viewer::new(&s, 64).unwrap();
                 let dt = 1.0 / 30.0;
                 let mut frames = Vec::new();
                 for i in 0..20 {
@@ -305,7 +301,7 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
                 (frames, viewer.frame(SIZE, 1.0).unwrap())
             })
     };
-    assert_eq!(Viewer::new(&s, 64).methods().nth(7), Some("relief"));
+    assert_eq!(Viewer::new(&s, 64).unwrap().methods().nth(7), Some("relief"));
     let (frames, traced) = run(2);
     let (one, _) = run(1);
     assert!(

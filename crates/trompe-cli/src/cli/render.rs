@@ -1,6 +1,6 @@
-//! `trompe render SCENE`: one frame, or with `--frames` a sequence, of a scene by any method —
-//! parse, call `trompe::render` (or `trompe::hybrid` for C3RC), write the images, print the
-//! timings and, for a sequence, a line a frame.
+//! `trompe render SCENE`: one frame, or with `--frames` a sequence, of a scene by any method of
+//! the library's list (`trompe::methods`) — parse, prepare the method, ask it for frames, write
+//! the images, print the timings and, for a sequence, a line a frame.
 
 use super::{MAX_IMPOSTOR_SIDE, MethodArg, bar, check_plan, print_timings};
 use anyhow::{Context, Result, bail};
@@ -8,7 +8,8 @@ use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use trompe::files::OutputPlan;
 use trompe::frame::{io, metrics};
-use trompe::render::{self, Method, Sequence, Timings};
+use trompe::methods::{MethodKind, MethodSettings, Renderer};
+use trompe::render::{self, Timings};
 use trompe::scene::Scene;
 
 /// `trompe render`.
@@ -21,7 +22,7 @@ pub struct RenderArgs {
     #[arg(short, long)]
     output: PathBuf,
     /// Renderer.
-    #[arg(long, value_enum, default_value_t = MethodArg::Trace)]
+    #[arg(long, value_enum, default_value = "trace")]
     method: MethodArg,
     /// How glass refracts what the eye sees through it: traced through the object, or by
     /// Wyman's image-space approximation of its far side (trace, impostor, pinhole-impostor and
@@ -121,27 +122,50 @@ pub(super) fn write_frame(
 }
 
 impl RenderArgs {
-    /// The render options the flags give, for `method`.
-    fn options(&self, method: Method) -> render::RenderOptions {
-        render::RenderOptions::new(method)
-            .refraction(match self.refraction {
+    /// The method's settings the flags give.
+    fn settings(&self) -> Result<MethodSettings> {
+        if let Some(sp) = self.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            bail!("--spacing {sp}: must be a positive number of scene units");
+        }
+        Ok(MethodSettings {
+            refraction: match self.refraction {
                 RefractionArg::Exact => render::Refraction::Exact,
                 RefractionArg::Wyman => render::Refraction::Wyman,
-            })
-            .mirrors(match self.mirrors {
+            },
+            mirrors: match self.mirrors {
                 MirrorsArg::Exact => render::Mirrors::Exact,
                 MirrorsArg::Impostor => render::Mirrors::Impostor,
-            })
-            .primary(match self.primary {
+            },
+            primary: match self.primary {
                 PrimaryArg::Traced => render::Primary::Traced,
                 PrimaryArg::Rasterized => render::Primary::Rasterized,
-            })
+            },
+            impostor_resolution: self.impostor_resolution,
+            hybrid: trompe::hybrid::HybridSettings {
+                splat: self.splat,
+                spacing: self.spacing,
+                ..Default::default()
+            },
+            octahedral_frames: self.octahedral,
+            octahedral_frame_size: self.frame_size,
+            ..Default::default()
+        })
+    }
+
+    /// The method, refused before any work if it does not render scenes.
+    fn kind(&self) -> Result<MethodKind> {
+        let kind = self.method.0;
+        if let Some(reason) = kind.refusal() {
+            bail!("--method {kind}: {reason}");
+        }
+        Ok(kind)
     }
 
     /// Loads the scene, renders it, writes the images; prints what it wrote.
     pub(super) fn render(self, verbose: bool) -> Result<()> {
+        let (kind, settings) = (self.kind()?, self.settings()?);
         if let Some(frames) = self.frames {
-            return self.sequence(frames, verbose);
+            return self.sequence(kind, settings, frames, verbose);
         }
         // Checked before loading, then again with everything the scene reads.
         let mut plan = OutputPlan::new();
@@ -158,43 +182,16 @@ impl RenderArgs {
         check_plan(plan.reads(s.files.iter().cloned()))?;
         s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         let t = self.time.unwrap_or(s.render.time);
-        let frame = match self.method.method(self.impostor_resolution) {
-            Some(method) => {
-                let pb = bar(&format!("{method}"), s.camera.height as u64);
-                let options = self.options(method);
-                let (frame, steps) =
-                    render::render_with(&s, t, options, pb.as_ref()).context("rendering")?;
-                timings.0.extend(steps.0);
-                frame
-            }
-            None if matches!(self.method, MethodArg::Octahedral) => {
-                let settings = trompe::octahedral::BakeSettings::new(
-trompe::octahedral::Grid { n: self.octahedral, coverage: trompe::octahedral::Coverage::Sphere },
-self.frame_size,
-);
-                let pb = bar("octahedral", s.camera.height as u64);
-                trompe::octahedral::scene::render(&s, t, settings, pb.as_ref(), &mut timings)
-                    .context("rendering")?
-            }
-            None => {
-                let settings = trompe::hybrid::HybridSettings {
-                    splat: self.splat,
-                    spacing: self.spacing,
-                    ..Default::default()
-                };
-                if let Some(sp) = self.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
-                    bail!("--spacing {sp}: must be a positive number of scene units");
-                }
-                let pb = bar("c3rc", s.camera.height as u64);
-                let (frame, report) = timings
-                    .time("render", || {
-                        trompe::hybrid::render(&s, t, settings, pb.as_ref())
-                    })
-                    .context("rendering")?;
-                eprintln!("{report}");
-                frame
-            }
-        };
+        let mut renderer = Renderer::new(&s, kind, settings)?;
+        let pb = bar(kind.name(), s.camera.height as u64);
+        let out = renderer
+            .frame(t, None, pb.as_ref())
+            .context("rendering")?;
+        timings.0.extend(out.timings.0);
+        if !out.report.is_empty() {
+            eprintln!("{}", out.report);
+        }
+        let frame = out.frame;
         let (depth, normals) = (self.depth.as_deref(), self.normals.as_deref());
         timings
             .time("write", || {
@@ -207,7 +204,13 @@ self.frame_size,
     }
 
     /// Renders `frames` frames into the files the output pattern names, a line a frame.
-    fn sequence(self, frames: u32, verbose: bool) -> Result<()> {
+    fn sequence(
+        self,
+        kind: MethodKind,
+        settings: MethodSettings,
+        frames: u32,
+        verbose: bool,
+    ) -> Result<()> {
         if !(self.fps.is_finite() && self.fps > 0.0) {
             bail!(
                 "--fps {}: must be a positive number of frames a second",
@@ -217,14 +220,6 @@ self.frame_size,
         if self.depth.is_some() || self.normals.is_some() {
             bail!("--depth and --normals write one frame: leave them out with --frames");
         }
-        let Some(method) = self.method.method(self.impostor_resolution) else {
-            bail!(
-                "--frames: --method {} renders one frame at a time; give --time instead",
-                self.method
-                    .to_possible_value()
-                    .map_or("c3rc".into(), |v| v.get_name().to_string())
-            );
-        };
         let paths: Vec<PathBuf> = (0..frames)
             .map(|i| frame_path(&self.output, i))
             .collect::<Result<_>>()?;
@@ -242,22 +237,23 @@ self.frame_size,
                 .with_context(|| format!("creating the folder {}", dir.display()))?;
         }
         let t0 = self.time.unwrap_or(s.render.time);
-        let mut sequence = Sequence::new(&s, self.options(method));
-        let mut exact = Sequence::new(&s, self.options(Method::Trace));
+        let mut sequence = Renderer::new(&s, kind, settings.clone())?;
+        let mut exact = Renderer::new(&s, MethodKind::Trace, settings)?;
         let (mut total_ms, mut total_flip) = (0.0, 0.0);
         for (i, path) in paths.iter().enumerate() {
             let t = t0 + i as f32 / self.fps;
             let start = std::time::Instant::now();
-            let (frame, steps, report) = sequence
-                .frame(t, &())
+            let out = sequence
+                .frame(t, None, &())
                 .with_context(|| format!("rendering frame {i} (t = {t} s)"))?;
+            let (frame, steps, report) = (out.frame, out.timings, out.report);
             let ms = start.elapsed().as_secs_f64() * 1e3;
             total_ms += ms;
             io::write_color(path, &frame.color)
                 .with_context(|| format!("writing {}", path.display()))?;
             let mut line = format!("frame {i:>5}  t {t:>8.3} s  {ms:>8.1} ms  {report}");
             if self.compare {
-                let (truth, _, _) = exact.frame(t, &())?;
+                let truth = exact.frame(t, None, &())?.frame;
                 let score = metrics::compare(&truth.color, &frame.color, None)?;
                 total_flip += score.flip;
                 line.push_str(&format!(
@@ -270,7 +266,7 @@ self.frame_size,
         }
         let n = frames as f64;
         let mut summary = format!(
-            "{frames} frames by {method}: {:.1} ms a frame ({:.1} frames/s)",
+            "{frames} frames by {kind}: {:.1} ms a frame ({:.1} frames/s)",
             total_ms / n,
             1e3 * n / total_ms.max(f64::MIN_POSITIVE)
         );

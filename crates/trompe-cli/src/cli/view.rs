@@ -81,7 +81,7 @@ impl ViewArgs {
         let marker = self.output.join(MARKER);
         std::fs::write(&marker, format!("trompe view {}\n", self.scene.display()))
             .with_context(|| format!("writing {}", marker.display()))?;
-        let viewer = Viewer::new(&scene, self.impostor_resolution);
+        let viewer = Viewer::new(&scene, self.impostor_resolution)?;
         match self.frames {
             Some(frames) => headless(viewer, &script, frames, self.fps, size, &self.output),
             None => window(viewer.live(), script, size, &self.output, self.quit_after),
@@ -168,6 +168,8 @@ fn key_of(code: KeyCode) -> Option<crate::viewer::Key> {
         KeyCode::Digit6 => "6",
         KeyCode::Digit7 => "7",
         KeyCode::Digit8 => "8",
+        KeyCode::Digit9 => "9",
+        KeyCode::Digit0 => "0",
         KeyCode::KeyO => "O",
         _ => return None,
     };

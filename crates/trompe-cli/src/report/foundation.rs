@@ -5,7 +5,8 @@
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, RenderRow, ReportError, fmt_psnr};
 use trompe::frame::{io, metrics};
-use trompe::render::{self, Method, Progress};
+use trompe::methods::{MethodKind, MethodSettings, Renderer};
+use trompe::render::Progress;
 use trompe::scene::Scene;
 use std::path::Path;
 
@@ -45,21 +46,21 @@ pub(super) fn section(
         let path = inputs.scenes.join(format!("{name}.toml"));
         let scene = Scene::load(&path).map_err(Box::new)?;
         let h = scene.camera.height;
-        let mut methods = vec![Method::Trace, Method::Raster];
+        let mut methods = vec![MethodKind::Trace, MethodKind::Raster];
         if name != "diffuse" {
-            let r = render::DEFAULT_IMPOSTOR_RESOLUTION;
             methods.extend([
-                Method::Impostor(r),
-                Method::PinholeImpostor(r),
-                Method::EnvMap,
+                MethodKind::Impostor,
+                MethodKind::PinholeImpostor,
+                MethodKind::EnvMap,
             ]);
         }
         let mut frames = Vec::new();
         for method in methods {
             let bar = progress(&format!("{name} ({method})"), h as u64);
             let start = std::time::Instant::now();
-            let (frame, timings) = render::render(&scene, method, bar.as_ref())?;
-            frames.push((method, frame, start.elapsed(), timings));
+            let mut renderer = Renderer::new(&scene, method, MethodSettings::default())?;
+            let out = renderer.frame(scene.render.time, None, bar.as_ref())?;
+            frames.push((method, out.frame, start.elapsed(), out.timings));
         }
         let reference = frames[0].1.clone();
         s.heading(format!("Scene `{name}.toml`"));
@@ -71,7 +72,7 @@ pub(super) fn section(
                 &file,
                 format!("{method}, {:.0} ms", time.as_secs_f64() * 1e3),
             ));
-            if *method != Method::Trace {
+            if *method != MethodKind::Trace {
                 let heat = metrics::heat_map(&metrics::flip_map(&reference.color, &frame.color)?);
                 let heat_file = format!("{name}-{method}-flip.png");
                 io::write_png(&out.join(&heat_file), &heat)?;

@@ -17,7 +17,8 @@ mod views;
 
 use trompe::frame::metrics::{self, Scores};
 use trompe::frame::{FrameError, io};
-use trompe::render::{Method, Progress, RenderError};
+use trompe::methods::{MethodError, MethodKind};
+use trompe::render::{Progress, RenderError};
 use trompe::scene::SceneError;
 use html::{Report, Section, Table};
 use std::path::{Path, PathBuf};
@@ -34,6 +35,9 @@ pub enum ReportError {
     /// Rendering failed.
     #[error(transparent)]
     Render(#[from] RenderError),
+    /// A method of the registry failed.
+    #[error(transparent)]
+    Method(#[from] MethodError),
     /// An image could not be written or compared.
     #[error(transparent)]
     Frame(#[from] FrameError),
@@ -95,7 +99,7 @@ pub struct RenderRow {
     /// Scene name.
     pub scene: String,
     /// Method.
-    pub method: Method,
+    pub method: MethodKind,
     /// Wall-clock time of the render.
     pub time: Duration,
     /// Scores against the trace render of the same scene.

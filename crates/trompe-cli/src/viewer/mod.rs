@@ -15,9 +15,8 @@ pub mod script;
 
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba, metrics};
-use trompe::relief::pipeline::ObjectFrame;
-use trompe::relief::{Pipeline, PipelineSettings, SoftwareShader};
-use trompe::render::{Method, Primary, RenderError, RenderOptions, Sequence, Timings};
+use trompe::methods::{MethodError, MethodKind, MethodSettings, Renderer};
+use trompe::render::{Primary, RenderError, Timings};
 use trompe::scene::Scene;
 use glam::{Vec3, Vec4};
 use std::time::Instant;
@@ -97,25 +96,16 @@ pub enum ViewerError {
     /// A frame could not be rendered.
     #[error(transparent)]
     Render(#[from] RenderError),
+    /// A method could not make its frame.
+    #[error(transparent)]
+    Method(#[from] MethodError),
     /// The camera became degenerate.
     #[error(transparent)]
     Camera(#[from] trompe::camera::CameraError),
     /// A frame could not be made or compared.
     #[error(transparent)]
     Frame(#[from] trompe::frame::FrameError),
-    /// The layered method's photographs could not be captured.
-    #[error(transparent)]
-    Capture(#[from] trompe::views::capture::CaptureError),
-    /// The layered method's layers could not be built.
-    #[error(transparent)]
-    Layers(#[from] Box<trompe::layers::LayersError>),
-    /// The relief pipeline failed.
-    #[error(transparent)]
-    Relief(#[from] trompe::relief::ReliefError),
 }
-
-/// Photographs the layered method captures of the scene on first use, on a ring around it.
-pub const LAYERED_VIEWS: usize = 6;
 
 /// Frames after its request that the relief method uses a new impostor, unless the viewer is
 /// [`Viewer::live`] (the frame waits for it if need be, so the same inputs give the same frames).
@@ -212,21 +202,11 @@ pub struct Viewer<'a> {
     speed: f32,
     time: f32,
     paused: bool,
-    methods: Vec<(&'static str, RenderOptions)>,
-    sequences: Vec<Sequence<'a>>,
+    /// The methods the number keys switch between, in [`MethodKind::for_scenes`] order.
+    renderers: Vec<Renderer<'a>>,
     /// `trace`, for the split screen.
-    exact: Sequence<'a>,
-    /// Paper 2's hybrid method, its points sampled on first use.
-    hybrid: Option<trompe::hybrid::HybridReflections>,
-    /// Paper 4's layered projective textures, built on first use from photographs of the
-    /// scene at time 0.
-    layered: Option<trompe::layers::LayerSet>,
-    /// Paper 3's relief pipeline over every object, started on first use over the scene as it
-    /// stands then (relief impostors are of a still scene: its time is kept).
-    relief: Option<(Pipeline, f32)>,
-    /// The relief method uses impostors as soon as they are made (else [`RELIEF_LATENCY`]
-    /// frames after their request).
-    live: bool,
+    exact: Renderer<'a>,
+    impostor_resolution: u32,
     /// The object orbited, if one was chosen.
     selected: Option<usize>,
     current: usize,
@@ -236,7 +216,7 @@ pub struct Viewer<'a> {
 
 impl<'a> Viewer<'a> {
     /// A viewer of `scene` from its camera at its time; impostors of `impostor_resolution²`.
-    pub fn new(scene: &'a Scene, impostor_resolution: u32) -> Self {
+    pub fn new(scene: &'a Scene, impostor_resolution: u32) -> Result<Self, ViewerError> {
         let c = &scene.camera;
         let start = scene.camera.at(scene.render.time).ok();
         let (eye, target) = match start {
@@ -247,51 +227,37 @@ impl<'a> Viewer<'a> {
             None => (c.position, c.look_at),
         };
         let target = if c.path.is_empty() { c.look_at } else { target };
-        let r = impostor_resolution;
-        let fast = |m| RenderOptions::new(m).primary(Primary::Rasterized);
-        let methods = vec![
-            ("trace", RenderOptions::new(Method::Trace)),
-            ("impostor", fast(Method::Impostor(r))),
-            ("pinhole-impostor", fast(Method::PinholeImpostor(r))),
-            ("envmap", fast(Method::EnvMap)),
-            ("raster", RenderOptions::new(Method::Raster)),
-        ];
-        let sequences = methods
-            .iter()
-            .map(|(_, o)| Sequence::new(scene, *o))
-            .collect();
-        Self {
+        let renderers = renderers(scene, impostor_resolution, false);
+        let exact = Renderer::new(scene, MethodKind::Trace, MethodSettings::default())?;
+        Ok(Self {
             scene,
             camera: FlyCamera::looking_at(eye, target, c.fov_y, c.near),
             held: Vec::new(),
             speed: (0.5 * eye.distance(target)).max(1e-3),
             time: scene.render.time,
             paused: false,
-            methods,
-            sequences,
-            exact: Sequence::new(scene, RenderOptions::new(Method::Trace)),
-            hybrid: None,
-            layered: None,
-            relief: None,
-            live: false,
+            renderers,
+            exact,
+            impostor_resolution,
             selected: None,
             current: 1,
             split: Split::Off,
             help: false,
-        }
+        })
     }
 
     /// Lets the relief method use each impostor as soon as its rendering thread makes it, as an
     /// interactive window wants; by default it uses it [`RELIEF_LATENCY`] frames after the
     /// request, waiting if need be, so that a frame depends only on the inputs.
     pub fn live(mut self) -> Self {
-        self.live = true;
+        self.renderers = renderers(self.scene, self.impostor_resolution, true);
         self
     }
 
-    /// The methods the number keys switch between, in order (key 1 is the first).
+    /// The methods the number keys switch between, in order (key 1 is the first, key 0 the
+    /// tenth).
     pub fn methods(&self) -> impl Iterator<Item = &'static str> + '_ {
-        self.methods.iter().map(|(n, _)| *n).chain(EXTRA)
+        self.renderers.iter().map(|r| r.kind().name())
     }
 
     /// The camera.
@@ -330,7 +296,7 @@ impl<'a> Viewer<'a> {
     fn press(&mut self, key: Key) -> Option<Request> {
         match key {
             // After the sequences' numbers, the hybrid and layered methods'.
-            Key::Method(n) if n < self.methods.len() + EXTRA.len() => self.current = n,
+            Key::Method(n) if n < self.renderers.len() => self.current = n,
             Key::Method(_) => {}
             Key::Orbit => {
                 self.camera.orbit = !self.camera.orbit;
@@ -415,22 +381,12 @@ impl<'a> Viewer<'a> {
             ((size.1 as f32 * scale).round() as u32).max(1),
         );
         let camera = self.camera.pinhole(small)?;
-        let extra = self.current.checked_sub(self.methods.len());
-        let (frame, timings, report, state) = match self.sequences.get_mut(self.current) {
-            Some(sequence) => {
-                let (f, t, r) = sequence.frame_from(self.time, Some(camera.clone()), &())?;
-                (f, t, r.to_string(), Vec::new())
-            }
-            None => match extra.and_then(|i| EXTRA.get(i)) {
-                Some(&"c3rc") => self.hybrid_frame(&camera)?,
-                Some(&"layered") => self.layered_frame(&camera, small)?,
-                _ => self.relief_frame(&camera)?,
-            },
-        };
+        let out = self.renderers[self.current].frame(self.time, Some(camera.clone()), &())?;
+        let (frame, timings, report, state) = (out.frame, out.timings, out.report, out.state);
         let image = match self.split {
             Split::Off => frame.color,
             Split::Halves | Split::Flip => {
-                let (exact, _, _) = self.exact.frame_from(self.time, Some(camera), &())?;
+                let exact = self.exact.frame(self.time, Some(camera), &())?.frame;
                 if self.split == Split::Flip {
                     metrics::heat_map(&metrics::flip_map(&exact.color, &frame.color)?)
                 } else {
@@ -452,10 +408,10 @@ impl<'a> Viewer<'a> {
         };
         let image = enlarge(&image, size)?;
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        let (name, resolution) = match self.methods.get(self.current) {
-            Some((name, options)) => (*name, options.method.impostor_resolution()),
-            None => (EXTRA[self.current - self.methods.len()], None),
-        };
+        let kind = self.renderers[self.current].kind();
+        let name = kind.name();
+        let resolution = matches!(kind, MethodKind::Impostor | MethodKind::PinholeImpostor)
+            .then_some(self.impostor_resolution);
         let mut hud = vec![
             format!(
                 "{name}{}  {ms:.0} ms ({:.1} fps)  {}x{} of {}x{}",
@@ -495,118 +451,6 @@ impl<'a> Viewer<'a> {
         })
     }
 
-    /// Paper 2's hybrid frame through `camera`, its points sampled on first use.
-    fn hybrid_frame(&mut self, camera: &Pinhole) -> Result<MethodFrame, ViewerError> {
-        let mut timings = Timings::default();
-        let clouds = match self.hybrid.take() {
-            Some(clouds) => clouds,
-            None => timings.time("sample points, build trees", || {
-                let settings = trompe::hybrid::HybridSettings::default();
-                trompe::hybrid::HybridReflections::prepare(self.scene, settings)
-            })?,
-        };
-        let f = timings.time("c3rc frame", || {
-            let camera = Some(camera.clone());
-            trompe::hybrid::render_frame_from(&clouds, self.scene, self.time, camera, &())
-        });
-        self.hybrid = Some(clouds);
-        let f = f?;
-        let report = format!("{} points seen", f.stats.points_seen);
-        Ok((f.frame, timings, report, Vec::new()))
-    }
-
-    /// Paper 4's layered frame through `camera`, the layers built on first use from
-    /// [`LAYERED_VIEWS`] photographs of the scene at time 0; the panorama where no layer is.
-    fn layered_frame(
-        &mut self,
-        camera: &Pinhole,
-        size: (u32, u32),
-    ) -> Result<MethodFrame, ViewerError> {
-        let mut timings = Timings::default();
-        let set = match self.layered.take() {
-            Some(set) => set,
-            None => {
-                let settings = trompe::views::capture::CaptureSettings {
-                    count: LAYERED_VIEWS,
-                    size: (640, 480),
-                    ..Default::default()
-                };
-                let views = timings.time("photograph the scene", || {
-                    trompe::views::capture::capture_of(self.scene.clone(), &settings, &())
-                })?;
-                let (meshes, names) = trompe::layers::scene_objects(self.scene)?;
-                timings
-                    .time("build layers", || {
-                        trompe::layers::build(meshes, names, &views.views, &Default::default(), &())
-                    })
-                    .map_err(Box::new)?
-            }
-        };
-        let blend = timings.time("layered frame", || {
-            trompe::layers::render::render(camera, &set, &Default::default())
-        });
-        self.layered = Some(set);
-        let blend = blend?;
-        let mut frame = trompe::frame::Frame::new(size.0, size.1)?;
-        let env = &self.scene.lighting.environment;
-        for y in 0..size.1 {
-            for x in 0..size.0 {
-                let c = blend.image.get(x, y);
-                let ray = camera.ray(glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
-                let behind = env.radiance(ray.dir);
-                let a = c.w.clamp(0.0, 1.0);
-                frame
-                    .color
-                    .set(x, y, (c.truncate() * a + behind * (1.0 - a)).extend(1.0));
-            }
-        }
-        let report = format!("{} holes of {} pixels", blend.holes, blend.covered);
-        Ok((frame, timings, report, Vec::new()))
-    }
-
-    /// Paper 3's relief frame through `camera`: every object a relief impostor warped to the
-    /// eye, made by the pipeline's software-shader thread, started on first use over the scene
-    /// at the time then. The HUD lines give each object's pipeline state and validity.
-    fn relief_frame(&mut self, camera: &Pinhole) -> Result<MethodFrame, ViewerError> {
-        let mut timings = Timings::default();
-        let (mut pipeline, time) = match self.relief.take() {
-            Some(relief) => relief,
-            None => {
-                let view = self.scene.view(self.time)?;
-                let shader = SoftwareShader::new(&view, &self.scene.lighting, &self.scene.render);
-                let objects: Vec<usize> = (0..view.meshes.len()).collect();
-                let settings = PipelineSettings {
-                    deterministic: (!self.live).then_some(RELIEF_LATENCY),
-                    ..Default::default()
-                };
-                let pipeline = timings.time("start the relief pipeline", || {
-                    Pipeline::new(shader, &objects, settings)
-                })?;
-                (pipeline, self.time)
-            }
-        };
-        let out = pipeline.frame(camera);
-        let threshold = pipeline.settings().threshold;
-        let regenerations = pipeline.regenerations;
-        self.relief = Some((pipeline, time));
-        let mut out = out?;
-        timings.0.append(&mut out.timings.0);
-        let lines = out
-            .objects
-            .iter()
-            .map(|o| {
-                let name = self
-                    .scene
-                    .objects
-                    .get(o.object)
-                    .map_or("?", |s| s.name.as_str());
-                pipeline_line(name, o, threshold)
-            })
-            .collect();
-        let report = format!("still scene at t {time:.2} s, {regenerations} impostors made");
-        Ok((out.frame, timings, report, lines))
-    }
-
     /// The camera as a scene-file `[camera]` block that reproduces the view at `size`.
     pub fn camera_block(&self, size: (u32, u32)) -> String {
         let c = &self.camera;
@@ -618,45 +462,35 @@ impl<'a> Viewer<'a> {
     }
 }
 
-/// A method's frame: the frame, its steps, a one-line report, and lines of pipeline state.
-type MethodFrame = (trompe::frame::Frame, Timings, String, Vec<String>);
-
-/// One relief object's line in the HUD: its pipeline state (valid, warping, stale or
-/// fallback, and whether a new impostor is being made), the impostor's resolution, and the
-/// validity measure — the interpolated share of the pre-warp the critical-point heuristic
-/// predicts, against the threshold past which the impostor is obsolete.
-pub fn pipeline_line(name: &str, o: &ObjectFrame, threshold: f64) -> String {
-    let mut line = format!("  {name}: {}", o.state);
-    if o.regenerating {
-        line.push_str(" + regenerating");
-    }
-    if o.resolution > 0 {
-        line.push_str(&format!(" {}^2", o.resolution));
-    }
-    if o.predicted.is_finite() {
-        line.push_str(&format!(
-            "  predicted {:.3} of limit {threshold:.3}",
-            o.predicted
-        ));
-    }
-    if let Some(ratio) = o.ratio {
-        line.push_str(&format!("  interpolated {ratio:.3}"));
-    }
-    if o.cache_hit {
-        line.push_str("  from cache");
-    }
-    line
+/// Every method that renders a scene, prepared over `scene` as the viewer runs them: the
+/// impostor and environment methods find what the eye sees by rasterizing (faster; differs on
+/// silhouette pixels only); the relief method uses a new impostor [`RELIEF_LATENCY`] frames
+/// after its request, or as soon as it is made when `live`.
+fn renderers(scene: &Scene, impostor_resolution: u32, live: bool) -> Vec<Renderer<'_>> {
+    MethodKind::for_scenes()
+        .filter_map(|kind| {
+            let mut settings = MethodSettings {
+                impostor_resolution,
+                ..Default::default()
+            };
+            if matches!(
+                kind,
+                MethodKind::Impostor | MethodKind::PinholeImpostor | MethodKind::EnvMap
+            ) {
+                settings.primary = Primary::Rasterized;
+            }
+            settings.relief.deterministic = (!live).then_some(RELIEF_LATENCY);
+            Renderer::new(scene, kind, settings).ok()
+        })
+        .collect()
 }
-
-/// The methods after the sequences', in key order.
-const EXTRA: [&str; 3] = ["c3rc", "layered", "relief"];
 
 /// The help overlay.
 pub const HELP: [&str; 9] = [
     "WASD move, Q/E down/up, mouse look, wheel speed",
     "Tab fly / orbit the point looked at, O orbit the next object",
     "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster",
-    "6 c3rc 7 layered 8 relief",
+    "6 c3rc 7 layered 8 relief 9 octahedral 0 projective",
     "V split: off / trace | method / FLIP heat map",
     "P pause the animation",
     "F12 screenshot  C save the camera block",

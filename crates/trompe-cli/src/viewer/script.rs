@@ -60,11 +60,9 @@ pub fn key(name: &str) -> Option<Key> {
         "C" => Key::SaveCamera,
         "H" => Key::Help,
         digit if digit.len() == 1 => {
-            let n = digit
-                .parse::<usize>()
-                .ok()
-                .filter(|n| (1..=9).contains(n))?;
-            Key::Method(n - 1)
+            // Keys 1 to 9 are the first nine methods, 0 the tenth.
+            let n = digit.parse::<usize>().ok()?;
+            Key::Method(if n == 0 { 9 } else { n - 1 })
         }
         _ => return None,
     })
