@@ -88,7 +88,6 @@ pub mod sidecar;
 pub mod trace;
 pub mod views;
 
-
 mod prefetch;
 #[cfg(test)]
 mod test_scratch;

@@ -15,6 +15,43 @@
 //! | `relief` | paper 3 §4–6 | relief impostors made by a software-shader thread and warped to every eye |
 //! | `views`, `master` | papers 4–5 | a mesh textured from calibrated photographs: no scene file holds them, so a scene renderer refuses them (`trompe views render`, `trompe master render`) |
 //!
+//! ```
+//! use trompe::methods::{MethodKind, MethodSettings, Renderer};
+//!
+//! // A mirror ball moving past a diffuse ball, under a uniform sky.
+//! let scene = trompe::Scene::from_toml(
+//!     r#"
+//!     [camera]
+//!     position = [0.0, 0.5, 3.0]
+//!     look_at = [0.0, 0.0, 0.0]
+//!     fov_y = 40.0
+//!     resolution = [32, 24]
+//!     [[object]]
+//!     shape = "sphere"
+//!     scale = 0.4
+//!     translate = [0.5, 0.0, 0.0]
+//!     [[object]]
+//!     shape = "sphere"
+//!     scale = 0.4
+//!     translate = [-0.5, 0.0, 0.0]
+//!     material = { type = "mirror" }
+//!     [object.animate]
+//!     velocity = [0.0, 0.5, 0.0]
+//!     "#,
+//!     std::path::Path::new("inline.toml"),
+//! )?;
+//! let settings = MethodSettings { impostor_resolution: 64, ..Default::default() };
+//! let mut impostor = Renderer::new(&scene, MethodKind::Impostor, settings)?;
+//! let first = impostor.frame(0.0, None, &())?;
+//! let next = impostor.frame(0.1, None, &())?;
+//! // The diffuse ball's impostor is built for the first frame and kept for the next (lit
+//! // again: the mirror moved, and with it the shadows).
+//! assert_eq!(first.report, "impostors: 1 built, 0 reused (0 relit)");
+//! assert_eq!(next.report, "impostors: 0 built, 1 reused (1 relit)");
+//! assert!(Renderer::new(&scene, MethodKind::Master, MethodSettings::default()).is_err());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! Invariants: a method's frame depends only on the scene, its settings, the times and cameras
 //! asked for so far, never on the thread count; a method that cannot render a scene file says
 //! why through [`MethodKind::refusal`] before any work.
@@ -132,9 +169,7 @@ impl MethodKind {
             MethodKind::Relief => {
                 "relief impostors made on a software-shader thread and warped to every eye (paper 3)"
             }
-            MethodKind::Views => {
-                "a mesh textured from calibrated views: `trompe views render`"
-            }
+            MethodKind::Views => "a mesh textured from calibrated views: `trompe views render`",
             MethodKind::Master => "a mesh rendered from master textures: `trompe master render`",
         }
     }
@@ -354,7 +389,11 @@ impl<'a> Renderer<'a> {
                 reason,
             });
         }
-        if let Some(sp) = settings.hybrid.spacing.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        if let Some(sp) = settings
+            .hybrid
+            .spacing
+            .filter(|s| !(s.is_finite() && *s > 0.0))
+        {
             return Err(RenderError::Setting {
                 name: "spacing",
                 value: f64::from(sp),
@@ -445,9 +484,8 @@ impl<'a> Renderer<'a> {
                 let rebake = !matches!(kept, Some((at, _)) if still && *at == poses);
                 if rebake {
                     let bake = self.settings.octahedral_bake();
-                    let atlases = timings.time("bake atlases", || {
-                        SceneAtlases::bake(scene, t, bake, &())
-                    })?;
+                    let atlases =
+                        timings.time("bake atlases", || SceneAtlases::bake(scene, t, bake, &()))?;
                     *kept = Some((poses, atlases));
                 }
                 let Some((_, atlases)) = kept.as_ref() else {

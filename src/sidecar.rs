@@ -36,8 +36,11 @@ pub enum SidecarError {
         reason: String,
     },
     /// A `format` trompe does not know.
-    #[error("{path}: format {format:?} is not one trompe reads (expected {:?} or {:?})",
-        crate::impostor::file::FORMAT, crate::octahedral::file::FORMAT)]
+    #[error(
+        "{path}: format {format:?} is not one trompe reads (expected {:?} or {:?})",
+        crate::impostor::file::FORMAT,
+        crate::octahedral::file::FORMAT
+    )]
     UnknownFormat {
         /// The file.
         path: PathBuf,

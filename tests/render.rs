@@ -734,7 +734,15 @@ fn rasterized_and_traced_primaries_shade_a_degenerate_normal_triangle_the_same()
         let options = RenderOptions::new(Method::Trace).primary(primary);
         let lighting = (&s.lighting, &s.render);
         let mut timings = trompe::Timings::default();
-        render_view(&view, lighting, options, &StandIns::default(), &(), &mut timings).unwrap()
+        render_view(
+            &view,
+            lighting,
+            options,
+            &StandIns::default(),
+            &(),
+            &mut timings,
+        )
+        .unwrap()
     };
     let (traced, rasterized) = (shade(Primary::Traced), shade(Primary::Rasterized));
     let (w, h) = traced.color.size();
@@ -752,6 +760,14 @@ fn rasterized_and_traced_primaries_shade_a_degenerate_normal_triangle_the_same()
             }
         }
     }
-    assert!(both > (w * h) as usize / 10, "{both} pixels see the triangle");
-    assert_eq!(same, both, "{} of {both} pixels shaded differently", both - same);
+    assert!(
+        both > (w * h) as usize / 10,
+        "{both} pixels see the triangle"
+    );
+    assert_eq!(
+        same,
+        both,
+        "{} of {both} pixels shaded differently",
+        both - same
+    );
 }

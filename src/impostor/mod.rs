@@ -17,9 +17,9 @@
 //! consults the mesh after it is built.
 
 mod bake;
-mod camera;
 mod billboard;
 mod builder;
+mod camera;
 pub mod file;
 mod front;
 pub mod gltf;
@@ -38,12 +38,12 @@ mod walk;
 /// texel's plane and its share of the max pyramid) and the rasterizer's scratch while it builds.
 pub const BYTES_PER_TEXEL: u64 = 64;
 
-pub use camera::{ImpostorCamera, ViewCamera};
-pub use maps::{Impostor, ImpostorSummary};
 pub use bake::{BakeError, BakeReport, BakeSettings, bake};
 pub use billboard::Billboard;
 pub use builder::{ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build, tessellate};
+pub use camera::{ImpostorCamera, ViewCamera};
 pub use front::front_bounds;
+pub use maps::{Impostor, ImpostorSummary};
 pub use peel::{AUTO_SHARE, LayerError, Layers, MAX_LAYERS, PEEL_GAP};
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;

@@ -88,10 +88,26 @@ impl PipelineSettings {
                 })
             }
         };
-        positive("threshold", self.threshold, "must be a positive share, e.g. 0.2")?;
-        positive("fallback", self.fallback, "must be a positive share, e.g. 0.6")?;
-        positive("prefetch", self.prefetch, "must be a positive factor, e.g. 0.75")?;
-        positive("max_angle", self.max_angle, "must be a positive angle in degrees")?;
+        positive(
+            "threshold",
+            self.threshold,
+            "must be a positive share, e.g. 0.2",
+        )?;
+        positive(
+            "fallback",
+            self.fallback,
+            "must be a positive share, e.g. 0.6",
+        )?;
+        positive(
+            "prefetch",
+            self.prefetch,
+            "must be a positive factor, e.g. 0.75",
+        )?;
+        positive(
+            "max_angle",
+            self.max_angle,
+            "must be a positive angle in degrees",
+        )?;
         if !(self.skip_move.is_finite() && self.skip_move >= 0.0) {
             return Err(ReliefError::Setting {
                 name: "skip_move",

@@ -9,8 +9,8 @@
 
 mod bvh;
 
-pub use bvh::{BruteForce, Bvh};
 pub(crate) use bvh::surface_point;
+pub use bvh::{BruteForce, Bvh};
 
 use crate::frame::envmap::EnvMap;
 use crate::geom::Ray;

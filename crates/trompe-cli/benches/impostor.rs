@@ -8,11 +8,11 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use std::path::PathBuf;
-use trompe_cli::bench::{framed_pinhole, plain_raster, raster_view, render_raster_once};
 use trompe::camera::Spoc;
 use trompe::eval::fidelity::ReflectorSetup;
 use trompe::impostor::{ImpostorCamera, ViewCamera, albedo_of, build};
 use trompe::raster::NoAttributes;
+use trompe_cli::bench::{framed_pinhole, plain_raster, raster_view, render_raster_once};
 
 fn impostor(c: &mut Criterion) {
     let assets = trompe_cli::bench::repo_root().join("assets");

@@ -4,9 +4,9 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::path::PathBuf;
-use trompe_cli::bench::relief::{SIDE, copy_texels, lone_shader, turned_eye};
 use trompe::relief::prewarp::{Eye, prewarp};
 use trompe::relief::{DepthEncoding, SoftwareShader};
+use trompe_cli::bench::relief::{SIDE, copy_texels, lone_shader, turned_eye};
 
 fn relief(c: &mut Criterion) {
     let root = trompe_cli::bench::repo_root();

@@ -4,9 +4,9 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::path::PathBuf;
 use std::sync::Arc;
-use trompe_cli::bench::{framing_camera, primary_rays, reflected_rays, trace_all};
 use trompe::geom::Ray;
 use trompe::trace::{BruteForce, Bvh};
+use trompe_cli::bench::{framing_camera, primary_rays, reflected_rays, trace_all};
 
 fn trace(c: &mut Criterion) {
     let path = trompe_cli::bench::repo_root().join("assets/meshes/bunny.obj");

@@ -21,11 +21,16 @@
 pub mod hybrid;
 pub mod layers;
 pub mod master;
+pub mod methods;
 pub mod octahedral;
 pub mod reflect;
 pub mod relief;
 pub mod walks;
 
+use glam::{DVec2, Vec3};
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 use trompe::camera::Pinhole;
 use trompe::frame::Frame;
 use trompe::frame::envmap::EnvMap;
@@ -34,10 +39,6 @@ use trompe::raster::{ItemId, NoAttributes, RasterStats, RasterTarget, rasterize}
 use trompe::render::{Timings, render_raster};
 use trompe::scene::{Lighting, RenderSettings, Surface, View};
 use trompe::trace::{BruteForce, Bvh, RayQuery};
-use glam::{DVec2, Vec3};
-use rayon::prelude::*;
-use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 /// The repository's root, where `assets/` and `scenes/` are: for `cargo bench`, run from a
 /// checkout.
@@ -698,6 +699,9 @@ pub enum BenchError {
     /// An image could not be made.
     #[error(transparent)]
     Frame(#[from] trompe::frame::FrameError),
+    /// A method of the registry failed.
+    #[error(transparent)]
+    Method(#[from] trompe::methods::MethodError),
     /// A thread pool could not be made.
     #[error("a benchmark's thread pool could not be started")]
     Threads,

@@ -145,6 +145,9 @@ pub enum BenchSuite {
     /// Impostor walks (paper 1 §3.2): time and texel visits per ray from 128² to 2048² beside
     /// the exact BVH on the same rays, a mesh 16× larger, depth layers.
     Walks,
+    /// Every method of the one list on paper 1's Fig. 2 scene: the first frame and the frames
+    /// after it, beside `trace`.
+    Methods,
 }
 
 /// `trompe impostor …`.
@@ -699,7 +702,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 suite @ (BenchSuite::Relief
                 | BenchSuite::Master
                 | BenchSuite::Layers
-                | BenchSuite::Walks),
+                | BenchSuite::Walks
+                | BenchSuite::Methods),
             quick,
             ..
         } => {
@@ -708,6 +712,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 BenchSuite::Master => ("master", crate::bench::master::master(&inputs, quick)),
                 BenchSuite::Layers => ("layers", crate::bench::layers::layers(&inputs, quick)),
                 BenchSuite::Walks => ("walks", crate::bench::walks::walks(&inputs, quick)),
+                BenchSuite::Methods => ("methods", crate::bench::methods::methods(&inputs, quick)),
                 _ => ("relief", crate::bench::relief::relief(&inputs, quick)),
             });
             let report = crate::bench::BenchReport {

@@ -101,8 +101,12 @@ fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
     let d = scratch("cli_octahedral_batch");
     let inputs = d.join("in");
     std::fs::create_dir_all(&inputs).unwrap();
-    std::fs::copy("assets/gltf/Duck.glb", inputs.join("Duck.glb")).unwrap();
-    std::fs::copy("assets/meshes/teapot.obj", inputs.join("teapot.obj")).unwrap();
+    std::fs::copy(common::asset("gltf/Duck.glb"), inputs.join("Duck.glb")).unwrap();
+    std::fs::copy(
+        common::asset("meshes/teapot.obj"),
+        inputs.join("teapot.obj"),
+    )
+    .unwrap();
     std::fs::write(inputs.join("broken.obj"), "v 1 2\nf 1 2 3\n").unwrap();
     let out = d.join("out");
     let files: Vec<String> = ["Duck.glb", "broken.obj", "teapot.obj"]

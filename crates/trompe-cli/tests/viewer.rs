@@ -11,9 +11,7 @@ use trompe_cli::viewer::script::Script;
 use trompe_cli::viewer::{Input, Key, Viewer};
 
 fn scene(name: &str) -> Scene {
-    let p = common::root()
-        .join("scenes")
-        .join(name);
+    let p = common::root().join("scenes").join(name);
     Scene::load(&p).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -301,7 +299,10 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
                 (frames, viewer.frame(SIZE, 1.0).unwrap())
             })
     };
-    assert_eq!(Viewer::new(&s, 64).unwrap().methods().nth(7), Some("relief"));
+    assert_eq!(
+        Viewer::new(&s, 64).unwrap().methods().nth(7),
+        Some("relief")
+    );
     let (frames, traced) = run(2);
     let (one, _) = run(1);
     assert!(

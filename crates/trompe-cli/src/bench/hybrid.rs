@@ -4,13 +4,13 @@
 //! impostors, timed in the same run, with FLIP against the exact frame.
 
 use super::BenchError;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 use trompe::eval::fixtures::Shipped;
 use trompe::frame::metrics;
 use trompe::hybrid::{HybridReflections, HybridSettings, TreeStats};
 use trompe::render::{Method, render_at};
 use trompe::scene::Scene;
-use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 /// The models reflected, as the shipped assets name them.
 pub const MODELS: [(&str, &str); 3] = [

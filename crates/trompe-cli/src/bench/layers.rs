@@ -5,13 +5,13 @@
 
 use super::master::gradient;
 use super::{BenchError, Figure};
+use glam::DVec3;
+use std::time::Instant;
 use trompe::layers::{self, BuildSettings};
 use trompe::raster::{NoAttributes, rasterize};
 use trompe::scene::Scene;
 use trompe::views::capture::{CaptureSettings, bounding_sphere, rig_centres};
 use trompe::views::{CalibratedView, Intrinsics, Pose};
-use glam::DVec3;
-use std::time::Instant;
 
 /// `count` views of `w × h` on the ring around `scene`'s objects, each with a gradient image.
 pub fn ring_views(

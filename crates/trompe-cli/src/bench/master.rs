@@ -3,14 +3,14 @@
 //! view and one master texture in memory), beside drawing the same views' depth maps alone.
 
 use super::{BenchError, Figure};
+use glam::{DVec3, Vec4};
+use std::time::Instant;
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba};
 use trompe::geom::Mesh;
 use trompe::master::{MasterError, encode_stream};
 use trompe::views::capture::{CaptureSettings, Rig, rig_centres};
 use trompe::views::visibility::DepthMap;
-use glam::{DVec3, Vec4};
-use std::time::Instant;
 
 /// `count` pinholes of `w × h` on a sphere around `mesh`, looking at its centre.
 pub fn sphere_cameras(mesh: &Mesh, count: usize, (w, h): (u32, u32)) -> Vec<(String, Pinhole)> {

@@ -4,15 +4,15 @@
 //! Duck and the milk truck at 16 × 16 against the exact render, with and without parallax.
 
 use super::BenchError;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::path::Path;
+use std::time::{Duration, Instant};
 use trompe::eval::fixtures::Shipped;
 use trompe::frame::envmap::EnvMap;
 use trompe::octahedral::{BakeSettings, Coverage, FrameCamera, Grid, bake, turntable};
 use trompe::raster::{NoAttributes, rasterize};
 use trompe::scene::{Light, Lighting, Surface};
-use glam::Vec3;
-use rayon::prelude::*;
-use std::path::Path;
-use std::time::{Duration, Instant};
 
 /// One bake.
 #[derive(Clone, Debug)]

@@ -6,6 +6,9 @@
 //! (nothing deforms), as in the paper's interactive runs.
 
 use super::BenchError;
+use glam::DVec2;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 use trompe::eval::fixtures::Shipped;
 use trompe::frame::metrics;
 use trompe::geom::Ray;
@@ -13,9 +16,6 @@ use trompe::geom::optics::{facing, reflect};
 use trompe::render::{Method, Mirrors, Primary, RenderOptions, Sequence, Timings};
 use trompe::scene::{Scene, Surface};
 use trompe::trace::{Bvh, RayQuery};
-use glam::DVec2;
-use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 /// The scenes of the method table, as `scenes/` names them.
 pub const SCENES: [&str; 7] = [

@@ -5,6 +5,8 @@
 //! rasterization and beside ray tracing the frame with the software shader.
 
 use super::{BenchError, Figure, time_pair_median};
+use glam::DVec3;
+use std::time::{Duration, Instant};
 use trompe::camera::Pinhole;
 use trompe::relief::pipeline::raster_subset;
 use trompe::relief::prewarp::{Eye, prewarp};
@@ -13,8 +15,6 @@ use trompe::relief::walk::true_frame;
 use trompe::relief::{DepthEncoding, Displacements, PipelineSettings, ReliefImpostor};
 use trompe::render::Timings;
 use trompe::scene::Scene;
-use glam::DVec3;
-use std::time::{Duration, Instant};
 
 /// The relief impostor side every workload here uses (the paper's).
 pub const SIDE: u32 = 256;

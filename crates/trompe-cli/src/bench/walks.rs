@@ -7,11 +7,11 @@
 //! triangles, the same surface) beside its BVH; then the automatic depth layers against one.
 
 use super::{BenchError, Figure, time_pair_median};
+use std::time::Duration;
 use trompe::eval::fidelity::ReflectorSetup;
 use trompe::geom::{Mesh, Ray};
 use trompe::impostor::{Impostor, Layers, ViewCamera, WalkMode, albedo_of, build};
 use trompe::trace::{Bvh, RayQuery};
-use std::time::Duration;
 
 /// Impostor sides the walks are measured at.
 const SIDES: [u32; 5] = [128, 256, 512, 1024, 2048];

@@ -184,9 +184,7 @@ impl RenderArgs {
         let t = self.time.unwrap_or(s.render.time);
         let mut renderer = Renderer::new(&s, kind, settings)?;
         let pb = bar(kind.name(), s.camera.height as u64);
-        let out = renderer
-            .frame(t, None, pb.as_ref())
-            .context("rendering")?;
+        let out = renderer.frame(t, None, pb.as_ref()).context("rendering")?;
         timings.0.extend(out.timings.0);
         if !out.report.is_empty() {
             eprintln!("{}", out.report);

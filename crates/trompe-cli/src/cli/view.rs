@@ -3,6 +3,8 @@
 //! headless: a script's inputs replayed at fixed time steps and every frame written.
 
 use super::{check_plan, refuse_foreign_folder};
+use crate::viewer::script::{self, Script};
+use crate::viewer::{Input, Request, Viewer, hud};
 use anyhow::{Context, Result, bail};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -11,8 +13,6 @@ use std::time::Instant;
 use trompe::files::OutputPlan;
 use trompe::frame::io;
 use trompe::scene::Scene;
-use crate::viewer::script::{self, Script};
-use crate::viewer::{Input, Request, Viewer, hud};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};

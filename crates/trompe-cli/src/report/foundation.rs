@@ -4,11 +4,11 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, RenderRow, ReportError, fmt_psnr};
+use std::path::Path;
 use trompe::frame::{io, metrics};
 use trompe::methods::{MethodKind, MethodSettings, Renderer};
 use trompe::render::Progress;
 use trompe::scene::Scene;
-use std::path::Path;
 
 /// Renders the shipped scenes; returns the section and a row per render.
 pub(super) fn section(

@@ -6,14 +6,14 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, draw_line};
+use glam::Vec4;
+use std::path::Path;
+use std::time::Instant;
 use trompe::camera::{C3rc, Projection};
 use trompe::frame::{Image, Rgba, io, metrics};
 use trompe::hybrid::{FrameStats, HybridReflections, HybridSettings};
 use trompe::render::{Method, render_at};
 use trompe::scene::{Scene, Surface};
-use glam::Vec4;
-use std::path::Path;
-use std::time::Instant;
 
 pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, ReportError> {
     let mut table = Table::new([

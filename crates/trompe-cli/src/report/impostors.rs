@@ -7,12 +7,12 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, fmt_psnr};
+use glam::Vec3;
+use std::path::Path;
 use trompe::eval::fidelity::{self, ReflectorSetup, check, viewpoint_rays};
 use trompe::frame::{FrameError, Image, Rgba, io, metrics};
 use trompe::geom::Mesh;
 use trompe::impostor::{ImpostorCamera, SurfaceSample, ViewCamera, build};
-use glam::Vec3;
-use std::path::Path;
 
 /// The colour the section bakes into impostors: an orange Lambertian lit from one direction
 /// (view-independent, so exact and impostor agree).

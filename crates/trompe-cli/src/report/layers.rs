@@ -6,6 +6,8 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, over};
+use glam::Vec4;
+use std::path::Path;
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba, io, metrics};
 use trompe::layers::{self, BuildSettings, LayerSet, RenderSettings};
@@ -14,8 +16,6 @@ use trompe::scene::Scene;
 use trompe::views::blend::{self, BlendSettings};
 use trompe::views::capture::{CaptureSettings, bounding_sphere, capture_of, rig_centres};
 use trompe::views::visibility::DepthMap;
-use glam::Vec4;
-use std::path::Path;
 
 /// The capture the section builds from.
 fn capture_settings(count: usize) -> CaptureSettings {

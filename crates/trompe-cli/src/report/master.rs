@@ -6,6 +6,9 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, over};
+use glam::{DVec3, Vec3, Vec4};
+use std::path::Path;
+use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba, io, metrics};
 use trompe::master::edit::{Apply, delta, delta_from_camera, propagate};
@@ -15,9 +18,6 @@ use trompe::master::{Encoding, MasterError, encode, encode_views};
 use trompe::views::BlendSettings;
 use trompe::views::capture::{CaptureSettings, capture};
 use trompe::views::visibility::DepthMap;
-use glam::{DVec3, Vec3, Vec4};
-use std::path::Path;
-use std::sync::Arc;
 
 impl From<MasterError> for ReportError {
     fn from(e: MasterError) -> Self {

@@ -3,9 +3,9 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, draw_line};
-use trompe::frame::{FrameError, io};
 use glam::Vec3;
 use std::path::Path;
+use trompe::frame::{FrameError, io};
 
 /// The closed outline, seen from above (`x`, `z`), of the convex hull of `points`.
 fn floor_hull(points: &[glam::DVec3]) -> Vec<glam::DVec3> {

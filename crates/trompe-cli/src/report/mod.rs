@@ -15,15 +15,15 @@ mod octahedral;
 mod relief;
 mod views;
 
+use html::{Report, Section, Table};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use thiserror::Error;
 use trompe::frame::metrics::{self, Scores};
 use trompe::frame::{FrameError, io};
 use trompe::methods::{MethodError, MethodKind};
 use trompe::render::{Progress, RenderError};
 use trompe::scene::SceneError;
-use html::{Report, Section, Table};
-use std::path::{Path, PathBuf};
-use std::time::Duration;
-use thiserror::Error;
 
 /// Errors from building the report.
 #[derive(Debug, Error)]

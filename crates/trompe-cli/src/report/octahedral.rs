@@ -4,22 +4,25 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, draw_line};
+use glam::{DVec2, Vec3, Vec4};
+use std::path::Path;
+use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::frame::envmap::EnvMap;
 use trompe::frame::{Image, Rgba, io, metrics};
 use trompe::octahedral::{BakeSettings, Coverage, Grid, TurntableView, bake, turntable};
 use trompe::scene::{Light, Lighting, RenderSettings, Surface, View};
-use glam::{DVec2, Vec3, Vec4};
-use std::path::Path;
-use std::sync::Arc;
 
 pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, ReportError> {
     let mesh = trompe::geom::io::load(&inputs.assets.join("gltf/Duck.glb"))?.mesh;
     let surface = Surface::Diffuse(None);
     let settings = BakeSettings::new(
-Grid { n: 16, coverage: Coverage::Sphere },
-96,
-);
+        Grid {
+            n: 16,
+            coverage: Coverage::Sphere,
+        },
+        96,
+    );
     let start = std::time::Instant::now();
     let atlas = bake(&mesh, &surface, settings)?;
     let bake_time = start.elapsed();

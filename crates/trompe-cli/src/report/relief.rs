@@ -6,14 +6,14 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError};
+use glam::{DVec3, Vec4};
+use std::path::Path;
 use trompe::frame::{Image, Rgba, io, metrics};
 use trompe::relief::pipeline::ObjectState;
 use trompe::relief::validity::{RATIO_THRESHOLD, validity_map};
 use trompe::relief::walk::{path, true_frame, verdicts_along};
 use trompe::relief::{DepthEncoding, PipelineSettings, ReliefError, WalkSettings, walk};
 use trompe::scene::Scene;
-use glam::{DVec3, Vec4};
-use std::path::Path;
 
 impl From<ReliefError> for ReportError {
     fn from(e: ReliefError) -> Self {

@@ -5,13 +5,13 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, over};
+use glam::{DVec3, Vec4};
+use std::path::Path;
 use trompe::frame::{io, metrics};
 use trompe::views::blend::{self, BlendSettings, Weighting};
 use trompe::views::capture::{CaptureSettings, capture, capture_scene};
 use trompe::views::score::{leave_one_out, name};
 use trompe::views::visibility::DepthMap;
-use glam::{DVec3, Vec4};
-use std::path::Path;
 
 /// The capture's background radiance (capture scenes escape to a uniform grey).
 const BACKGROUND: Vec4 = Vec4::new(0.5, 0.5, 0.5, 1.0);

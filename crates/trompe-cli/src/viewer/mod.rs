@@ -13,14 +13,14 @@
 pub mod hud;
 pub mod script;
 
+use glam::{Vec3, Vec4};
+use std::time::Instant;
+use thiserror::Error;
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba, metrics};
 use trompe::methods::{MethodError, MethodKind, MethodSettings, Renderer};
 use trompe::render::{Primary, RenderError, Timings};
 use trompe::scene::Scene;
-use glam::{Vec3, Vec4};
-use std::time::Instant;
-use thiserror::Error;
 
 /// A control.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
