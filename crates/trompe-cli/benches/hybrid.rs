@@ -3,7 +3,6 @@
 //! exactly through the BVH.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use std::path::PathBuf;
 use trompe::hybrid::{HybridReflections, HybridSettings};
 use trompe::render::{Method, render_at};
 

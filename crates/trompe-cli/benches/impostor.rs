@@ -7,7 +7,6 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
-use std::path::PathBuf;
 use trompe::camera::Spoc;
 use trompe::eval::fidelity::ReflectorSetup;
 use trompe::impostor::{ImpostorCamera, ViewCamera, albedo_of, build};

@@ -3,7 +3,6 @@
 //! beside plain projective texturing.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use std::path::PathBuf;
 use trompe::layers::{self, BuildSettings, RenderSettings};
 use trompe::raster::{NoAttributes, rasterize};
 

@@ -1,7 +1,6 @@
 //! Rasterizer throughput on the 56k-triangle bunny, beside a memcpy of the bytes it writes.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use std::path::PathBuf;
 use trompe_cli::bench::{frame_bytes, framing_camera, memcpy_frame, raster_once};
 
 fn raster(c: &mut Criterion) {

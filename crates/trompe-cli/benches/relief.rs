@@ -3,7 +3,6 @@
 //! generation of the ~1000-triangle teapot beside rasterizing its image.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use std::path::PathBuf;
 use trompe::relief::prewarp::{Eye, prewarp};
 use trompe::relief::{DepthEncoding, SoftwareShader};
 use trompe_cli::bench::relief::{SIDE, copy_texels, lone_shader, turned_eye};

@@ -2,7 +2,6 @@
 //! beside brute force over every triangle on a sample of the same rays.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use std::path::PathBuf;
 use std::sync::Arc;
 use trompe::geom::Ray;
 use trompe::trace::{BruteForce, Bvh};

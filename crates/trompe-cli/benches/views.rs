@@ -4,7 +4,6 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
-use std::path::PathBuf;
 use std::sync::Arc;
 use trompe::views::capture::{CaptureSettings, Rig, rig_centres};
 use trompe::views::visibility::DepthMap;
