@@ -109,14 +109,17 @@ fn every_method_renders_a_frame_and_a_sequence_the_same_on_one_and_two_threads()
             seq1[0] == single1,
             "{kind}: a sequence's first frame is not the frame"
         );
-        // The ball moves: the frames of the sequence are not all one — but for the methods of
-        // a still scene (the scene photographed, or relief impostors made, on the first frame),
-        // which a still camera sees the same.
-        let still = matches!(
-            kind,
-            MethodKind::Layered | MethodKind::Projective | MethodKind::Relief
-        );
-        assert_eq!(seq1[0] == seq1[2], still, "{kind}: moves, or stands still");
+        // The ball moves: the frames of the sequence are not all one — but for the methods
+        // that photograph the scene on the first frame, which a still camera sees the same.
+        // (Relief impostors are of the scene as it stood too, but its frames change as the
+        // pipeline's impostors come into use: tests/relief.rs follows them.)
+        match kind {
+            MethodKind::Layered | MethodKind::Projective => {
+                assert!(seq1[0] == seq1[2], "{kind}: a still camera, another frame")
+            }
+            MethodKind::Relief => {}
+            _ => assert!(seq1[0] != seq1[2], "{kind}: the sequence does not move"),
+        }
         // Something of the scene is drawn over the panorama (4 floats a pixel).
         let drawn = single1
             .chunks(4)

@@ -39,6 +39,11 @@ pub enum MasterError {
     /// No view sees any face.
     #[error("no view sees the mesh: there is nothing to encode")]
     NothingSeen,
+    /// A weighting master textures cannot honour: they weigh views per surface point.
+    #[error(
+        "master textures blend views per surface point (ulr or vdtm): the {0} weighting needs every view's depth map"
+    )]
+    Weighting(&'static str),
     /// The mesh has no triangles.
     #[error("the mesh has no triangles")]
     EmptyMesh,

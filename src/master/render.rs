@@ -2,7 +2,8 @@
 //! surface point's colour blended from the views that see it — the views module's VDTM / ULR
 //! weights ([`crate::views::blend::weights`]) — reading each view's master texture at the
 //! point's one texture coordinate. A view sees a point where its master texture's texel there
-//! has alpha (the encoder marked occlusion), so no depth map is needed at render time.
+//! has alpha (the encoder marked occlusion), so no depth map is needed at render time — and the
+//! per-face weightings, which need every view's depth map, are refused.
 //!
 //! Invariant: the same camera, masters and settings give the same pixels on any thread count.
 
@@ -11,7 +12,7 @@ use super::layout::Layout;
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
 use crate::raster::{StoreFragment, rasterize};
-use crate::views::blend::{Blend, BlendSettings, Holes, Weighting, weights};
+use crate::views::blend::{Blend, BlendSettings, Holes, weights};
 use glam::{DVec2, DVec3, Vec4};
 use rayon::prelude::*;
 
@@ -44,6 +45,9 @@ pub fn render(
             map: layout.faces.len(),
         });
     }
+    if !settings.weighting.per_point() {
+        return Err(MasterError::Weighting(settings.weighting.name()));
+    }
     let (target, _) = rasterize(camera, &[mesh], &StoreFragment, None)?;
     let (w, h) = camera.resolution();
     let eye = camera.position();
@@ -65,18 +69,8 @@ pub fn render(
                 let c = mesh.corners(t);
                 let p = (c[0] * f.bary.x + c[1] * f.bary.y + c[2] * f.bary.z).as_dvec3();
                 let at = faces[t].at(f.bary.y as f64, f.bary.z as f64);
-                let ws = match settings.weighting {
-                    // Master textures carry no per-face view table: the nearest-angle views.
-                    Weighting::ViewMap | Weighting::BestFace => weights(
-                        p,
-                        eye,
-                        centres,
-                        |i| sees(&masters[i], at),
-                        Weighting::Vdtm,
-                        1,
-                    ),
-                    wt => weights(p, eye, centres, |i| sees(&masters[i], at), wt, settings.k),
-                };
+                let sees = |i| sees(&masters[i], at);
+                let ws = weights(p, eye, centres, sees, settings.weighting, settings.k);
                 let mut colour = Vec4::ZERO;
                 let mut total = 0.0;
                 for (i, wgt) in ws {

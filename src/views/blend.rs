@@ -38,6 +38,25 @@ pub enum Weighting {
     BestFace,
 }
 
+impl Weighting {
+    /// Whether the weighting weighs the views at each surface point (ULR, VDTM), which every
+    /// projective renderer can honour; the view map and best face weigh per face, from a table
+    /// of every view's visibility of every triangle that only [`render`] builds from depth maps.
+    pub fn per_point(self) -> bool {
+        matches!(self, Weighting::Ulr { .. } | Weighting::Vdtm)
+    }
+
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Weighting::Ulr { .. } => "ulr",
+            Weighting::Vdtm => "vdtm",
+            Weighting::ViewMap => "view-map",
+            Weighting::BestFace => "best-face",
+        }
+    }
+}
+
 /// What a pixel whose surface no view sees shows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Holes {

@@ -174,6 +174,24 @@ fn encode_render_and_edit_through_the_command_line() {
         &s(&dir.join("x.png")),
     ]));
     assert!(e.contains("992 triangles") && e.contains("4212"), "{e}");
+    // A per-face weighting is refused, not replaced by another.
+    let e = err(&trompe(&[
+        "master",
+        "render",
+        &s(&enc),
+        "--mesh",
+        duck,
+        "--scene",
+        &s(&scene),
+        "--weights",
+        "view-map",
+        "-o",
+        &s(&dir.join("x.png")),
+    ]));
+    assert!(
+        e.contains("view-map") && e.contains("per surface point"),
+        "{e}"
+    );
     let e = err(&trompe(&[
         "master",
         "edit",

@@ -190,7 +190,7 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn render(&self) -> Result<()> {
-        if self.weights == WeightsArg::ViewMap || self.weights == WeightsArg::BestFace {
+        if !self.weights.weighting().per_point() {
             bail!("--weights: layered rendering blends per point: use ulr or vdtm");
         }
         let scene = Scene::load(&self.scene)?;

@@ -143,6 +143,13 @@ impl MasterEncodeArgs {
 
 impl MasterRenderArgs {
     fn render(&self) -> Result<()> {
+        let weighting = self.weights.weighting();
+        if !weighting.per_point() {
+            bail!(
+                "--weights {}: master textures blend views per surface point: use ulr or vdtm",
+                weighting.name()
+            );
+        }
         let mut plan = OutputPlan::new();
         plan.reads([&self.mesh, &self.scene, &self.encoding])
             .writes(&self.output, &["png", "exr"]);
