@@ -64,7 +64,8 @@ pub struct MasterRenderArgs {
     /// A scene file whose camera to render from (its objects are ignored).
     #[arg(long)]
     scene: PathBuf,
-    /// Weighting (ulr or vdtm; the per-face ones fall back to the nearest view).
+    /// Weighting: ulr or vdtm (master textures blend per surface point; the per-face view-map
+    /// and best-face are refused).
     #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
     weights: WeightsArg,
     /// Most views blended at a point.
