@@ -482,14 +482,14 @@ impl<'a> Renderer<'a> {
                 let poses = poses_at(scene, t);
                 let still = scene.objects.iter().all(|o| o.deform.is_none());
                 let rebake = !matches!(kept, Some((at, _)) if still && *at == poses);
-                if rebake {
-                    let bake = self.settings.octahedral_bake();
-                    let atlases =
-                        timings.time("bake atlases", || SceneAtlases::bake(scene, t, bake, &()))?;
-                    *kept = Some((poses, atlases));
-                }
-                let Some((_, atlases)) = kept.as_ref() else {
-                    unreachable!("baked above")
+                let atlases = match (rebake, kept.as_ref()) {
+                    (false, Some((_, atlases))) => atlases,
+                    _ => {
+                        let bake = self.settings.octahedral_bake();
+                        let atlases = timings
+                            .time("bake atlases", || SceneAtlases::bake(scene, t, bake, &()))?;
+                        &kept.insert((poses, atlases)).1
+                    }
                 };
                 let camera = match camera {
                     Some(c) => c,
