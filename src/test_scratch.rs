@@ -1,6 +1,6 @@
 //! Scratch directories for the unit tests: under `target/test-scratch/`, emptied when a test
 //! asks for one, so tests leave nothing in the system's temporary directory (the integration
-//! tests' `tests/common::scratch` does the same for them).
+//! tests' `common::scratch`, in `tests/integration/common/mod.rs`, does the same for them).
 
 use std::path::PathBuf;
 

@@ -1,6 +1,7 @@
 //! The memory budget: every allocation sized by input is refused past the limit, before it is
 //! made. One test in this binary, because the limit is process-wide.
 
+#[path = "integration/common/mod.rs"]
 mod common;
 use std::path::Path;
 use trompe::memory::{self, OverBudget};

@@ -1,7 +1,6 @@
 //! Hybrid reflections (paper 2) against the exact tracer: a flat mirror, where the continuous
 //! 3-ray cameras are exact up to point sampling, the paper's curved teapot, and determinism.
 
-mod common;
 use std::path::Path;
 use trompe::frame::metrics;
 use trompe::hybrid::{HybridReflections, HybridSettings};

@@ -1,6 +1,6 @@
 //! `trompe impostor bake --layers`: depth layers baked, shown by `info`, a bad count refused.
 
-mod common;
+use crate::common;
 
 #[test]
 fn the_command_line_bakes_layers_shows_them_and_refuses_a_bad_count() {

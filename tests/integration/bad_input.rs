@@ -1,6 +1,6 @@
 //! Every bad input gives an error naming the file and the element, never a panic.
 
-mod common;
+use crate::common;
 use common::{scratch, shared};
 use std::path::{Path, PathBuf};
 use trompe::geom::io::load;

@@ -2,7 +2,7 @@
 //! binary run from the repository's root.
 #![allow(dead_code, unused_imports)]
 
-#[path = "../../../../tests/common/mod.rs"]
+#[path = "../../../../../tests/integration/common/mod.rs"]
 mod library;
 
 pub use library::*;

@@ -1,7 +1,7 @@
 //! Graph-camera impostors (paper 1 §5; docs/conventions.md §4): an L-shaped corridor seen around its
 //! corner.
 
-mod common;
+use crate::common;
 
 use glam::{DVec3, Mat4, Vec3};
 use std::sync::Arc;

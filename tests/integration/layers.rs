@@ -2,7 +2,7 @@
 //! the paper's Fig. 2, cycles, OpenRaster round trips and bad files, rendering at an input
 //! viewpoint.
 
-mod common;
+use crate::common;
 
 use common::scratch;
 use glam::{Vec3, Vec4};

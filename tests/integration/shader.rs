@@ -2,7 +2,7 @@
 //! validates with naga, its constants are the Rust code's, and run on a Vulkan device (Mesa's
 //! lavapipe on the CPU) it picks the frames the Rust code picks.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! Layered impostors (depth peeling through one camera) and batched ray queries.
 
-mod common;
+use crate::common;
 use glam::Vec3;
 use std::path::Path;
 use trompe::eval::check::{CheckSettings, check_built};

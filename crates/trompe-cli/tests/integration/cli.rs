@@ -1,6 +1,6 @@
 //! The `trompe` binary end to end: outputs, exit codes and error messages.
 
-mod common;
+use crate::common;
 use common::{fails_cleanly, scratch, stderr, trompe};
 use std::path::Path;
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! The rasterizer against the exact BVH: depth at every covered pixel and item ids; and the BVH
 //! against brute force.
 
-mod common;
+use crate::common;
 use common::shared;
 use glam::Vec3;
 use std::sync::Arc;

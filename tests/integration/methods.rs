@@ -2,7 +2,7 @@
 //! and a three-frame sequence of it through the same interface, the same on one and two
 //! threads; the methods that cannot render a scene are refused with their reason.
 
-mod common;
+use crate::common;
 
 use trompe::frame::Frame;
 use trompe::methods::{MethodError, MethodKind, MethodSettings, Renderer};
@@ -112,7 +112,7 @@ fn every_method_renders_a_frame_and_a_sequence_the_same_on_one_and_two_threads()
         // The ball moves: the frames of the sequence are not all one — but for the methods
         // that photograph the scene on the first frame, which a still camera sees the same.
         // (Relief impostors are of the scene as it stood too, but its frames change as the
-        // pipeline's impostors come into use: tests/relief.rs follows them.)
+        // pipeline's impostors come into use: tests/integration/relief.rs follows them.)
         match kind {
             MethodKind::Layered | MethodKind::Projective => {
                 assert!(seq1[0] == seq1[2], "{kind}: a still camera, another frame")

@@ -1,7 +1,6 @@
 //! Octahedral impostors: a frame reproduced from its own direction, dilation, and a turntable
 //! against the exact render.
 
-mod common;
 use std::path::Path;
 use trompe::frame::envmap::EnvMap;
 use trompe::frame::metrics;

@@ -1,6 +1,6 @@
 //! `trompe render --method c3rc`: its statistics, and the settings it refuses.
 
-mod common;
+use crate::common;
 use common::{fails_cleanly, scratch, stderr, trompe};
 
 #[test]

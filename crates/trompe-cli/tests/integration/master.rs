@@ -1,7 +1,7 @@
 //! `trompe master`: encode a capture, render from the encoding, propagate an edit — and the
 //! errors a user meets on the way.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -1,6 +1,6 @@
 //! Impostors against the exact BVH.
 
-mod common;
+use crate::common;
 use common::shared;
 use glam::DVec2;
 use trompe::Projection;

@@ -1,6 +1,6 @@
 //! `trompe impostor bake --octahedral`: atlases and their layout, batches, shards and their manifests.
 
-mod common;
+use crate::common;
 use common::{fails_cleanly, scratch, stderr, trompe};
 
 #[test]

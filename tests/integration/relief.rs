@@ -1,8 +1,6 @@
 //! Relief impostors on real models: the validity heuristic against the brute force along a walk,
 //! the pipeline's walk of a shipped scene, and the `trompe relief` command.
 
-mod common;
-
 use std::path::Path;
 use trompe::glam::Vec3;
 use trompe::relief::pipeline::ObjectState;

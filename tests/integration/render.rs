@@ -1,7 +1,7 @@
 //! The ground-truth renderers: agreement on diffuse scenes, determinism across thread counts;
 //! and the impostor method against them.
 
-mod common;
+use crate::common;
 use std::path::PathBuf;
 use trompe::frame::metrics;
 use trompe::render::{Method, render};

@@ -1,6 +1,6 @@
 //! `trompe layers build` and `layers render`: a project built, rendered, and a broken one refused.
 
-mod common;
+use crate::common;
 use common::{fails_cleanly, scratch, trompe};
 
 #[test]

@@ -2,7 +2,7 @@
 //! frames, the controls move the camera as they say, a saved camera reproduces the view; and
 //! the real window under a virtual X server shows the frame the headless viewer renders.
 
-mod common;
+use crate::common;
 use common::{scratch, stderr, trompe};
 use std::path::Path;
 use trompe::frame::metrics;

@@ -1,6 +1,6 @@
 //! Loading the shared models gives the counts listed in ../shared/data/SOURCES.md.
 
-mod common;
+use crate::common;
 use common::shared;
 use trompe::geom::io::load;
 

@@ -1,6 +1,6 @@
 //! `trompe relief`: frames written, bad settings refused.
 
-mod common;
+use crate::common;
 
 #[test]
 fn the_relief_command_writes_frames_and_refuses_what_it_should() {

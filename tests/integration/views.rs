@@ -1,7 +1,7 @@
 //! Calibrated views against COLMAP's own files (written by pycolmap: tests/fixtures/colmap/),
 //! capture rigs and view-dependent texturing.
 
-mod common;
+use crate::common;
 use glam::{DVec2, DVec3};
 use std::path::{Path, PathBuf};
 use trompe::views::{BlendSettings, ViewSet, Weighting, blend, visibility::DepthMap};

@@ -1,0 +1,12 @@
+//! The command line's tests, one binary (each file a module: one link instead of one a file).
+
+mod common;
+
+mod cli;
+mod hybrid;
+mod layers;
+mod master;
+mod octahedral;
+mod peeling;
+mod relief;
+mod viewer;
