@@ -11,7 +11,8 @@
 use std::error::Error;
 use std::path::PathBuf;
 use trompe::frame::metrics;
-use trompe::layers::{self, BuildSettings, RenderSettings};
+use trompe::layers::{self, BuildSettings};
+use trompe::texturing::BlendSettings;
 use trompe::views::capture::{CaptureSettings, capture_of};
 
 fn main() -> Result<(), Box<dyn Error>> {
@@ -46,7 +47,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     // The scene's own camera, where no photograph was taken.
     let (exact, _) = trompe::render(&scene, trompe::Method::Trace, &())?;
     let camera = scene.view(0.0)?.camera;
-    let rs = RenderSettings::default();
+    let rs = BlendSettings::default();
     for (name, blend) in [
         ("layered", layers::render::render(&camera, &set, &rs)?),
         (

@@ -37,8 +37,10 @@
 //!   3-ray camera per mirror triangle.
 //! * [`relief`] — relief impostors: a software shader, 3-D image warping, validity, the
 //!   two-thread pipeline.
-//! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility,
-//!   view-dependent projective texturing (VDTM / ULR).
+//! * [`texturing`] — projective texturing, the one renderer of views, layers and master
+//!   textures: weights (VDTM, ULR, view map, best face), one hole policy.
+//! * [`views`] — calibrated views: COLMAP models, capture rigs, per-view visibility, the views
+//!   as a texturing source.
 //! * [`layers`] — layered view-dependent projective textures: visibility layers per view,
 //!   editable OpenRaster image layers, rendering through each layer's sub-frustum.
 //! * [`master`] — Master Texture Space: many views of a mesh encoded in pixel-aligned atlases
@@ -85,6 +87,7 @@ pub mod relief;
 pub mod render;
 pub mod scene;
 pub mod sidecar;
+pub mod texturing;
 pub mod trace;
 pub mod views;
 

@@ -242,7 +242,7 @@ pub struct MethodSettings {
     /// The photographs the layered and projective methods take of the scene on first use.
     pub capture: CaptureSettings,
     /// How the layered and projective methods blend views.
-    pub layers: crate::layers::RenderSettings,
+    pub layers: crate::texturing::BlendSettings,
     /// Paper 3's pipeline.
     pub relief: PipelineSettings,
 }
@@ -262,7 +262,7 @@ impl Default for MethodSettings {
                 size: (640, 480),
                 ..Default::default()
             },
-            layers: crate::layers::RenderSettings::default(),
+            layers: crate::texturing::BlendSettings::default(),
             relief: PipelineSettings {
                 // A frame uses the impostor it asked for at once, waiting for it: the same
                 // inputs give the same frames.

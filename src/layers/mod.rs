@@ -26,7 +26,6 @@ pub mod split;
 
 pub use image::{Assignment, ImageLayer, Memory, Rect, ViewLayers};
 pub use order::{Item, OrderSettings, Ordering};
-pub use render::RenderSettings;
 
 use crate::camera::Pinhole;
 use crate::frame::FrameError;

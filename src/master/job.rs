@@ -9,7 +9,7 @@ use crate::camera::Pinhole;
 use crate::frame::{Image, Rgba, io};
 use crate::geom::Mesh;
 use crate::progress::Progress;
-use crate::views::blend::{Blend, BlendSettings};
+use crate::texturing::{Blend, BlendSettings};
 use crate::views::visibility::DepthMap;
 use std::path::{Path, PathBuf};
 
@@ -161,12 +161,8 @@ pub fn render_folder(
     settings: &BlendSettings,
 ) -> Result<Blend, MasterError> {
     let (manifest, masters) = load(dir)?;
-    let centres: Vec<glam::DVec3> = manifest
-        .views
-        .iter()
-        .map(|v| v.pinhole().position())
-        .collect();
-    super::render::render(camera, mesh, &manifest.layout, &centres, &masters, settings)
+    let cameras: Vec<Pinhole> = manifest.views.iter().map(|v| v.pinhole()).collect();
+    super::render::render(camera, mesh, &manifest.layout, &cameras, &masters, settings)
 }
 
 /// What an edit changed.

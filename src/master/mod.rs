@@ -39,11 +39,6 @@ pub enum MasterError {
     /// No view sees any face.
     #[error("no view sees the mesh: there is nothing to encode")]
     NothingSeen,
-    /// A weighting master textures cannot honour: they weigh views per surface point.
-    #[error(
-        "master textures blend views per surface point (ulr or vdtm): the {0} weighting needs every view's depth map"
-    )]
-    Weighting(&'static str),
     /// The mesh has no triangles.
     #[error("the mesh has no triangles")]
     EmptyMesh,
@@ -70,6 +65,14 @@ pub enum MasterError {
         mesh: usize,
         /// The map's faces.
         map: usize,
+    },
+    /// The views' cameras and master textures do not pair up.
+    #[error("{cameras} cameras for {masters} master textures")]
+    Unpaired {
+        /// Cameras given.
+        cameras: usize,
+        /// Master textures given.
+        masters: usize,
     },
     /// A view the command names is not in the encoding.
     #[error("view {view}: the encoding has {count} views")]
@@ -278,9 +281,9 @@ pub struct Encoding {
 }
 
 impl Encoding {
-    /// The views' centres of projection.
-    pub fn centres(&self) -> Vec<glam::DVec3> {
-        self.cameras.iter().map(|(_, c)| c.position()).collect()
+    /// The views' cameras, without their names.
+    pub fn pinholes(&self) -> Vec<Pinhole> {
+        self.cameras.iter().map(|(_, c)| c.clone()).collect()
     }
 }
 

@@ -1,9 +1,9 @@
-//! Rendering from master textures (paper 5 §4): the mesh drawn through a new camera, each
-//! surface point's colour blended from the views that see it — the views module's VDTM / ULR
-//! weights ([`crate::views::blend::weights`]) — reading each view's master texture at the
-//! point's one texture coordinate. A view sees a point where its master texture's texel there
-//! has alpha (the encoder marked occlusion), so no depth map is needed at render time — and the
-//! per-face weightings, which need every view's depth map, are refused.
+//! Rendering from master textures (paper 5 §4): the mesh drawn through a new camera by the
+//! projective-texturing renderer ([`crate::texturing`]), each view answering from its master
+//! texture at the point's one texture coordinate. A view sees a point where its master
+//! texture's texel there has alpha (the encoder marked occlusion), so no depth map is needed at
+//! render time; every weighting works, the per-face ones asking the same texels at each
+//! triangle's centroid.
 //!
 //! Invariant: the same camera, masters and settings give the same pixels on any thread count.
 
@@ -11,10 +11,8 @@ use super::MasterError;
 use super::layout::Layout;
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
-use crate::raster::{StoreFragment, rasterize};
-use crate::views::blend::{Blend, BlendSettings, Holes, weights};
-use glam::{DVec2, DVec3, Vec4};
-use rayon::prelude::*;
+use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
+use glam::{DVec2, DVec3};
 
 /// Colour of `master` at atlas point `p`, bilinear over the texels that hold a colour (alpha),
 /// or `None` when none of the four does.
@@ -23,19 +21,52 @@ pub fn lookup(master: &Image<Rgba>, p: DVec2) -> Option<Rgba> {
 }
 
 /// Whether `master` holds the surface at atlas point `p` (its nearest texel has alpha).
-fn sees(master: &Image<Rgba>, p: DVec2) -> bool {
+fn holds(master: &Image<Rgba>, p: DVec2) -> bool {
     let (w, h) = master.size();
     let (x, y) = (p.x.floor(), p.y.floor());
     x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64 && master.get(x as u32, y as u32).w > 0.0
 }
 
-/// Renders `mesh` through `camera` from `masters` (one a view, laid out by `layout`; the views'
-/// centres of projection `centres`, for the weights).
+/// Master textures as a texturing source: one a view, all laid out by one layout.
+struct Masters<'a> {
+    layout: &'a Layout,
+    cameras: &'a [Pinhole],
+    masters: &'a [Image<Rgba>],
+    centres: Vec<DVec3>,
+}
+
+impl Masters<'_> {
+    /// The atlas point of `at` (one texture coordinate for every view).
+    fn atlas_point(&self, at: &SurfacePoint) -> DVec2 {
+        self.layout.faces[at.triangle].at(at.bary.y as f64, at.bary.z as f64)
+    }
+}
+
+impl Source for Masters<'_> {
+    fn centres(&self) -> &[DVec3] {
+        &self.centres
+    }
+
+    fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
+        holds(&self.masters[view], self.atlas_point(at))
+    }
+
+    fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
+        lookup(&self.masters[view], self.atlas_point(at))
+    }
+
+    fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {
+        self.cameras[view].project(p).map(|q| q.uv)
+    }
+}
+
+/// Renders `mesh` through `camera` from `masters` (one a view, laid out by `layout`; `cameras`
+/// the views' cameras, for the weights).
 pub fn render(
     camera: &Pinhole,
     mesh: &crate::geom::Mesh,
     layout: &Layout,
-    centres: &[DVec3],
+    cameras: &[Pinhole],
     masters: &[Image<Rgba>],
     settings: &BlendSettings,
 ) -> Result<Blend, MasterError> {
@@ -45,61 +76,24 @@ pub fn render(
             map: layout.faces.len(),
         });
     }
-    if !settings.weighting.per_point() {
-        return Err(MasterError::Weighting(settings.weighting.name()));
+    if cameras.len() != masters.len() {
+        return Err(MasterError::Unpaired {
+            cameras: cameras.len(),
+            masters: masters.len(),
+        });
     }
-    let (target, _) = rasterize(camera, &[mesh], &StoreFragment, None)?;
-    let (w, h) = camera.resolution();
-    let eye = camera.position();
-    let fragments = target.attributes.pixels();
-    let faces = &layout.faces;
-    let mut image = Image::new(w, h, Vec4::ZERO)?;
-    let counts: Vec<(usize, usize)> = image
-        .pixels_mut()
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .map(|(y, row)| {
-            let (mut covered, mut holes) = (0, 0);
-            for (x, out) in row.iter_mut().enumerate() {
-                let Some(f) = fragments[y * w as usize + x] else {
-                    continue;
-                };
-                covered += 1;
-                let t = f.item.triangle as usize;
-                let c = mesh.corners(t);
-                let p = (c[0] * f.bary.x + c[1] * f.bary.y + c[2] * f.bary.z).as_dvec3();
-                let at = faces[t].at(f.bary.y as f64, f.bary.z as f64);
-                let sees = |i| sees(&masters[i], at);
-                let ws = weights(p, eye, centres, sees, settings.weighting, settings.k);
-                let mut colour = Vec4::ZERO;
-                let mut total = 0.0;
-                for (i, wgt) in ws {
-                    if let Some(s) = lookup(&masters[i], at) {
-                        colour += s * wgt as f32;
-                        total += wgt;
-                    }
-                }
-                if total <= 0.0 {
-                    holes += 1;
-                    *out = match settings.holes {
-                        Holes::Transparent => Vec4::ZERO,
-                        Holes::Fill(c) => c,
-                    };
-                    continue;
-                }
-                *out = (colour / total as f32).truncate().extend(1.0);
-            }
-            (covered, holes)
-        })
-        .collect();
-    let (covered, holes) = counts
-        .into_iter()
-        .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-    Ok(Blend {
-        image,
-        covered,
-        holes,
-    })
+    let source = Masters {
+        layout,
+        cameras,
+        masters,
+        centres: cameras.iter().map(|c| c.position()).collect(),
+    };
+    Ok(crate::texturing::render(
+        camera,
+        &[mesh],
+        &source,
+        settings,
+    )?)
 }
 
 #[cfg(test)]
@@ -121,7 +115,7 @@ mod tests {
                 &view.pinhole(),
                 &mesh,
                 &enc.atlas.layout,
-                &enc.centres(),
+                &enc.pinholes(),
                 &enc.masters,
                 &settings,
             )
@@ -160,7 +154,7 @@ mod tests {
             &camera,
             &mesh,
             &enc.atlas.layout,
-            &enc.centres(),
+            &enc.pinholes(),
             &enc.masters,
             &settings,
         )

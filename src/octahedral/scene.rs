@@ -2,9 +2,10 @@
 //! object replaced by its octahedral atlas, baked on first use, each pixel's ray looked up in
 //! every atlas it passes through ([`OctahedralAtlas::blend`]: the three frames around the
 //! direction toward the eye, parallax-corrected) and the surfaces found composited front to back
-//! by their coverage. Diffuse surfaces are relit with the blended normal, unshadowed, as an
-//! engine's impostor shader does; a mirror reflects the environment about that normal and glass
-//! shows the environment behind it (environment mapping — an atlas holds no other object).
+//! by their coverage. Each surface is shaded by the one shading path of every method
+//! ([`crate::render::shading::surface_radiance`]) with the blended normal: diffuse surfaces
+//! relit unshadowed, as an engine's impostor shader does; mirrors and glass reflecting and
+//! refracting the environment (environment mapping — an atlas holds no other object).
 //!
 //! Invariants: the atlases are baked in world space from the scene at the frame's time; a
 //! pixel's result depends only on its ray (the same pixels for any thread count).
@@ -12,9 +13,9 @@
 use super::bake::{BakeError, BakeSettings, OctahedralAtlas, bake};
 use super::render::PARALLAX_STEPS;
 use crate::frame::{Frame, FrameError};
-use crate::geom::optics::reflect;
+use crate::geom::optics::facing;
 use crate::progress::{Progress, Timings};
-use crate::render::shading::lambert;
+use crate::render::shading::surface_radiance;
 use crate::scene::{Scene, Surface};
 use glam::{DVec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -136,18 +137,18 @@ impl SceneAtlases {
                         let mut id = crate::geom::NO_OBJECT;
                         for (_, i, b) in &found {
                             let surface = &self.atlases[*i].1;
-                            let c = match surface {
-                                Surface::Diffuse(_) => {
-                                    lambert(b.albedo, b.normal, lighting, |_| true)
-                                }
-                                Surface::Mirror { tint } => {
-                                    *tint
-                                        * lighting.environment.radiance(reflect(ray.dir, b.normal))
-                                }
-                                Surface::Glass { tint, .. } => {
-                                    *tint * lighting.environment.radiance(ray.dir)
-                                }
-                            };
+                            // The one shading path, the blended normal both shading and
+                            // geometric, unshadowed, every bounce the environment's.
+                            let (n, _, front) = facing(ray.dir, b.normal, b.normal);
+                            let c = surface_radiance(
+                                surface,
+                                ray.dir,
+                                (n, front),
+                                || b.albedo,
+                                lighting,
+                                |_| true,
+                                |bounce| lighting.environment.radiance(bounce.dir),
+                            );
                             if id == crate::geom::NO_OBJECT && b.alpha >= 0.5 {
                                 id = *i as u32;
                             }

@@ -1,16 +1,32 @@
-//! The raster method: rasterize a visibility buffer through the view camera, then shade each
-//! pixel from its fragment (deferred, so each pixel is shaded once); the light's shadows are
-//! shadow rays through the scene's BVH, built only when the scene has a light.
+//! The raster method: the tracer ([`super::Tracer`]) with its primary hits read from the
+//! rasterizer's visibility buffer ([`primary_hits`]) and every ray a mirror or glass sends out
+//! answered by the environment alone, at depth 1 — classic environment mapping, shaded by the
+//! one shading path every method shares. The light's shadows are shadow rays through the
+//! scene's BVH, built only when the scene has a light.
 
-use super::shading::{Shadows, albedo, lambert};
-use super::{Progress, RenderError, Timings};
+use super::trace::shade_pixels;
+use super::{Progress, RenderError, Timings, Tracer};
 use crate::frame::Frame;
-use crate::geom::optics::{facing, fresnel, reflect, refract};
-use crate::raster::{Fragment, StoreFragment, rasterize};
-use crate::scene::{Lighting, RenderSettings, Surface, View};
-use crate::trace::Bvh;
-use glam::{DVec2, Vec2, Vec3};
+use crate::geom::Ray;
+use crate::raster::{StoreFragment, rasterize};
+use crate::scene::{Lighting, RenderSettings, View};
+use crate::trace::{Bvh, EnvironmentOnly, Hit, RayQuery};
+use glam::DVec2;
 use rayon::prelude::*;
+
+/// What blocks the light in a raster frame: the scene's BVH when the scene has a light. Without
+/// a light no shadow ray is cast, and no BVH is built.
+struct Occluders(Option<Bvh>);
+
+impl RayQuery for Occluders {
+    fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.0.as_ref()?.closest_hit(ray, t_max)
+    }
+
+    fn any_hit(&self, ray: &Ray, t_max: f32) -> bool {
+        self.0.as_ref().is_some_and(|b| b.any_hit(ray, t_max))
+    }
+}
 
 /// Renders `view` by rasterization.
 pub fn render_raster(
@@ -20,92 +36,26 @@ pub fn render_raster(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
-    let meshes = view.mesh_refs();
-    let occluders = lighting
-        .light
-        .as_ref()
-        .map(|_| timings.time("build BVH (shadows)", || Bvh::build(view.meshes.clone())));
-    let shadows = occluders.as_ref().map(|b| Shadows {
-        occluders: b,
-        epsilon: settings.ray_epsilon,
-    });
-    let (target, _stats) = timings.time("rasterize", || {
-        rasterize(&view.camera, &meshes, &StoreFragment, None)
-    })?;
-    let (w, h) = target.gd.size();
-    let mut frame = Frame::new(w, h)?;
-    let fragments = target.attributes.pixels();
-    timings.time("shade", || {
-        frame
-            .par_rows_mut()
-            .for_each(|(y, (color, depth, normal, id))| {
-                for x in 0..w as usize {
-                    let uv = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-                    let ray = view.camera.ray(uv);
-                    match fragments[y * w as usize + x] {
-                        None => color[x] = lighting.environment.radiance(ray.dir).extend(1.0),
-                        Some(f) => {
-                            let s = shade_fragment(view, lighting, shadows, &f, ray.dir);
-                            color[x] = s.color.extend(1.0);
-                            depth[x] = view.camera.distance(uv, f.gd as f64) as f32;
-                            normal[x] = s.normal;
-                            id[x] = f.item.object;
-                        }
-                    }
-                }
-                progress.advance(1);
-            });
-    });
-    Ok(frame)
-}
-
-struct Shaded {
-    color: Vec3,
-    normal: Vec3,
-}
-
-fn shade_fragment(
-    view: &View,
-    lighting: &Lighting,
-    shadows: Option<Shadows<'_>>,
-    f: &Fragment,
-    d: Vec3,
-) -> Shaded {
-    let mesh = &view.meshes[f.item.object as usize];
-    let surface = &view.surfaces[f.item.object as usize];
-    let tri = f.item.triangle as usize;
-    let [i0, i1, i2] = mesh.triangles[tri].map(|i| i as usize);
-    let b = f.bary;
-    let n = (mesh.normals[i0] * b.x + mesh.normals[i1] * b.y + mesh.normals[i2] * b.z)
-        .normalize_or_zero();
-    let uv = mesh
-        .uvs
-        .as_ref()
-        .map_or(Vec2::ZERO, |uv| uv[i0] * b.x + uv[i1] * b.y + uv[i2] * b.z);
-    let (n, ng, front) = facing(d, n, mesh.face_normal(tri));
-    let env = &lighting.environment;
-    let color = match surface {
-        Surface::Diffuse(_) => {
-            let c = mesh.corners(tri);
-            let p = c[0] * b.x + c[1] * b.y + c[2] * b.z;
-            lambert(
-                albedo(mesh, surface, f.item.triangle, uv),
-                n,
-                lighting,
-                |l| shadows.is_none_or(|s| s.lit(p, ng, l)),
-            )
-        }
-        Surface::Mirror { tint } => *tint * env.radiance(reflect(d, n)),
-        Surface::Glass { ior, tint } => {
-            let eta = if front { 1.0 / ior } else { *ior };
-            let cos_i = (-d.dot(n)).max(0.0);
-            let kr = fresnel(cos_i, eta);
-            let reflected = env.radiance(reflect(d, n));
-            let transmitted = refract(d, n, eta).map_or(Vec3::ZERO, |t| *tint * env.radiance(t));
-            kr * reflected + (1.0 - kr) * transmitted
-        }
+    let occluders = Occluders(
+        lighting
+            .light
+            .as_ref()
+            .map(|_| timings.time("build BVH (shadows)", || Bvh::build(view.meshes.clone()))),
+    );
+    let hits = timings.time("rasterize", || primary_hits(view))?;
+    // Depth 1: what mirrors and glass send out is looked up in the environment.
+    let settings = RenderSettings {
+        max_depth: 1,
+        ..*settings
     };
-    Shaded { color, normal: n }
+    let tracer = Tracer {
+        view,
+        primary: &occluders,
+        secondary: &EnvironmentOnly,
+        lighting,
+        settings: &settings,
+    };
+    timings.time("shade", || shade_pixels(&tracer, progress, |i, _| hits[i]))
 }
 
 /// What the camera sees at every pixel centre, by rasterization rather than by tracing (the

@@ -6,12 +6,12 @@
 //! environment alone is classic environment mapping. Rays that escape, or reach the depth limit,
 //! take the environment's radiance.
 
-use super::shading::{albedo, lambert, lit};
+use super::shading::{Side, albedo, lit, surface_radiance};
 use super::{Progress, RenderError};
 use crate::frame::Frame;
 use crate::geom::Ray;
-use crate::geom::optics::{facing, fresnel, reflect, refract};
-use crate::scene::{Lighting, RenderSettings, Surface, View};
+use crate::geom::optics::facing;
+use crate::scene::{Lighting, RenderSettings, View};
 use crate::trace::{Hit, RayQuery, SecondaryQuery};
 use glam::{DVec2, Vec3};
 use rayon::prelude::*;
@@ -54,41 +54,30 @@ impl<P: RayQuery, S: SecondaryQuery + ?Sized> Tracer<'_, P, S> {
         let d = ray.dir;
         let (n, ng, front) = facing(d, hit.normal, hit.geometric_normal);
         let eps = self.settings.ray_epsilon;
-        let env = &self.lighting.environment;
         let last = depth + 1 >= self.settings.max_depth;
-        // `outward`: the ray leaves the object into the open (not into the glass).
-        let follow = |origin: Vec3, dir: Vec3, outward: bool| {
-            let ray = Ray::new(origin, dir);
-            if outward {
-                self.leaving(hit.object, &ray, depth)
-            } else if last {
-                env.radiance(dir)
-            } else {
-                self.radiance(&ray, depth + 1)
-            }
-        };
-        match surface {
-            Surface::Diffuse(_) => lambert(
-                albedo(mesh, surface, hit.triangle, hit.uv),
-                n,
-                self.lighting,
-                // Hard shadows: the light is seen unless the scene blocks the shadow ray.
-                |l| lit(self.primary, hit.position, ng, l, eps),
-            ),
-            Surface::Mirror { tint } => {
-                *tint * follow(hit.position + ng * eps, reflect(d, n), true)
-            }
-            Surface::Glass { ior, tint } => {
-                let eta = if front { 1.0 / ior } else { *ior };
-                let kr = fresnel((-d.dot(n)).max(0.0), eta);
-                let reflected = follow(hit.position + ng * eps, reflect(d, n), front);
-                let transmitted = match refract(d, n, eta) {
-                    Some(t) if kr < 1.0 => *tint * follow(hit.position - ng * eps, t, !front),
-                    _ => Vec3::ZERO,
+        surface_radiance(
+            surface,
+            d,
+            (n, front),
+            || albedo(mesh, surface, hit.triangle, hit.uv),
+            self.lighting,
+            // Hard shadows: the light is seen unless the scene blocks the shadow ray.
+            |l| lit(self.primary, hit.position, ng, l, eps),
+            |bounce| {
+                let origin = match bounce.side {
+                    Side::Near => hit.position + ng * eps,
+                    Side::Far => hit.position - ng * eps,
                 };
-                kr * reflected + (1.0 - kr) * transmitted
-            }
-        }
+                let ray = Ray::new(origin, bounce.dir);
+                if bounce.outward {
+                    self.leaving(hit.object, &ray, depth)
+                } else if last {
+                    self.lighting.environment.radiance(bounce.dir)
+                } else {
+                    self.radiance(&ray, depth + 1)
+                }
+            },
+        )
     }
 }
 
@@ -198,6 +187,7 @@ mod tests {
     use super::*;
     use crate::camera::Pinhole;
     use crate::frame::envmap::EnvMap;
+    use crate::scene::Surface;
     use crate::trace::{Bvh, Exact};
     use std::sync::Arc;
     use std::sync::atomic::{AtomicU64, Ordering};

@@ -4,8 +4,8 @@
 //!
 //! A [`ViewSet`] reads and writes COLMAP models ([`colmap`]); each [`CalibratedView`] has its
 //! intrinsics with lens distortion ([`intrinsics`]), its pose and its image. [`visibility`]
-//! gives each view's depth map of a mesh; [`blend`] renders the mesh at a new viewpoint from the
-//! views (VDTM / Unstructured Lumigraph weights); [`capture`] renders synthetic captures whose
+//! gives each view's depth map of a mesh; [`blend`] makes the views a source of
+//! [`crate::texturing`], which renders the mesh at a new viewpoint from them; [`capture`] renders synthetic captures whose
 //! every novel view has a known ground truth.
 //!
 //! Invariants: a pose maps world to camera, `x_cam = R·x_world + t`, `R` from a unit
@@ -16,10 +16,9 @@ pub mod capture;
 pub mod colmap;
 pub mod intrinsics;
 pub mod score;
-pub mod view_map;
 pub mod visibility;
 
-pub use blend::{BlendSettings, Holes, Weighting};
+pub use crate::texturing::{Blend, BlendSettings, Holes, Weighting};
 pub use intrinsics::{CameraModel, Intrinsics};
 
 use crate::camera::Pinhole;

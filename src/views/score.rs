@@ -4,12 +4,13 @@
 //!
 //! Invariant: the view scored never contributes to its own rendering.
 
-use super::blend::{self, BlendSettings, Weighting};
+use super::blend;
 use super::visibility::DepthMap;
 use super::{ViewSet, ViewsError};
 use crate::frame::metrics::{self, Scores};
 use crate::geom::Mesh;
 use crate::progress::Progress;
+use crate::texturing::{BlendSettings, Weighting};
 
 /// One view's scores.
 #[derive(Clone, Debug)]

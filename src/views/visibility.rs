@@ -13,8 +13,7 @@ use crate::geom::Mesh;
 use crate::raster::{NoAttributes, rasterize};
 use glam::{DVec2, DVec3, Vec2};
 
-/// Default relative depth tolerance of the visibility test (1 %).
-pub const DEFAULT_TOLERANCE: f64 = 0.01;
+pub use crate::texturing::DEFAULT_TOLERANCE;
 
 /// One view's depth map: generalized depth `gd = 1/z` through its undistorted pinhole.
 #[derive(Clone, Debug)]

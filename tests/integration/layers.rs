@@ -12,8 +12,9 @@ use trompe::frame::{Image, io::to_srgb8, metrics};
 use trompe::geom::{Material, Mesh};
 use trompe::layers::ora::{self, Ora, OraError, OraLayer};
 use trompe::layers::order::{OrderSettings, Ordering, order_view, violations};
-use trompe::layers::{self, BuildSettings, LayerSet, RenderSettings};
+use trompe::layers::{self, BuildSettings, LayerSet};
 use trompe::scene::Scene;
+use trompe::texturing::BlendSettings;
 use trompe::views::CalibratedView;
 use trompe::views::capture::{CaptureSettings, capture_of};
 
@@ -172,7 +173,7 @@ fn rendering_from_an_input_viewpoint_reproduces_its_photograph() {
     let (scene, views) = captured(4);
     let set = built(&scene, &views, &BuildSettings::default());
     for (i, v) in views.iter().enumerate() {
-        let blend = layers::render::render(&v.pinhole(), &set, &RenderSettings::default())
+        let blend = layers::render::render(&v.pinhole(), &set, &BlendSettings::default())
             .expect("rendered");
         assert_eq!(
             blend.holes, 0,
@@ -394,7 +395,7 @@ fn a_layer_an_artist_grew_and_moved_keeps_its_placement() {
     let before = layers::render::render(
         &cam,
         &layers::file::load(&dir, meshes.clone(), names.clone()).expect("loaded"),
-        &RenderSettings::default(),
+        &BlendSettings::default(),
     )
     .expect("rendered");
     // Grow the first layer of view 0 by 5 transparent texels left and 3 above, as an editor
@@ -416,7 +417,7 @@ fn a_layer_an_artist_grew_and_moved_keeps_its_placement() {
     let after = layers::render::render(
         &cam,
         &layers::file::load(&dir, meshes, names).expect("loaded"),
-        &RenderSettings::default(),
+        &BlendSettings::default(),
     )
     .expect("rendered");
     assert_eq!(before.image.pixels(), after.image.pixels());
@@ -496,7 +497,7 @@ fn krita_opens_the_layers_as_written_and_what_it_saves_renders_the_same() {
     let cam = scene.camera.at(0.0).expect("camera");
     let render = |dir: &Path| {
         let set = layers::file::load(dir, meshes.clone(), names.clone()).expect("loaded");
-        layers::render::render(&cam, &set, &RenderSettings::default()).expect("rendered")
+        layers::render::render(&cam, &set, &BlendSettings::default()).expect("rendered")
     };
     let before = render(&dir);
     let saved = dir.join("krita.ora");

@@ -16,4 +16,5 @@ mod relief;
 mod render;
 mod sequence;
 mod shader;
+mod texturing;
 mod views;

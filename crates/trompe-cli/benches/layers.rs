@@ -3,8 +3,9 @@
 //! beside plain projective texturing.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use trompe::layers::{self, BuildSettings, RenderSettings};
+use trompe::layers::{self, BuildSettings};
 use trompe::raster::{NoAttributes, rasterize};
+use trompe::texturing::BlendSettings;
 
 fn layers(c: &mut Criterion) {
     let root = trompe_cli::bench::repo_root();
@@ -42,16 +43,11 @@ fn layers(c: &mut Criterion) {
     .expect("layers");
     let camera = scene.camera.at(0.0).expect("camera");
     g.bench_function("layered frame", |b| {
-        b.iter(|| layers::render::render(&camera, &set, &RenderSettings::default()))
+        b.iter(|| layers::render::render(&camera, &set, &BlendSettings::default()))
     });
     g.bench_function("plain projective frame", |b| {
         b.iter(|| {
-            layers::render::render_projective(
-                &camera,
-                &refs,
-                &set.views,
-                &RenderSettings::default(),
-            )
+            layers::render::render_projective(&camera, &refs, &set.views, &BlendSettings::default())
         })
     });
     g.finish();

@@ -3,13 +3,14 @@
 
 use super::views::{RigArg, WeightsArg, parse_size};
 use super::{bar, check_plan, refuse_foreign_folder};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
 use std::path::PathBuf;
 use trompe::files::OutputPlan;
 use trompe::frame::io;
-use trompe::layers::{self, BuildSettings, OrderSettings, Ordering, RenderSettings};
+use trompe::layers::{self, BuildSettings, OrderSettings, Ordering};
 use trompe::scene::Scene;
+use trompe::texturing::BlendSettings;
 
 /// `trompe layers …`.
 #[derive(Subcommand, Debug)]
@@ -190,9 +191,6 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn render(&self) -> Result<()> {
-        if !self.weights.weighting().per_point() {
-            bail!("--weights: layered rendering blends per point: use ulr or vdtm");
-        }
         let scene = Scene::load(&self.scene)?;
         let mut plan = OutputPlan::new();
         plan.reads(scene.files.iter().cloned())
@@ -207,10 +205,10 @@ impl RenderArgs {
             eprintln!("filled {n} hidden texels");
         }
         let camera = scene.camera.at(scene.render.time)?;
-        let settings = RenderSettings {
+        let settings = BlendSettings {
             weighting: self.weights.weighting(),
             k: self.k as usize,
-            ..RenderSettings::default()
+            ..BlendSettings::default()
         };
         let start = std::time::Instant::now();
         let blend = match self.method {

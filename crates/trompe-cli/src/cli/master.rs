@@ -64,8 +64,7 @@ pub struct MasterRenderArgs {
     /// A scene file whose camera to render from (its objects are ignored).
     #[arg(long)]
     scene: PathBuf,
-    /// Weighting: ulr or vdtm (master textures blend per surface point; the per-face view-map
-    /// and best-face are refused).
+    /// View weighting.
     #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
     weights: WeightsArg,
     /// Most views blended at a point.
@@ -144,13 +143,6 @@ impl MasterEncodeArgs {
 
 impl MasterRenderArgs {
     fn render(&self) -> Result<()> {
-        let weighting = self.weights.weighting();
-        if !weighting.per_point() {
-            bail!(
-                "--weights {}: master textures blend views per surface point: use ulr or vdtm",
-                weighting.name()
-            );
-        }
         let mut plan = OutputPlan::new();
         plan.reads([&self.mesh, &self.scene, &self.encoding])
             .writes(&self.output, &["png", "exr"]);

@@ -10,10 +10,11 @@ use glam::Vec4;
 use std::path::Path;
 use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba, io, metrics};
-use trompe::layers::{self, BuildSettings, LayerSet, RenderSettings};
+use trompe::layers::{self, BuildSettings, LayerSet};
 use trompe::render::Method;
 use trompe::scene::Scene;
-use trompe::views::blend::{self, BlendSettings};
+use trompe::texturing::{Blend, BlendSettings};
+use trompe::views::blend;
 use trompe::views::capture::{CaptureSettings, bounding_sphere, capture_of, rig_centres};
 use trompe::views::visibility::DepthMap;
 
@@ -97,7 +98,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     // Fidelity at the input viewpoints.
     let mut worst_input = f64::INFINITY;
     for v in &set.views {
-        let b = layers::render::render(&v.pinhole(), &set, &RenderSettings::default())?;
+        let b = layers::render::render(&v.pinhole(), &set, &BlendSettings::default())?;
         if let Some(photo) = &v.image {
             let mask = b.image.map(|p| p.w >= 0.5);
             worst_input = worst_input.min(metrics::psnr(&b.image, photo, Some(&mask))?);
@@ -111,14 +112,14 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let depth = DepthMap::of_all(&set.views, &merged)?;
     for (c, (name, camera)) in cameras.iter().enumerate() {
         let exact = exact_render(&scene, camera)?;
-        let methods: [(&str, blend::Blend); 4] = [
+        let methods: [(&str, Blend); 4] = [
             (
                 "layered",
-                layers::render::render(camera, &set, &RenderSettings::default())?,
+                layers::render::render(camera, &set, &BlendSettings::default())?,
             ),
             (
                 "layered, push-pull fill",
-                layers::render::render(camera, &filled, &RenderSettings::default())?,
+                layers::render::render(camera, &filled, &BlendSettings::default())?,
             ),
             (
                 "plain projective (no visibility)",
@@ -126,7 +127,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
                     camera,
                     &set.mesh_refs(),
                     &set.views,
-                    &RenderSettings::default(),
+                    &BlendSettings::default(),
                 )?,
             ),
             (

@@ -6,7 +6,7 @@
 
 use super::html::{Figure, Section, Table};
 use super::{DemoInputs, ReportError, over};
-use glam::{DVec3, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use std::path::Path;
 use std::sync::Arc;
 use trompe::camera::Pinhole;
@@ -40,7 +40,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let t = std::time::Instant::now();
     let enc = encode_views(&mesh, &set.views, trompe::master::DEFAULT_SCALE, &())?;
     let encode_time = t.elapsed();
-    let centres = enc.centres();
+    let cameras = enc.pinholes();
     let blend = BlendSettings::default();
 
     // An exemplar, its master texture, the bake.
@@ -74,7 +74,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         &camera,
         &mesh,
         &enc.atlas.layout,
-        &centres,
+        &cameras,
         &enc.masters,
         &blend,
     )?;
@@ -113,7 +113,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let d = delta(&enc.masters[0], &after, EDIT_THRESHOLD)?;
     let mut edited = enc.masters.clone();
     let changed_a = propagate(&mut edited, &d, &after, Apply::Add)?;
-    let edited_view = render(&camera, &mesh, &enc.atlas.layout, &centres, &edited, &blend)?;
+    let edited_view = render(&camera, &mesh, &enc.atlas.layout, &cameras, &edited, &blend)?;
     io::write_png(
         &out.join("master-edit-a.png"),
         &over(GREY, &edited_view.image),
@@ -121,7 +121,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
 
     // Edit (b): the shadow of a sphere added above the Duck, seen from a new camera and
     // rendered with and without it by the software shader (hard shadows).
-    let (shadow_file, changed_b) = shadow_edit(&model, &mesh, &enc, &centres, &blend, out)?;
+    let (shadow_file, changed_b) = shadow_edit(&model, &mesh, &enc, &cameras, &blend, out)?;
 
     // Storage, paper Table 1: exemplars + per-view UVs against masters + one UV set.
     let mut table = Table::new([
@@ -223,7 +223,7 @@ fn shadow_edit(
     model: &Path,
     mesh: &trompe::geom::Mesh,
     enc: &Encoding,
-    centres: &[DVec3],
+    cameras: &[Pinhole],
     blend: &BlendSettings,
     out: &Path,
 ) -> Result<(String, usize), ReportError> {
@@ -280,7 +280,7 @@ fn shadow_edit(
         256,
         192,
     )?;
-    let shown = render(&seen_from, mesh, &enc.atlas.layout, centres, &edited, blend)?;
+    let shown = render(&seen_from, mesh, &enc.atlas.layout, cameras, &edited, blend)?;
     io::write_png(&out.join("master-edit-b.png"), &over(GREY, &shown.image))?;
     Ok(("master-edit-b.png".into(), changed))
 }

@@ -174,24 +174,26 @@ fn encode_render_and_edit_through_the_command_line() {
         &s(&dir.join("x.png")),
     ]));
     assert!(e.contains("992 triangles") && e.contains("4212"), "{e}");
-    // A per-face weighting is refused, not replaced by another.
-    let e = err(&trompe(&[
-        "master",
-        "render",
-        &s(&enc),
-        "--mesh",
-        duck,
-        "--scene",
-        &s(&scene),
-        "--weights",
-        "view-map",
-        "-o",
-        &s(&dir.join("x.png")),
-    ]));
-    assert!(
-        e.contains("view-map") && e.contains("per surface point"),
-        "{e}"
-    );
+    // Every weighting the views take, master textures take: the per-face ones from the masters'
+    // own texels at each triangle's centroid.
+    for weights in ["view-map", "best-face"] {
+        let out = dir.join(format!("{weights}.png"));
+        let o = trompe(&[
+            "master",
+            "render",
+            &s(&enc),
+            "--mesh",
+            duck,
+            "--scene",
+            &s(&scene),
+            "--weights",
+            weights,
+            "-o",
+            &s(&out),
+        ]);
+        assert!(o.status.success(), "{weights}: {}", common::stderr(&o));
+        assert!(out.is_file(), "{weights}");
+    }
     let e = err(&trompe(&[
         "master",
         "edit",

@@ -7,8 +7,6 @@
 //!
 //! Invariant: a sample holds a view only if that view sees the polygon's centroid.
 
-use super::CalibratedView;
-use super::visibility::DepthMap;
 use crate::geom::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -27,13 +25,12 @@ pub struct ViewMap {
 }
 
 impl ViewMap {
-    /// The view maps of `mesh`'s triangles over the `usable` views (at most 65 535).
+    /// The view maps of `mesh`'s triangles over views centred at `centres` (at most 65 535);
+    /// `sees(view, triangle, centroid)` says whether a view sees a triangle's centroid.
     pub fn build(
         mesh: &Mesh,
-        views: &[CalibratedView],
-        depth: &[DepthMap],
-        tolerance: f64,
-        usable: &(dyn Fn(usize) -> bool + Sync),
+        centres: &[DVec3],
+        sees: &(dyn Fn(usize, usize, DVec3) -> bool + Sync),
     ) -> ViewMap {
         let sphere = crate::geom::icosphere(2);
         // The icosphere repeats positions along texture seams: keep one direction per position.
@@ -58,14 +55,13 @@ impl ViewMap {
             .map(|t| t.map(|i| remap[i as usize]))
             .collect();
         let n = directions.len();
-        let centres: Vec<DVec3> = views.iter().map(|v| v.pose.centre()).collect();
         let table: Vec<u16> = (0..mesh.triangle_count())
             .into_par_iter()
             .flat_map_iter(|t| {
                 let c = mesh.corners(t).map(|p| p.as_dvec3());
                 let centroid = (c[0] + c[1] + c[2]) / 3.0;
-                let seeing: Vec<(u16, DVec3)> = (0..views.len().min(NONE as usize))
-                    .filter(|&i| usable(i) && depth[i].sees(centroid, tolerance))
+                let seeing: Vec<(u16, DVec3)> = (0..centres.len().min(NONE as usize))
+                    .filter(|&i| sees(i, t, centroid))
                     .map(|i| (i as u16, (centres[i] - centroid).normalize()))
                     .collect();
                 let row: Vec<u16> = directions
@@ -132,13 +128,11 @@ impl ViewMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::views::{Intrinsics, Pose};
 
     #[test]
     fn a_view_map_blends_at_most_three_views_that_see_the_triangle() {
         let mesh = crate::geom::plane(1);
-        let intrinsics = Intrinsics::pinhole(64, 64, 60.0, 60.0, 32.0, 32.0);
-        // Views above the plane and one below it, never the nearest to a direction from above.
+        // Views above the plane (y = 0, facing +y) and one below it, which sees nothing.
         let centres = [
             DVec3::new(0.0, 3.0, 0.5),
             DVec3::new(2.0, 2.0, 0.0),
@@ -146,20 +140,7 @@ mod tests {
             DVec3::new(0.2, 2.0, 2.0),
             DVec3::new(0.0, -3.0, 0.1),
         ];
-        let views: Vec<CalibratedView> = centres
-            .iter()
-            .enumerate()
-            .map(|(i, &c)| CalibratedView {
-                name: format!("v{i}"),
-                image_id: i as u32,
-                camera_id: 1,
-                intrinsics: intrinsics.clone(),
-                pose: Pose::looking_at(c, DVec3::ZERO, DVec3::Z).unwrap(),
-                image: None,
-            })
-            .collect();
-        let depth = DepthMap::of_all(&views, &mesh).unwrap();
-        let map = ViewMap::build(&mesh, &views, &depth, 0.01, &|_| true);
+        let map = ViewMap::build(&mesh, &centres, &|i, _, _| centres[i].y > 0.0);
         for t in 0..mesh.triangle_count() {
             for k in 0..50 {
                 let a = k as f64 * 0.4;
