@@ -3,10 +3,11 @@
 //! And the first of those methods, `impostor` (paper 1 §6): the tracer with the rays mirrors and
 //! glass send out answered by impostors.
 //!
-//! Every method shares one shading model ([`shading`]): Lambert with the sun (hard shadows)
-//! plus the environment's diffuse irradiance; mirrors and glass reflect and refract. The
-//! raster method has no secondary rays, so it looks mirrors and glass up in the environment map
-//! (classic environment mapping); `trace` follows the rays. On diffuse-only scenes the two differ
+//! Every method shares one shading path ([`shading::surface_radiance`]): Lambert with the sun
+//! (hard shadows) plus the environment's diffuse irradiance; mirrors and glass reflect and
+//! refract. The raster method is the tracer on the rasterizer's primary hits at depth 1, so
+//! mirrors and glass look the environment map up (classic environment mapping); `trace` follows
+//! the rays. On diffuse-only scenes the two differ
 //! only where the visible triangle differs (silhouette pixels), which the tests measure.
 //!
 //! [`Sequence`] plays frames of an animated scene, keeping impostors between them.

@@ -4,6 +4,7 @@
 
 use crate::common;
 
+use common::layer_scene::{built, captured};
 use common::scratch;
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
@@ -12,11 +13,8 @@ use trompe::frame::{Image, io::to_srgb8, metrics};
 use trompe::geom::{Material, Mesh};
 use trompe::layers::ora::{self, Ora, OraError, OraLayer};
 use trompe::layers::order::{OrderSettings, Ordering, order_view, violations};
-use trompe::layers::{self, BuildSettings, LayerSet};
-use trompe::scene::Scene;
+use trompe::layers::{self, BuildSettings};
 use trompe::texturing::BlendSettings;
-use trompe::views::CalibratedView;
-use trompe::views::capture::{CaptureSettings, capture_of};
 
 /// A quad (two triangles) through four corners, in order around it.
 fn quad(c: [Vec3; 4]) -> Mesh {
@@ -100,67 +98,6 @@ fn interpenetrating_quads_are_opened_and_split_until_no_triangle_hides_an_earlie
         (after - area).abs() < 1e-4 * area,
         "splits keep the surface"
     );
-}
-
-/// A small scene of several objects on a ground plane.
-fn scene() -> Scene {
-    let text = r#"
-[camera]
-position = [0.9, 0.7, 1.4]
-look_at = [0.0, 0.15, 0.0]
-fov_y = 45.0
-resolution = [160, 120]
-[light]
-direction = [0.4, 1.0, 0.6]
-intensity = 2.51
-[render]
-background = [0.3, 0.3, 0.35]
-[[object]]
-name = "ground"
-shape = "plane"
-scale = 1.6
-material = { type = "diffuse", color = [0.5, 0.5, 0.45] }
-[[object]]
-name = "box"
-shape = "cube"
-fit = 0.4
-translate = [0.0, 0.0, -0.3]
-rotate = [0.0, 25.0, 0.0]
-material = { type = "diffuse", color = [0.3, 0.5, 0.8] }
-[[object]]
-name = "duck"
-mesh = "../assets/gltf/Duck.glb"
-fit = 0.3
-translate = [0.1, 0.0, 0.25]
-[[object]]
-name = "ball"
-shape = "sphere"
-fit = 0.2
-translate = [-0.25, 0.0, 0.1]
-material = { type = "diffuse", color = [0.8, 0.4, 0.3] }
-"#;
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/layers-test.toml");
-    Scene::from_toml(text, &path).expect("the test scene")
-}
-
-fn captured(count: usize) -> (Scene, Vec<CalibratedView>) {
-    let scene = scene();
-    let settings = CaptureSettings {
-        count,
-        size: (160, 120),
-        distance: 1.4,
-        fov_y: 50.0,
-        ..CaptureSettings::default()
-    };
-    let views = capture_of(scene.clone(), &settings, &())
-        .expect("captured")
-        .views;
-    (scene, views)
-}
-
-fn built(scene: &Scene, views: &[CalibratedView], settings: &BuildSettings) -> LayerSet {
-    let (meshes, names) = layers::scene_objects(scene).expect("objects");
-    layers::build(meshes, names, views, settings, &()).expect("built")
 }
 
 /// Pixels a render textured (alpha ½ or more).
@@ -446,62 +383,4 @@ fn a_colmap_model_of_the_scene_builds_the_same_layers_as_the_capture_it_came_fro
         let rects = |l: &layers::ViewLayers| l.layers.iter().map(|x| x.rect).collect::<Vec<_>>();
         assert_eq!(rects(a), rects(b));
     }
-}
-
-/// Runs Krita headless (under `xvfb-run`) on `input`, exporting `output`; `None` with the reason
-/// printed when Krita or xvfb-run is not installed (CI installs both).
-fn krita(input: &Path, output: &Path) -> Option<()> {
-    if !common::has_command("krita") || !common::has_command("xvfb-run") {
-        common::system_package_missing("krita or xvfb-run");
-        return None;
-    }
-    // Krita starting under a fresh virtual display can lose the race with the display's own
-    // start on a loaded machine; a second and third start are made before giving up.
-    let mut errors = String::new();
-    for _ in 0..3 {
-        let o = std::process::Command::new("xvfb-run")
-            .args(["-a", "krita"])
-            .arg(input)
-            .args(["--export", "--export-filename"])
-            .arg(output)
-            .output()
-            .expect("krita runs");
-        if output.is_file() {
-            return Some(());
-        }
-        errors.push_str(&common::stderr(&o));
-    }
-    panic!("krita wrote nothing in three starts: {errors}");
-}
-
-#[test]
-fn krita_opens_the_layers_as_written_and_what_it_saves_renders_the_same() {
-    let (scene, views) = captured(2);
-    let set = built(&scene, &views, &BuildSettings::default());
-    let dir = scratch("layers-krita");
-    layers::file::save(&dir, &set).expect("saved");
-    let file = dir.join(layers::file::ora_name(&set.views[0].name));
-    // Krita's composite of the stack is the photograph's.
-    let png = dir.join("krita.png");
-    if krita(&file, &png).is_none() {
-        return;
-    }
-    let flat = trompe::frame::io::read_png(&png).expect("krita's png");
-    let composite = ora::read(&file)
-        .expect("read")
-        .composite()
-        .expect("composite");
-    assert_eq!(to_srgb8(&flat), to_srgb8(&composite));
-    // Krita's own OpenRaster file (nested stack, its own entry names) textures the same frame.
-    let (meshes, names) = layers::scene_objects(&scene).expect("objects");
-    let cam = scene.camera.at(0.0).expect("camera");
-    let render = |dir: &Path| {
-        let set = layers::file::load(dir, meshes.clone(), names.clone()).expect("loaded");
-        layers::render::render(&cam, &set, &BlendSettings::default()).expect("rendered")
-    };
-    let before = render(&dir);
-    let saved = dir.join("krita.ora");
-    krita(&file, &saved).expect("krita ran a moment ago");
-    std::fs::copy(&saved, &file).expect("replaced");
-    assert_eq!(before.image.pixels(), render(&dir).image.pixels());
 }

@@ -15,6 +15,5 @@ mod raster_vs_bvh;
 mod relief;
 mod render;
 mod sequence;
-mod shader;
 mod texturing;
 mod views;

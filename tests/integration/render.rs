@@ -730,8 +730,7 @@ fn rasterized_and_traced_primaries_shade_a_degenerate_normal_triangle_the_same()
     mesh.face_material = vec![0];
     view.meshes = vec![Arc::new(mesh)];
     view.surfaces = vec![Surface::Diffuse(None)];
-    let shade = |primary| {
-        let options = RenderOptions::new(Method::Trace).primary(primary);
+    let shade = |options: RenderOptions| {
         let lighting = (&s.lighting, &s.render);
         let mut timings = trompe::Timings::default();
         render_view(
@@ -744,30 +743,38 @@ fn rasterized_and_traced_primaries_shade_a_degenerate_normal_triangle_the_same()
         )
         .unwrap()
     };
-    let (traced, rasterized) = (shade(Primary::Traced), shade(Primary::Rasterized));
-    let (w, h) = traced.color.size();
-    let (mut both, mut same) = (0, 0);
-    for y in 0..h {
-        for x in 0..w {
-            if traced.object_id.get(x, y) != 0 || rasterized.object_id.get(x, y) != 0 {
-                continue;
-            }
-            both += 1;
-            let (a, b) = (traced.color.get(x, y), rasterized.color.get(x, y));
-            let (na, nb) = (traced.normal.get(x, y), rasterized.normal.get(x, y));
-            if (a - b).abs().max_element() <= 1e-5 && (na - nb).length() <= 1e-5 {
-                same += 1;
+    let trace = RenderOptions::new(Method::Trace);
+    let traced = shade(trace.primary(Primary::Traced));
+    // The rasterized primary pass of the tracing methods, and the raster method (the same
+    // tracer at depth 1): one shading path.
+    for rasterized in [
+        shade(trace.primary(Primary::Rasterized)),
+        shade(RenderOptions::new(Method::Raster)),
+    ] {
+        let (w, h) = traced.color.size();
+        let (mut both, mut same) = (0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                if traced.object_id.get(x, y) != 0 || rasterized.object_id.get(x, y) != 0 {
+                    continue;
+                }
+                both += 1;
+                let (a, b) = (traced.color.get(x, y), rasterized.color.get(x, y));
+                let (na, nb) = (traced.normal.get(x, y), rasterized.normal.get(x, y));
+                if (a - b).abs().max_element() <= 1e-5 && (na - nb).length() <= 1e-5 {
+                    same += 1;
+                }
             }
         }
+        assert!(
+            both > (w * h) as usize / 10,
+            "{both} pixels see the triangle"
+        );
+        assert_eq!(
+            same,
+            both,
+            "{} of {both} pixels shaded differently",
+            both - same
+        );
     }
-    assert!(
-        both > (w * h) as usize / 10,
-        "{both} pixels see the triangle"
-    );
-    assert_eq!(
-        same,
-        both,
-        "{} of {both} pixels shaded differently",
-        both - same
-    );
 }

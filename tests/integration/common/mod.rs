@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod layer_scene;
+
 use std::path::PathBuf;
 use std::process::Output;
 
@@ -161,14 +163,28 @@ pub fn zip_of(path: &std::path::Path, entries: &[(&str, Vec<u8>)]) {
     z.finish().expect("finished");
 }
 
-/// Says a test cannot run because a system package is missing: the test passes, saying
-/// `skipped` on its output, or fails where `TROMPE_REQUIRE_SYSTEM` is set (`.ci/run` sets it).
-#[track_caller]
-pub fn system_package_missing(what: &str) {
-    if std::env::var_os("TROMPE_REQUIRE_SYSTEM").is_some() {
-        panic!("{what} is not installed, and TROMPE_REQUIRE_SYSTEM is set (.ci/run installs it)");
+/// A test that needs a system package (`what`, which `present` says is installed): run as is
+/// when it is; otherwise ignored — counted in the test summary, the reason printed — or, where
+/// `TROMPE_REQUIRE_SYSTEM` is set (`.ci/run` sets it), failed.
+pub fn needs(
+    trial: libtest_mimic::Trial,
+    present: bool,
+    what: &'static str,
+) -> libtest_mimic::Trial {
+    if present {
+        return trial;
     }
-    eprintln!("skipped: {what} is not installed (.ci/run installs it)");
+    let name = trial.name().to_string();
+    if std::env::var_os("TROMPE_REQUIRE_SYSTEM").is_some() {
+        return libtest_mimic::Trial::test(name, move || {
+            Err(format!(
+                "{what} is not installed, and TROMPE_REQUIRE_SYSTEM is set (.ci/run installs it)"
+            )
+            .into())
+        });
+    }
+    println!("ignored {name}: {what} is not installed (.ci/run installs it)");
+    trial.with_ignored_flag(true)
 }
 
 /// Whether `tool` is a command on the `PATH`.

@@ -1,6 +1,6 @@
 //! The interactive viewer's state, driven without a display: scripted input replays the same
-//! frames, the controls move the camera as they say, a saved camera reproduces the view; and
-//! the real window under a virtual X server shows the frame the headless viewer renders.
+//! frames, the controls move the camera as they say, a saved camera reproduces the view (the
+//! real window under a virtual X server is tested in `tests/system/`).
 
 use crate::common;
 use common::{scratch, stderr, trompe};
@@ -118,66 +118,6 @@ fn a_saved_camera_block_parses_as_a_scene_camera_and_reproduces_the_view() {
             "{a:?} {b:?}"
         );
     }
-}
-
-#[test]
-fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
-    if !common::has_command("xvfb-run") {
-        common::system_package_missing("xvfb-run");
-        return;
-    }
-    let dir = scratch("viewer-window");
-    let keys = dir.join("keys.txt");
-    std::fs::write(&keys, "0.0 tap 4\n1.0 tap F12\n").unwrap();
-    let (window, headless) = (dir.join("window"), dir.join("headless"));
-    let o = std::process::Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24"])
-        .arg(env!("CARGO_BIN_EXE_trompe"))
-        .args([
-            "view",
-            "scenes/teapot-in-bunny.toml",
-            "--size",
-            "160x120",
-            "--quit-after",
-            "2",
-        ])
-        .arg("--script")
-        .arg(&keys)
-        .arg("-o")
-        .arg(&window)
-        .current_dir(common::root())
-        .output()
-        .expect("xvfb-run runs");
-    assert!(o.status.success(), "{}", stderr(&o));
-    let shot = std::fs::read_dir(&window)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .find(|p| {
-            p.file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with("screenshot"))
-        })
-        .unwrap_or_else(|| panic!("no screenshot: {}", stderr(&o)));
-    let o = trompe(&[
-        "view",
-        "scenes/teapot-in-bunny.toml",
-        "--size",
-        "160x120",
-        "--frames",
-        "1",
-        "--script",
-        keys.to_str().unwrap(),
-        "-o",
-        headless.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
-    let score =
-        metrics::compare(&read(&headless.join("frame_0000.png")), &read(&shot), None).unwrap();
-    assert!(
-        score.flip < 0.01,
-        "window against headless: FLIP {}",
-        score.flip
-    );
 }
 
 #[test]

@@ -2,8 +2,6 @@
 //! validates with naga, its constants are the Rust code's, and run on a Vulkan device (Mesa's
 //! lavapipe on the CPU) it picks the frames the Rust code picks.
 
-use crate::common;
-
 use std::path::Path;
 
 fn source() -> String {
@@ -13,8 +11,7 @@ fn source() -> String {
     .unwrap()
 }
 
-#[test]
-fn the_shader_parses_and_validates() {
+pub fn the_shader_parses_and_validates() {
     let module = naga::front::wgsl::parse_str(&source()).unwrap_or_else(|e| {
         panic!("{}", e.emit_to_string(&source()));
     });
@@ -32,8 +29,7 @@ fn the_shader_parses_and_validates() {
     assert_eq!(entries, ["vs_main", "fs_main"]);
 }
 
-#[test]
-fn the_shader_constants_are_the_rust_codes() {
+pub fn the_shader_constants_are_the_rust_codes() {
     let src = source();
     assert!(
         src.contains(&format!(
@@ -191,10 +187,14 @@ fn shader_frames_around(
     )
 }
 
-/// Skips a test (or fails it where CI requires the system packages) when no Vulkan device is
-/// found.
-fn no_device() {
-    common::system_package_missing("a Vulkan device (Mesa's lavapipe runs it on the CPU)");
+/// The name of the Vulkan adapter the shader runs on, if there is one.
+pub fn vulkan_adapter() -> Option<String> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::VULKAN,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).ok()?;
+    Some(adapter.get_info().name)
 }
 
 /// A compute entry over the shader's `frame_texel`: each input `(x, y, z, frame)` (frame as
@@ -217,8 +217,7 @@ fn run(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 "#;
 
-#[test]
-fn the_shaders_frame_texels_are_the_cpu_references_for_both_projections() {
+pub fn the_shaders_frame_texels_are_the_cpu_references_for_both_projections() {
     use glam::DVec3;
     use trompe::octahedral::render::frame_texel;
     use trompe::octahedral::{BakeSettings, Coverage, FrameProjection, Grid};
@@ -257,9 +256,7 @@ fn the_shaders_frame_texels_are_the_cpu_references_for_both_projections() {
             projection,
         };
         let u = uniform(centre, radius, (n, 96, 0), distance);
-        let Some(shader) = run_on_device(TEXEL, &u, &input, 2) else {
-            return no_device();
-        };
+        let shader = run_on_device(TEXEL, &u, &input, 2).expect("the Vulkan device found before");
         let sphere = (glam::Vec3::from(centre).as_dvec3(), f64::from(radius));
         let mut worst = 0.0f64;
         for (k, (p, f)) in items.iter().enumerate() {
@@ -274,8 +271,7 @@ fn the_shaders_frame_texels_are_the_cpu_references_for_both_projections() {
     }
 }
 
-#[test]
-fn the_shaders_frame_selection_is_the_cpu_references_on_ten_thousand_directions() {
+pub fn the_shaders_frame_selection_is_the_cpu_references_on_ten_thousand_directions() {
     use glam::DVec3;
     use trompe::octahedral::{Coverage, Grid};
     // Uniform directions on the sphere, from a fixed generator.
@@ -296,9 +292,8 @@ fn the_shaders_frame_selection_is_the_cpu_references_on_ten_thousand_directions(
     let single: Vec<[f32; 3]> = directions.iter().map(|d| d.as_vec3().to_array()).collect();
     for (coverage, code) in [(Coverage::Sphere, 0), (Coverage::Hemisphere, 1)] {
         for n in [8, 16, 31] {
-            let Some(shader) = shader_frames_around(&single, n, code) else {
-                return no_device();
-            };
+            let shader =
+                shader_frames_around(&single, n, code).expect("the Vulkan device found before");
             let grid = Grid { n, coverage };
             let mut on_an_edge = 0;
             for (k, d) in directions.iter().enumerate() {

@@ -1,0 +1,84 @@
+//! The command-line tests that need a system package: the viewer's real window under a virtual
+//! X server (Xvfb). A missing package makes its test *ignored* — counted in the summary, the
+//! reason printed above it — or failed where `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets
+//! it.
+
+#[path = "../integration/common/mod.rs"]
+mod common;
+
+use common::{needs, scratch, stderr, trompe};
+use libtest_mimic::{Arguments, Trial};
+use std::path::Path;
+use trompe::frame::metrics;
+
+fn main() {
+    let args = Arguments::from_args();
+    let trials = vec![needs(
+        Trial::test(
+            "viewer::the_window_under_a_virtual_x_server_shows_the_headless_frame",
+            || {
+                the_window_under_a_virtual_x_server_shows_the_headless_frame();
+                Ok(())
+            },
+        ),
+        common::has_command("xvfb-run"),
+        "xvfb-run (package xvfb)",
+    )];
+    libtest_mimic::run(&args, trials).exit();
+}
+
+/// The viewer's window, driven by a script under Xvfb, shows what the headless viewer renders.
+pub fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
+    let dir = scratch("viewer-window");
+    let keys = dir.join("keys.txt");
+    std::fs::write(&keys, "0.0 tap 4\n1.0 tap F12\n").unwrap();
+    let (window, headless) = (dir.join("window"), dir.join("headless"));
+    let o = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_trompe"))
+        .args([
+            "view",
+            "scenes/teapot-in-bunny.toml",
+            "--size",
+            "160x120",
+            "--quit-after",
+            "2",
+        ])
+        .arg("--script")
+        .arg(&keys)
+        .arg("-o")
+        .arg(&window)
+        .current_dir(common::root())
+        .output()
+        .expect("xvfb-run runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let shot = std::fs::read_dir(&window)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("screenshot"))
+        })
+        .unwrap_or_else(|| panic!("no screenshot: {}", stderr(&o)));
+    let o = trompe(&[
+        "view",
+        "scenes/teapot-in-bunny.toml",
+        "--size",
+        "160x120",
+        "--frames",
+        "1",
+        "--script",
+        keys.to_str().unwrap(),
+        "-o",
+        headless.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
+    let score =
+        metrics::compare(&read(&headless.join("frame_0000.png")), &read(&shot), None).unwrap();
+    assert!(
+        score.flip < 0.01,
+        "window against headless: FLIP {}",
+        score.flip
+    );
+}
