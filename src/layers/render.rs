@@ -11,11 +11,11 @@
 
 use super::LayerSet;
 use crate::camera::Pinhole;
-use crate::frame::{FrameError, Image, Rgba, Wrap};
+use crate::frame::{FrameError, Image, Rgba};
 use crate::geom::Mesh;
 use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
 use crate::views::CalibratedView;
-use glam::{DVec2, DVec3, Vec2};
+use glam::{DVec2, DVec3};
 
 /// A layer set as a texturing source: each view answers through the layer that holds the
 /// point's triangle.
@@ -67,12 +67,7 @@ impl Source for Photographs<'_> {
         if !v.contains(px) {
             return None;
         }
-        let img = v.image.as_ref()?;
-        Some(img.sample_bilinear(
-            Vec2::new(px.x as f32, px.y as f32),
-            Wrap::Clamp,
-            Wrap::Clamp,
-        ))
+        v.colour_at(px)
     }
 
     fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {

@@ -8,7 +8,7 @@
 
 use super::CalibratedView;
 use super::visibility::DepthMap;
-use crate::frame::{FrameError, Image, Rgba, Wrap};
+use crate::frame::{FrameError, Image, Rgba};
 use crate::geom::Mesh;
 use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
 use glam::{DVec2, DVec3, Vec2, Vec4};
@@ -56,17 +56,13 @@ impl Source for ViewSource<'_> {
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
         let v = &self.views[view];
-        let img = v.image.as_ref()?;
         let (px, z) = v.project(at.position).unwrap_or((DVec2::ZERO, 0.0));
-        Some(if v.intrinsics.is_undistorted() {
-            sample_on_surface(img, self.depth[view].gd(), px, z)
+        if v.intrinsics.is_undistorted() {
+            let img = v.image.as_ref()?;
+            Some(sample_on_surface(img, self.depth[view].gd(), px, z))
         } else {
-            img.sample_bilinear(
-                Vec2::new(px.x as f32, px.y as f32),
-                Wrap::Clamp,
-                Wrap::Clamp,
-            )
-        })
+            v.colour_at(px)
+        }
     }
 
     fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {
@@ -125,11 +121,7 @@ pub fn undistorted_image(view: &CalibratedView) -> Option<Image<Rgba>> {
                 let n = DVec2::new((x as f64 + 0.5 - cx) / fx, (y as f64 + 0.5 - cy) / fy);
                 let px = view.intrinsics.pixel_of(n);
                 if view.contains(px) {
-                    *o = img.sample_bilinear(
-                        Vec2::new(px.x as f32, px.y as f32),
-                        Wrap::Clamp,
-                        Wrap::Clamp,
-                    );
+                    *o = view.colour_at(px).unwrap_or(Vec4::ZERO);
                 }
             }
         });

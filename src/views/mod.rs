@@ -148,6 +148,17 @@ impl CalibratedView {
         Some((px, p.z))
     }
 
+    /// The loaded image's colour at pixel `px`, bilinear, clamped at the edges; `None` when the
+    /// image is not loaded.
+    pub fn colour_at(&self, px: DVec2) -> Option<Rgba> {
+        let img = self.image.as_ref()?;
+        Some(img.sample_bilinear(
+            glam::Vec2::new(px.x as f32, px.y as f32),
+            crate::frame::Wrap::Clamp,
+            crate::frame::Wrap::Clamp,
+        ))
+    }
+
     /// Whether a pixel lies in the image.
     pub fn contains(&self, px: DVec2) -> bool {
         let (w, h) = self.intrinsics.size();

@@ -1,7 +1,7 @@
 //! `trompe layers build | render`: layered view-dependent projective textures (paper 4) on the
 //! command line — parse, call `trompe::layers`, print its report.
 
-use super::views::{RigArg, WeightsArg, parse_size};
+use super::views::{BlendArgs, RigArg, parse_size};
 use super::{bar, check_plan, refuse_foreign_folder};
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
@@ -10,7 +10,6 @@ use trompe::files::OutputPlan;
 use trompe::frame::io;
 use trompe::layers::{self, BuildSettings, OrderSettings, Ordering};
 use trompe::scene::Scene;
-use trompe::texturing::BlendSettings;
 
 /// `trompe layers …`.
 #[derive(Subcommand, Debug)]
@@ -178,12 +177,8 @@ pub struct RenderArgs {
     /// Fill the layers' hidden texels by push-pull before rendering (in memory only).
     #[arg(long)]
     fill: bool,
-    /// View weighting.
-    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
-    weights: WeightsArg,
-    /// Most views blended at a point.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
-    k: u32,
+    #[command(flatten)]
+    blend: BlendArgs,
     /// Output image (.png or .exr); pixels nothing textures are transparent.
     #[arg(short, long)]
     output: PathBuf,
@@ -205,11 +200,7 @@ impl RenderArgs {
             eprintln!("filled {n} hidden texels");
         }
         let camera = scene.camera.at(scene.render.time)?;
-        let settings = BlendSettings {
-            weighting: self.weights.weighting(),
-            k: self.k as usize,
-            ..BlendSettings::default()
-        };
+        let settings = self.blend.settings();
         let start = std::time::Instant::now();
         let blend = match self.method {
             TextureArg::Layered => layers::render::render(&camera, &set, &settings)?,

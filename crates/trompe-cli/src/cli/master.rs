@@ -1,7 +1,7 @@
 //! `trompe master encode|render|edit`: Master Texture Space (paper 5) on the command line —
 //! parse, call one `trompe::master::job` function, print its summary.
 
-use super::views::WeightsArg;
+use super::views::BlendArgs;
 use super::{bar, check_plan, load_mesh, refuse_foreign_folder};
 use anyhow::{Context, Result, bail};
 use clap::Subcommand;
@@ -64,12 +64,8 @@ pub struct MasterRenderArgs {
     /// A scene file whose camera to render from (its objects are ignored).
     #[arg(long)]
     scene: PathBuf,
-    /// View weighting.
-    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
-    weights: WeightsArg,
-    /// Most views blended at a point.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
-    k: u32,
+    #[command(flatten)]
+    blend: BlendArgs,
     /// Output image (.png or .exr).
     #[arg(short, long)]
     output: PathBuf,
@@ -150,11 +146,7 @@ impl MasterRenderArgs {
         let mesh = load_mesh(&self.mesh)?;
         let scene = Scene::load(&self.scene).context("loading the scene")?;
         let camera = scene.view(scene.render.time)?.camera;
-        let settings = trompe::views::BlendSettings {
-            weighting: self.weights.weighting(),
-            k: self.k as usize,
-            ..Default::default()
-        };
+        let settings = self.blend.settings();
         let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
         io::write_color(&self.output, &b.image)?;
         println!(

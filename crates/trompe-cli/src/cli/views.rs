@@ -75,6 +75,29 @@ impl WeightsArg {
     }
 }
 
+/// How a projective render blends its views: `--weights`, `--k` (shared by `views render`,
+/// `layers render` and `master render`, one renderer behind them).
+#[derive(clap::Args, Debug)]
+pub struct BlendArgs {
+    /// View weighting.
+    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
+    weights: WeightsArg,
+    /// Most views blended at a point.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    k: u32,
+}
+
+impl BlendArgs {
+    /// The library's settings.
+    pub(super) fn settings(&self) -> trompe::texturing::BlendSettings {
+        trompe::texturing::BlendSettings {
+            weighting: self.weights.weighting(),
+            k: self.k as usize,
+            ..Default::default()
+        }
+    }
+}
+
 /// `trompe views score`.
 #[derive(clap::Args, Debug)]
 pub struct ScoreArgs {
@@ -111,12 +134,8 @@ pub struct ViewsRenderArgs {
     /// A scene file whose camera to render from (its objects are ignored).
     #[arg(long)]
     scene: PathBuf,
-    /// Weighting.
-    #[arg(long, value_enum, default_value_t = WeightsArg::Ulr)]
-    weights: WeightsArg,
-    /// Most views blended at a point.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
-    k: u32,
+    #[command(flatten)]
+    blend: BlendArgs,
     /// Output image (.png or .exr); pixels no view sees are transparent.
     #[arg(short, long)]
     output: PathBuf,
@@ -226,11 +245,7 @@ impl ViewsRenderArgs {
         let scene = Scene::load(&self.scene).context("loading the scene")?;
         let camera = scene.view(scene.render.time)?.camera;
         let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;
-        let settings = trompe::views::BlendSettings {
-            weighting: self.weights.weighting(),
-            k: self.k as usize,
-            ..Default::default()
-        };
+        let settings = self.blend.settings();
         let b = trompe::views::blend::render(&camera, &mesh, &set.views, &depth, &settings, None)?;
         io::write_color(&self.output, &b.image)?;
         println!(
