@@ -15,7 +15,7 @@ use trompe::views::{blend, visibility::DepthMap};
 /// Least PSNR between the views' and the layers' renders, and between the views' and the
 /// masters', over the pixels both colour, for every weighting.
 const LAYERS_DB: f64 = 35.0;
-const MASTERS_DB: f64 = 36.0;
+const MASTERS_DB: f64 = 39.0;
 
 /// Pixels both renders coloured.
 fn both(a: &Image<Rgba>, b: &Image<Rgba>) -> Image<bool> {
@@ -100,10 +100,10 @@ fn views_layers_and_masters_render_alike_where_their_inputs_coincide() {
         // The layers hold the photographs' own texels; what differs is which texels count as
         // the surface near a silhouette: the views' depth test keeps a nearest texel where no
         // bilinear tap is within 5 % of the depth, a layer drops the view there (1 %, its own
-        // depth). Measured 37.14 dB (ULR).
+        // depth). Measured 37.1 (ULR) to 46.1 dB (best face).
         assert!(vl >= LAYERS_DB, "{name}: views against layers {vl:.2} dB");
         // Masters resample each photograph once more (view to atlas, at twice its
-        // resolution). Measured 40.93 dB (ULR).
+        // resolution). Measured 40.9 (ULR) to 48.6 dB (view map).
         assert!(vm >= MASTERS_DB, "{name}: views against masters {vm:.2} dB");
         for (what, b) in [("layers", &layers), ("masters", &masters)] {
             let extra = b.holes.abs_diff(views.holes);
