@@ -632,7 +632,7 @@ mod tests {
             .step_by(3)
             .flat_map(|y| (0..w).step_by(3).map(move |x| (y, x)))
         {
-            let uv = DVec2::new(px as f64 + 0.5, py as f64 + 0.5);
+            let uv = crate::frame::pixel_centre(px as f64, py as f64);
             let path = g.ray_path(uv, 4.0);
             assert!(path.len() >= 3, "{uv}: {path:?}");
             let mut last_gd = f64::INFINITY;

@@ -12,7 +12,7 @@ use crate::camera::{Pinhole, Projection};
 use crate::geom::{Mesh, Ray};
 use crate::impostor::Impostor;
 use crate::trace::{Bvh, RayQuery};
-use glam::{DVec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -164,7 +164,7 @@ pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
     let primary: Vec<(Ray, f32)> = (0..w * h)
         .into_par_iter()
         .map(|i| {
-            let r = view.ray(DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5));
+            let r = view.ray(crate::frame::pixel_centre((i % w) as f64, (i / w) as f64));
             (r, f32::INFINITY)
         })
         .collect();

@@ -7,7 +7,6 @@ use crate::frame::FrameError;
 use crate::geom::Mesh;
 use crate::raster::{NoAttributes, rasterize};
 use crate::trace::{Bvh, RayQuery};
-use glam::DVec2;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -41,7 +40,7 @@ pub fn raster_vs_bvh(mesh: &Mesh, size: u32) -> Result<RasterAgreement, FrameErr
         .zip(target.item.pixels())
         .enumerate()
         .map(|(i, (&gd, id))| {
-            let uv = DVec2::new((i as u32 % w) as f64 + 0.5, (i as u32 / w) as f64 + 0.5);
+            let uv = crate::frame::pixel_centre((i as u32 % w) as f64, (i as u32 / w) as f64);
             let hit = bvh.closest_hit(&cam.ray(uv), f32::INFINITY);
             let raster_covers = gd > 0.0;
             match hit {

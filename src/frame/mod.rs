@@ -18,6 +18,13 @@ use thiserror::Error;
 
 /// Offset of a pixel's centre from its integer corner (docs/conventions.md §1.1).
 pub const PIXEL_CENTER: f32 = 0.5;
+
+/// The centre of pixel (or texel) `(x, y)`: `(x + ½, y + ½)` ([`PIXEL_CENTER`]).
+#[inline]
+pub fn pixel_centre(x: f64, y: f64) -> glam::DVec2 {
+    let c = f64::from(PIXEL_CENTER);
+    glam::DVec2::new(x + c, y + c)
+}
 /// Object id of "nothing": an empty pixel or texel.
 pub const NO_OBJECT: u32 = u32::MAX;
 /// Object id of the environment (a hit at infinity).

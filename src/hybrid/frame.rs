@@ -16,7 +16,7 @@ use crate::render::shading::{lambert, lit};
 use crate::render::{RenderError, Tracer, shade_pixels};
 use crate::scene::{Scene, Surface, View};
 use crate::trace::{Bvh, Exact, Hit, RayQuery, SecondaryQuery};
-use glam::{DMat4, DVec2, DVec3, Mat3, Vec3};
+use glam::{DMat4, DVec3, Mat3, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -201,7 +201,7 @@ pub fn render_frame_from(
         .flat_map_iter(|y| {
             let bvh = &bvh;
             (0..w as usize).map(move |x| {
-                let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
                 bvh.closest_hit(&ray, f32::INFINITY)
             })
         })
@@ -756,7 +756,9 @@ mod tests {
         let gbuffer: Vec<Option<Hit>> = (0..80)
             .flat_map(|y| (0..120).map(move |x| (x, y)))
             .map(|(x, y)| {
-                let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let ray = view
+                    .camera
+                    .ray(crate::frame::pixel_centre(x as f64, y as f64));
                 bvh.closest_hit(&ray, f32::INFINITY)
             })
             .collect();

@@ -15,7 +15,7 @@
 use super::Impostor;
 use super::file::ImpostorFileError;
 use crate::frame::{Image, Rgba};
-use glam::{DVec2, Vec3};
+use glam::Vec3;
 use std::path::Path;
 
 /// Most grid vertices a side of the exported surface (a larger impostor is sampled every few
@@ -53,7 +53,7 @@ impl SurfaceGrid {
                     reach.push(0.0);
                     continue;
                 }
-                let uv = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                let uv = crate::frame::pixel_centre(x as f64, y as f64);
                 let texel = [(uv.x / w as f64) as f32, (uv.y / h as f64) as f32];
                 vertices.push(Some((
                     impostor.position_at(x, y),

@@ -216,7 +216,7 @@ impl Impostor {
         if gd <= 0.0 {
             return Vec3::ZERO;
         }
-        let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+        let centre = crate::frame::pixel_centre(x as f64, y as f64);
         self.camera.unproject(centre, gd as f64).as_vec3()
     }
 

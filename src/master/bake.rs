@@ -71,7 +71,7 @@ impl Baker {
                 if atlas.face[i] != t as u32 {
                     return false;
                 }
-                let (b1, b2) = place.barycentrics(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let (b1, b2) = place.barycentrics(crate::frame::pixel_centre(x as f64, y as f64));
                 b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0
             };
             let mut whole = true;

@@ -350,7 +350,7 @@ mod tests {
             let [x, y, w, h] = f.bbox;
             for yy in y..y + h {
                 for xx in x..x + w {
-                    let p = DVec2::new(xx as f64 + 0.5, yy as f64 + 0.5);
+                    let p = crate::frame::pixel_centre(xx as f64, yy as f64);
                     assert!(!(f.holds(p) && g.holds(p)), "faces {i} and {j} share {p}");
                 }
             }

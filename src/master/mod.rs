@@ -157,7 +157,7 @@ impl Atlas {
             let c = mesh.corners(t).map(|p| p.as_dvec3());
             for y in by..by + bh {
                 for x in bx..bx + bw {
-                    let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    let centre = crate::frame::pixel_centre(x as f64, y as f64);
                     if !place.holds(centre) {
                         continue;
                     }
@@ -513,7 +513,8 @@ mod tests {
                 continue;
             }
             let place = enc.atlas.layout.faces[f as usize];
-            let texel = DVec2::new((i % w as usize) as f64 + 0.5, (i / w as usize) as f64 + 0.5);
+            let texel =
+                crate::frame::pixel_centre((i % w as usize) as f64, (i / w as usize) as f64);
             // Inside the triangle (the gutter ring holds the nearest edge point instead).
             let (b1, b2) = place.barycentrics(texel);
             if b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0 {

@@ -97,7 +97,7 @@ impl OctahedralAtlas {
             .into_par_iter()
             .map(|k| {
                 let (x, y) = (k % w as usize, k / w as usize);
-                let ray = ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let ray = ray(crate::frame::pixel_centre(x as f64, y as f64));
                 let env = lighting.environment.radiance(ray.dir);
                 let Some(b) = self.blend(&frames, ray, parallax) else {
                     return env.extend(1.0);

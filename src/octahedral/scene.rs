@@ -17,7 +17,7 @@ use crate::geom::optics::facing;
 use crate::progress::{Progress, Timings};
 use crate::render::shading::surface_radiance;
 use crate::scene::{Scene, Surface};
-use glam::{DVec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 /// Errors drawing a scene from octahedral atlases.
@@ -119,7 +119,8 @@ impl SceneAtlases {
             .map(|y| {
                 let row = (0..w)
                     .map(|x| {
-                        let ray = camera.ray(DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5));
+                        let ray =
+                            camera.ray(crate::frame::pixel_centre(f64::from(x), f64::from(y)));
                         let mut found: Vec<(f64, usize, super::render::Blended)> = self
                             .atlases
                             .iter()

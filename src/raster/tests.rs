@@ -229,7 +229,7 @@ fn largest_position_error(world: &[Vec3], fragments: &Image<Option<Fragment>>) -
         .flatten()
         .map(|f| {
             let interp = world[0] * f.bary.x + world[1] * f.bary.y + world[2] * f.bary.z;
-            let uv = DVec2::new(f.x as f64 + 0.5, f.y as f64 + 0.5);
+            let uv = crate::frame::pixel_centre(f.x as f64, f.y as f64);
             let exact = Persp.unproject(uv, f.gd as f64).as_vec3();
             (interp - exact).length() / exact.length()
         })

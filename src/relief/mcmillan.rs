@@ -116,7 +116,7 @@ mod tests {
         let shift = m_t_inv * (src_cam.position() - dst.position());
         for (x, y) in [(3u32, 4u32), (20, 10), (40, 30), (47, 0)] {
             let delta = src.gd.get(x, y) as f64;
-            let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            let centre = crate::frame::pixel_centre(x as f64, y as f64);
             let point = src_cam.position() + (a * centre.x + b * centre.y + c) / delta;
             let p = homography * centre.extend(1.0) + shift * delta;
             let expect = dst.project(point).unwrap();

@@ -16,7 +16,7 @@ use crate::geom::optics::facing;
 use crate::render::Tracer;
 use crate::scene::{Lighting, RenderSettings, View};
 use crate::trace::{Bvh, Exact, Hit, RayQuery};
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -191,7 +191,7 @@ impl SoftwareShader {
             .par_rows_mut()
             .for_each(|(y, (color, depth, normal, id))| {
                 for x in 0..w as usize {
-                    let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                    let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
                     let hit = self
                         .scene
                         .closest_hit(&ray, f32::INFINITY)

@@ -68,7 +68,7 @@ pub fn draw(
         .map(|(y, (color, depth, normals, id))| {
             let mut drawn = 0;
             for x in cols.0..cols.1 {
-                let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
                 let dir = ray.dir.as_dvec3();
                 let along = dir.dot(frame.f);
                 if along >= 0.0 {

@@ -50,7 +50,7 @@ impl CriticalPairs {
         let g = grid as usize;
         let mut best: Vec<Option<(f64, CriticalTexel, CriticalTexel)>> = vec![None; g * g];
         let texel = |u: usize, v: usize| CriticalTexel {
-            at: DVec2::new(u as f64 + 0.5, v as f64 + 0.5),
+            at: crate::frame::pixel_centre(u as f64, v as f64),
             d: impostor.displacement(v * w + u),
         };
         for v in 0..h {

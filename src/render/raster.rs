@@ -11,7 +11,6 @@ use crate::geom::Ray;
 use crate::raster::{StoreFragment, rasterize};
 use crate::scene::{Lighting, RenderSettings, View};
 use crate::trace::{Bvh, EnvironmentOnly, Hit, RayQuery};
-use glam::DVec2;
 use rayon::prelude::*;
 
 /// What blocks the light in a raster frame: the scene's BVH when the scene has a light. Without
@@ -74,7 +73,9 @@ pub fn primary_hits(view: &View) -> Result<Vec<Option<crate::trace::Hit>>, Rende
         .map(|(i, f)| {
             let f = f.as_ref()?;
             let (x, y) = (i % w as usize, i / w as usize);
-            let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            let ray = view
+                .camera
+                .ray(crate::frame::pixel_centre(x as f64, y as f64));
             let mesh = &view.meshes[f.item.object as usize];
             let c = mesh.corners(f.item.triangle as usize);
             let b = f.bary;

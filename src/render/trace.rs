@@ -13,7 +13,7 @@ use crate::geom::Ray;
 use crate::geom::optics::facing;
 use crate::scene::{Lighting, RenderSettings, View};
 use crate::trace::{Hit, RayQuery, SecondaryQuery};
-use glam::{DVec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// A ray tracer over one view: primary rays (and rays that go into glass) answered by `P`,
@@ -160,7 +160,7 @@ pub fn shade_rows<P: RayQuery, S: SecondaryQuery + ?Sized>(
         .for_each(|(y, (color, depth, normal, id))| {
             let rays: Vec<(Ray, f32)> = (0..w as usize)
                 .map(|x| {
-                    let ray = camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                    let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
                     (ray, f32::INFINITY)
                 })
                 .collect();

@@ -28,7 +28,7 @@ use crate::progress::Progress;
 use crate::raster::{StoreFragment, rasterize};
 use crate::scene::{Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
-use glam::{DVec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -85,9 +85,9 @@ impl BackFaces {
                 let n =
                     (m.normals[a] * f.bary.x + m.normals[b] * f.bary.y + m.normals[c] * f.bary.z)
                         .normalize_or(m.face_normal(f.item.triangle as usize));
-                let uv = DVec2::new(
-                    (i % width as usize) as f64 + 0.5,
-                    (i / width as usize) as f64 + 0.5,
+                let uv = crate::frame::pixel_centre(
+                    (i % width as usize) as f64,
+                    (i / width as usize) as f64,
                 );
                 let t = camera.distance(uv, f64::from(f.gd)) as f32;
                 Some((glass[f.item.object as usize] as u32, t, n))

@@ -481,7 +481,7 @@ mod tests {
         assert!(g.frusta().len() <= MAX_FRUSTA);
         for py in (0..48).step_by(4) {
             for px in (0..48).step_by(4) {
-                let uv = glam::DVec2::new(px as f64 + 0.5, py as f64 + 0.5);
+                let uv = crate::frame::pixel_centre(px as f64, py as f64);
                 let mut last = f64::INFINITY;
                 for seg in g.ray_path(uv, 2.0).windows(2).skip(1) {
                     // Each segment from its start (the last one ends on a far plane or a

@@ -27,7 +27,7 @@ pub mod reflect;
 pub mod relief;
 pub mod walks;
 
-use glam::{DVec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -166,7 +166,7 @@ pub fn primary_rays(camera: &Pinhole) -> Vec<Ray> {
     let (w, h) = trompe::camera::Projection::resolution(camera);
     (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5)))
+        .map(|(x, y)| camera.ray(trompe::frame::pixel_centre(x as f64, y as f64)))
         .collect()
 }
 

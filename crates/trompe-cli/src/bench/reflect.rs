@@ -6,7 +6,6 @@
 //! (nothing deforms), as in the paper's interactive runs.
 
 use super::BenchError;
-use glam::DVec2;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use trompe::eval::fixtures::Shipped;
@@ -333,7 +332,9 @@ fn walk_lengths(scene: &Scene, t: f32, side: u32) -> Result<(u64, f64), BenchErr
     // Every fourth pixel each way: the longest path is a property of the scene, not of one ray.
     for y in (0..h).step_by(4) {
         for x in (0..w).step_by(4) {
-            let ray = view.camera.ray(DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+            let ray = view
+                .camera
+                .ray(trompe::frame::pixel_centre(x as f64, y as f64));
             let Some(hit) = bvh.closest_hit(&ray, f32::INFINITY) else {
                 continue;
             };
