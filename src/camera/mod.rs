@@ -27,6 +27,22 @@ pub use spoc::{SPOC_STRENGTH_RANGE, Spoc};
 use glam::{DVec2, DVec3, Vec3};
 use thiserror::Error;
 
+/// The orthonormal frame of a camera at `eye` looking at `target`, `up` roughly up (the one
+/// look-at basis every camera and calibrated pose is made with): `[forward, right, up]`, where
+/// `right = forward × up` and the true up is `right × forward`.
+pub fn look_at_basis(eye: DVec3, target: DVec3, up: DVec3) -> Result<[DVec3; 3], CameraError> {
+    let forward = (target - eye)
+        .try_normalize()
+        .ok_or(CameraError::Degenerate("look_at equals position"))?;
+    let right = forward
+        .cross(up)
+        .try_normalize()
+        .ok_or(CameraError::Degenerate(
+            "up is parallel to the view direction",
+        ))?;
+    Ok([forward, right, right.cross(forward)])
+}
+
 /// Where a world point lands in an image: continuous pixel coordinates and generalized depth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImagePoint {

@@ -40,16 +40,7 @@ impl Orthographic {
                 "half_height and depth must be positive",
             ));
         }
-        let dir = (target - eye)
-            .try_normalize()
-            .ok_or(CameraError::Degenerate("look_at equals position"))?;
-        let right = dir
-            .cross(up)
-            .try_normalize()
-            .ok_or(CameraError::Degenerate(
-                "up is parallel to the view direction",
-            ))?;
-        let true_up = right.cross(dir);
+        let [dir, right, true_up] = super::look_at_basis(eye, target, up)?;
         let s = 2.0 * half_height / height as f64;
         let (a, b) = (right * s, -true_up * s);
         let corner = eye - a * (width as f64 * 0.5) - b * (height as f64 * 0.5);

@@ -43,16 +43,7 @@ impl Pinhole {
                 "position, look_at and up must be finite",
             ));
         }
-        let forward = (target - eye)
-            .try_normalize()
-            .ok_or(CameraError::Degenerate("look_at equals position"))?;
-        let right = forward
-            .cross(up)
-            .try_normalize()
-            .ok_or(CameraError::Degenerate(
-                "up is parallel to the view direction",
-            ))?;
-        let true_up = right.cross(forward);
+        let [forward, right, true_up] = super::look_at_basis(eye, target, up)?;
         // Pixel size at unit distance; v grows downward (image origin top-left).
         let s = 2.0 * (fov_y_deg.to_radians() * 0.5).tan() / height as f64;
         let a = right * s;

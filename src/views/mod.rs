@@ -96,9 +96,9 @@ pub struct Pose {
 impl Pose {
     /// The pose of a camera at `centre` looking at `target`, `up` roughly up (camera `y` down).
     pub fn looking_at(centre: DVec3, target: DVec3, up: DVec3) -> Option<Pose> {
-        let z = (target - centre).try_normalize()?;
-        let x = z.cross(up).try_normalize()?;
-        let y = z.cross(x);
+        // Camera y is down: the basis's up, reversed.
+        let [z, x, up] = crate::camera::look_at_basis(centre, target, up).ok()?;
+        let y = -up;
         // Rows of R are the camera axes in world coordinates.
         let r = DMat3::from_cols(x, y, z).transpose();
         let rotation = DQuat::from_mat3(&r).normalize();
