@@ -162,15 +162,16 @@ impl ReliefFrame {
         if !(RESOLUTION_RANGE.0..=RESOLUTION_RANGE.1).contains(&resolution) {
             return Err(ReliefError::Resolution(resolution));
         }
-        let f = (eye - centre).normalize_or_zero();
         // Rows follow world "down" where they can (y up), else the z axis.
-        let up = if f.cross(DVec3::Y).length_squared() > 1e-6 {
+        let toward_eye = (eye - centre).normalize_or_zero();
+        let up = if toward_eye.cross(DVec3::Y).length_squared() > 1e-6 {
             DVec3::Y
         } else {
             DVec3::Z
         };
-        let right = up.cross(f).normalize();
-        let down = right.cross(f).normalize();
+        // The base plane faces the eye: the eye's look-at frame toward the centre, reversed.
+        let [forward, right, true_up] = crate::camera::look_at_basis(eye, centre, up)?;
+        let (f, down) = (-forward, (-true_up).normalize());
         let s = 2.0 * radius / resolution as f64;
         let (a, b) = (right * s, down * s);
         let half = resolution as f64 * 0.5;
