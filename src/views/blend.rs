@@ -4,7 +4,7 @@
 //! keeps to that surface ([`sample_on_surface`]). The renderer and the weights (VDTM, ULR, view
 //! map, best face) are [`crate::texturing`]'s.
 //!
-//! Invariant: a view without a loaded image, or the one left out, sees nothing.
+//! Invariant: a view without a loaded image or a depth map, or the one left out, sees nothing.
 
 use super::CalibratedView;
 use super::visibility::DepthMap;
@@ -51,7 +51,10 @@ impl Source for ViewSource<'_> {
     fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
         Some(view) != self.exclude
             && self.views[view].image.is_some()
-            && self.depth[view].sees(at.position, self.tolerance)
+            && self
+                .depth
+                .get(view)
+                .is_some_and(|d| d.sees(at.position, self.tolerance))
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
@@ -59,7 +62,7 @@ impl Source for ViewSource<'_> {
         let (px, z) = v.project(at.position).unwrap_or((DVec2::ZERO, 0.0));
         if v.intrinsics.is_undistorted() {
             let img = v.image.as_ref()?;
-            Some(sample_on_surface(img, self.depth[view].gd(), px, z))
+            Some(sample_on_surface(img, self.depth.get(view)?.gd(), px, z))
         } else {
             v.colour_at(px)
         }
