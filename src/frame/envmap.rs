@@ -137,7 +137,8 @@ fn downsample(src: &Image<Vec3>, size: (u32, u32)) -> Image<Vec3> {
         let mut out = Image::new(w, h, Vec3::ZERO).expect("constant size");
         for y in 0..h {
             for x in 0..w {
-                let st = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                let st = (super::pixel_centre(f64::from(x), f64::from(y)).as_vec2())
+                    / Vec2::new(w as f32, h as f32);
                 out.set(x, y, src.sample_uv_lonlat(st));
             }
         }
@@ -174,7 +175,8 @@ fn convolve_cosine(radiance: &Image<Vec3>) -> Image<Vec3> {
     let mut texels = Vec::with_capacity((sw * sh) as usize);
     for y in 0..sh {
         for x in 0..sw {
-            let uv = Vec2::new((x as f32 + 0.5) / sw as f32, (y as f32 + 0.5) / sh as f32);
+            let uv = super::pixel_centre(f64::from(x), f64::from(y)).as_vec2()
+                / Vec2::new(sw as f32, sh as f32);
             let d_omega = (2.0 * PI / sw as f32) * (PI / sh as f32) * (uv.y * PI).sin();
             texels.push((uv_to_direction(uv), src.get(x, y) * d_omega));
         }
@@ -183,10 +185,10 @@ fn convolve_cosine(radiance: &Image<Vec3>) -> Image<Vec3> {
     let mut out = Image::new(w, h, Vec3::ZERO).expect("constant size");
     for y in 0..h {
         for x in 0..w {
-            let n = uv_to_direction(Vec2::new(
-                (x as f32 + 0.5) / w as f32,
-                (y as f32 + 0.5) / h as f32,
-            ));
+            let n = uv_to_direction(
+                super::pixel_centre(f64::from(x), f64::from(y)).as_vec2()
+                    / Vec2::new(w as f32, h as f32),
+            );
             let mut sum = Vec3::ZERO;
             for (d, l) in &texels {
                 let c = n.dot(*d);

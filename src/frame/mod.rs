@@ -12,7 +12,7 @@ pub mod io;
 pub mod metrics;
 pub mod packed;
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{DVec2, Vec2, Vec3, Vec4};
 use std::ops::{Add, Mul};
 use thiserror::Error;
 
@@ -22,8 +22,13 @@ pub const PIXEL_CENTER: f32 = 0.5;
 /// The centre of pixel (or texel) `(x, y)`: `(x + ½, y + ½)` ([`PIXEL_CENTER`]).
 #[inline]
 pub fn pixel_centre(x: f64, y: f64) -> glam::DVec2 {
-    let c = f64::from(PIXEL_CENTER);
-    glam::DVec2::new(x + c, y + c)
+    glam::DVec2::new(texel_centre(x), texel_centre(y))
+}
+
+/// The centre of texel `i` along one axis: `i + ½` ([`PIXEL_CENTER`]).
+#[inline]
+pub fn texel_centre(i: f64) -> f64 {
+    i + f64::from(PIXEL_CENTER)
 }
 /// Object id of "nothing": an empty pixel or texel.
 pub const NO_OBJECT: u32 = u32::MAX;
@@ -292,6 +297,37 @@ impl<T: Lerp> Image<T> {
         let (y0, ty) = floor_and_fraction(uv.y - PIXEL_CENTER);
         let (xa, xb) = texel_pair(x0, self.width, wrap_x);
         let (ya, yb) = texel_pair(y0, self.height, wrap_y);
+        self.blend_taps((xa, xb), (ya, yb), (tx, ty))
+    }
+
+    /// Bilinear lookup inside one tile of an atlas, as if the tile were the whole image: the
+    /// `size` texels from `origin`, at tile texel coordinates `uv` (centres at `+½`), clamped to
+    /// the tile's border texels so that a lookup never reads a neighbouring tile.
+    ///
+    /// Panics if the tile is empty or does not lie inside the image.
+    pub fn sample_bilinear_tile(&self, origin: (u32, u32), size: (u32, u32), uv: DVec2) -> T {
+        assert!(size.0 > 0 && size.1 > 0, "a tile holds at least one texel");
+        assert!(
+            u64::from(origin.0) + u64::from(size.0) <= u64::from(self.width)
+                && u64::from(origin.1) + u64::from(size.1) <= u64::from(self.height),
+            "the tile lies inside the image"
+        );
+        let axis = |c: f64, n: u32, o: u32| {
+            let f = c - f64::from(PIXEL_CENTER);
+            let i = f.floor();
+            // Clamp in floats first: a coordinate far outside stays a valid integer.
+            let i0 = i.clamp(-1.0, f64::from(n)) as i64;
+            let (a, b) = texel_pair(i0, n, Wrap::Clamp);
+            ((a + o, b + o), (f - i) as f32)
+        };
+        let (xs, tx) = axis(uv.x, size.0, origin.0);
+        let (ys, ty) = axis(uv.y, size.1, origin.1);
+        self.blend_taps(xs, ys, (tx, ty))
+    }
+
+    /// The four taps `(xa | xb) × (ya | yb)` blended with weights `t`.
+    #[inline]
+    fn blend_taps(&self, (xa, xb): (u32, u32), (ya, yb): (u32, u32), (tx, ty): (f32, f32)) -> T {
         let top = self.get(xa, ya) * (1.0 - tx) + self.get(xb, ya) * tx;
         let bottom = self.get(xa, yb) * (1.0 - tx) + self.get(xb, yb) * tx;
         top * (1.0 - ty) + bottom * ty
@@ -492,6 +528,41 @@ mod tests {
                 < 1e-6
         );
         assert_eq!(img.sample_nearest(Vec2::new(1.9, 0.2)), 1.0);
+    }
+
+    #[test]
+    fn a_tile_lookup_is_the_lookup_of_the_tile_cut_out_and_never_reads_its_neighbours() {
+        // A 3 × 2 atlas of 4 × 3 tiles, each texel a distinct value.
+        let texel = |x: u32, y: u32| Vec3::new(x as f32, y as f32, (x * 7 + y) as f32);
+        let image = |w: u32, h: u32, at: &dyn Fn(u32, u32) -> Vec3| {
+            let data = (0..w * h).map(|i| at(i % w, i / w)).collect();
+            Image::from_vec(w, h, data).unwrap()
+        };
+        let atlas = image(12, 6, &texel);
+        let (origin, size) = ((4, 3), (4, 3));
+        let tile = image(4, 3, &|x, y| texel(x + 4, y + 3));
+        for uv in [
+            DVec2::new(0.5, 0.5),
+            DVec2::new(1.25, 2.0),
+            DVec2::new(3.9, 0.1),
+            DVec2::new(-5.0, 1.5),
+            DVec2::new(2.2, 40.0),
+            DVec2::new(f64::NAN, 1.0),
+        ] {
+            let in_atlas = atlas.sample_bilinear_tile(origin, size, uv);
+            let alone = tile.sample_bilinear(uv.as_vec2(), Wrap::Clamp, Wrap::Clamp);
+            if uv.x.is_nan() {
+                // A NaN coordinate blends to NaN, as the whole-image lookup does: no panic.
+                assert!(in_atlas.is_nan() && alone.is_nan());
+                continue;
+            }
+            assert!(
+                (in_atlas - alone).abs().max_element() < 1e-5,
+                "{uv}: {in_atlas} {alone}"
+            );
+            // Inside the tile's value range: no neighbour's texel mixed in.
+            assert!((4.0..=7.0).contains(&in_atlas.x) && (3.0..=5.0).contains(&in_atlas.y));
+        }
     }
 
     #[test]

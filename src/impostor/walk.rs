@@ -23,6 +23,7 @@
 use super::path::ImagePath;
 use super::{Impostor, ImpostorCamera};
 use crate::camera::{ImagePoint, Projection};
+use crate::frame::pixel_centre;
 use crate::geom::Ray;
 use crate::trace::{Hit, RayQuery};
 use glam::{BVec3, DVec2, DVec3, Vec2, Vec3};
@@ -369,7 +370,7 @@ impl Impostor {
             position: x.as_vec3(),
             normal,
             geometric_normal: self.face_normal_at(tx, ty),
-            uv: Vec2::new(tx as f32 + 0.5, ty as f32 + 0.5),
+            uv: pixel_centre(f64::from(tx), f64::from(ty)).as_vec2(),
             bary: Vec2::ZERO,
             object: self.object.get(tx, ty),
             triangle: 0,

@@ -12,7 +12,7 @@
 use super::bake::{FrameProjection, OctahedralAtlas};
 use super::mapping::frame_basis;
 use crate::camera::Pinhole;
-use crate::frame::{Image, Rgba};
+use crate::frame::{Image, Lerp, Rgba};
 use crate::geom::Ray;
 use crate::render::shading::lambert;
 use crate::scene::Lighting;
@@ -190,19 +190,8 @@ impl OctahedralAtlas {
 
     /// Bilinear lookup of frame `(i, j)` of `img` at frame texel coordinates `uv` (texel
     /// centres at `+½`), clamped to the frame.
-    fn bilinear<T>(&self, img: &Image<T>, i: u32, j: u32, uv: DVec2) -> T
-    where
-        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
-    {
+    fn bilinear<T: Lerp>(&self, img: &Image<T>, i: u32, j: u32, uv: DVec2) -> T {
         let s = self.settings.frame_size;
-        let max = f64::from(s - 1);
-        let p = (uv - DVec2::splat(0.5)).clamp(DVec2::ZERO, DVec2::splat(max));
-        let (x0, y0) = (p.x.floor() as u32, p.y.floor() as u32);
-        let (x1, y1) = ((x0 + 1).min(s - 1), (y0 + 1).min(s - 1));
-        let (fx, fy) = ((p.x - f64::from(x0)) as f32, (p.y - f64::from(y0)) as f32);
-        let (ox, oy) = (i * s, j * s);
-        let g = |x: u32, y: u32| img.get(ox + x, oy + y);
-        (g(x0, y0) * (1.0 - fx) + g(x1, y0) * fx) * (1.0 - fy)
-            + (g(x0, y1) * (1.0 - fx) + g(x1, y1) * fx) * fy
+        img.sample_bilinear_tile((i * s, j * s), (s, s), uv)
     }
 }

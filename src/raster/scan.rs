@@ -3,6 +3,7 @@
 
 use super::setup::{ONE, ScreenTri};
 use super::{Fragment, FragmentShader, ItemId, RasterStats};
+use crate::frame::texel_centre;
 use glam::Vec3;
 
 /// The rows `first_row ..` of every target buffer, owned by one worker.
@@ -68,11 +69,11 @@ impl<T: Copy> Band<'_, T> {
         for y in y0..=y1 {
             let mut w = [e[0].value, e[1].value, e[2].value];
             let row = (y - self.first_row) as usize * self.width as usize;
-            let dy = y as f64 + 0.5 - t.origin.y;
+            let dy = texel_centre(f64::from(y)) - t.origin.y;
             for x in x0..=x1 {
                 if (w[0] | w[1] | w[2]) >= 0 {
                     stats.fragments += 1;
-                    let dx = x as f64 + 0.5 - t.origin.x;
+                    let dx = texel_centre(f64::from(x)) - t.origin.x;
                     let gd = gd_p.f0 + gd_p.dfdx * dx + gd_p.dfdy * dy;
                     let idx = row + x as usize;
                     let gd32 = gd as f32;
@@ -130,10 +131,10 @@ pub(super) fn cover(
     let gd_p = t.planes[0];
     for y in y0..=y1 {
         let mut w = [e[0].value, e[1].value, e[2].value];
-        let dy = y as f64 + 0.5 - t.origin.y;
+        let dy = texel_centre(f64::from(y)) - t.origin.y;
         for x in x0..=x1 {
             if (w[0] | w[1] | w[2]) >= 0 {
-                let dx = x as f64 + 0.5 - t.origin.x;
+                let dx = texel_centre(f64::from(x)) - t.origin.x;
                 let gd = gd_p.f0 + gd_p.dfdx * dx + gd_p.dfdy * dy;
                 out(y as usize * width as usize + x as usize, gd as f32);
             }

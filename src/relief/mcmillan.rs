@@ -9,8 +9,7 @@
 //! z-buffer, equivalent to McMillan's occlusion-compatible order for one-pixel splats).
 
 use crate::camera::{Pinhole, Projection};
-use crate::frame::{FrameError, Image, Rgba};
-use glam::DVec3;
+use crate::frame::{FrameError, Image, Rgba, pixel_centre};
 
 /// A perspective depth image: colour and generalized disparity per pixel (0 = empty).
 #[derive(Clone, Debug)]
@@ -39,7 +38,7 @@ pub fn warp(source: &DepthImage, target: &Pinhole) -> Result<DepthImage, FrameEr
             if delta <= 0.0 {
                 continue;
             }
-            let p = homography * DVec3::new(x as f64 + 0.5, y as f64 + 0.5, 1.0) + shift * delta;
+            let p = homography * pixel_centre(x as f64, y as f64).extend(1.0) + shift * delta;
             if p.z <= 0.0 {
                 continue;
             }
@@ -72,11 +71,12 @@ mod tests {
         let (w, h) = camera.resolution();
         let mut color = Image::new(w, h, Rgba::ZERO).unwrap();
         let mut gd = Image::new(w, h, 0.0).unwrap();
-        let (n, off) = (DVec3::new(0.2, 0.1, 1.0).normalize(), -0.3);
+        let (n, off) = (glam::DVec3::new(0.2, 0.1, 1.0).normalize(), -0.3);
         let (a, b, c) = camera.mcmillan();
         for y in 0..h {
             for x in 0..w {
-                let dir = a * (x as f64 + 0.5) + b * (y as f64 + 0.5) + c;
+                let centre = pixel_centre(x as f64, y as f64);
+                let dir = a * centre.x + b * centre.y + c;
                 // Plane n·X = off: t = (off − n·C) / n·dir.
                 let t = (off - n.dot(camera.position())) / n.dot(dir);
                 let p = camera.position() + dir * t;

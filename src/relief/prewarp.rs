@@ -19,6 +19,7 @@
 //! bit-identical images to the direct one.
 
 use super::{ReliefImpostor, Srgba8};
+use crate::frame::texel_centre;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -303,7 +304,7 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
         Some(t) => {
             let (a, b) = (
                 |i: usize, d: f32, code: u8, off: bool| {
-                    let u = i as f64 + 0.5;
+                    let u = texel_centre(i as f64);
                     if off {
                         return k.warp_u(u, d as f64);
                     }
@@ -311,7 +312,7 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
                     (!s.is_nan()).then(|| (u + t.coef1[code as usize]) * s)
                 },
                 |i: usize, d: f32, code: u8, off: bool| {
-                    let v = i as f64 + 0.5;
+                    let v = texel_centre(i as f64);
                     if off {
                         return k.warp_v(v, d as f64);
                     }
@@ -324,8 +325,8 @@ pub fn prewarp(impostor: &ReliefImpostor, eye: Eye, lut: bool) -> Option<Prewarp
             (p1.1, p2)
         }
         None => {
-            let a = |i: usize, d: f32, _: u8, _: bool| k.warp_u(i as f64 + 0.5, d as f64);
-            let b = |i: usize, d: f32, _: u8, _: bool| k.warp_v(i as f64 + 0.5, d as f64);
+            let a = |i: usize, d: f32, _: u8, _: bool| k.warp_u(texel_centre(i as f64), d as f64);
+            let b = |i: usize, d: f32, _: u8, _: bool| k.warp_v(texel_centre(i as f64), d as f64);
             let p1 = pass(&src, w + 2 * mx, mx, k.epipole.0, &a);
             let p2 = pass(&p1.0.transposed(), h + 2 * my, my, k.epipole.1, &b);
             (p1.1, p2)
@@ -496,7 +497,7 @@ impl Line<'_> {
         }
         let inv = 1.0 / (q.x - p.x);
         for j in first..end {
-            let centre = (j - self.offset) as f64 + 0.5;
+            let centre = texel_centre((j - self.offset) as f64);
             let s = ((centre - p.x) * inv).clamp(0.0, 1.0) as f32;
             let j = j as usize;
             self.color[j] = lerp8(p.color, q.color, s);

@@ -10,7 +10,7 @@
 
 use super::{DepthEncoding, Displacements, ReliefError, ReliefFrame, ReliefImpostor};
 use crate::camera::{Pinhole, Projection};
-use crate::frame::Frame;
+use crate::frame::{Frame, pixel_centre};
 use crate::geom::Ray;
 use crate::geom::optics::facing;
 use crate::render::Tracer;
@@ -128,7 +128,10 @@ impl SoftwareShader {
                 return Ok(None);
             }
             for u in 0..n {
-                let start = frame.point(u as f64 + 0.5, v as f64 + 0.5, top);
+                let start = {
+                    let c = pixel_centre(u as f64, v as f64);
+                    frame.point(c.x, c.y, top)
+                };
                 let ray = Ray::new(start.as_vec3(), (-frame.f).as_vec3());
                 let Some(hit) = bvh.closest_hit(&ray, (frame.max_depth * 1.0002) as f32) else {
                     continue;

@@ -8,7 +8,7 @@
 
 use super::CalibratedView;
 use super::visibility::DepthMap;
-use crate::frame::{FrameError, Image, Rgba};
+use crate::frame::{FrameError, Image, Rgba, pixel_centre};
 use crate::geom::Mesh;
 use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
 use glam::{DVec2, DVec3, Vec2, Vec4};
@@ -121,7 +121,8 @@ pub fn undistorted_image(view: &CalibratedView) -> Option<Image<Rgba>> {
         .enumerate()
         .for_each(|(y, row)| {
             for (x, o) in row.iter_mut().enumerate() {
-                let n = DVec2::new((x as f64 + 0.5 - cx) / fx, (y as f64 + 0.5 - cy) / fy);
+                let n =
+                    (pixel_centre(x as f64, y as f64) - DVec2::new(cx, cy)) / DVec2::new(fx, fy);
                 let px = view.intrinsics.pixel_of(n);
                 if view.contains(px) {
                     *o = view.colour_at(px).unwrap_or(Vec4::ZERO);

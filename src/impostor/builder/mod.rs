@@ -21,7 +21,7 @@ use super::{Impostor, ImpostorCamera};
 use crate::camera::Spoc;
 use crate::camera::{ImagePoint, Projection};
 use crate::frame::packed::{HalfRgba, OctUnit, OpaquePacker, ZERO_UNIT, pack_unit};
-use crate::frame::{FrameError, Image};
+use crate::frame::{FrameError, Image, texel_centre};
 use crate::geom::NO_OBJECT;
 use crate::geom::{Aabb, Material, Mesh};
 use crate::raster::{

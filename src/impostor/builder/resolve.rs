@@ -153,9 +153,9 @@ pub(super) fn resolve_run<F, V>(
         empty_texels(run, row_start..x0, *before);
         empty_texels(run, x1..row_end, *before);
         // The image row of this run row, for a SPOC's texel centres.
-        let image_row = depth
-            .as_ref()
-            .map_or(0.0, |d| ((d.first_pixel + row_start) / width) as f64 + 0.5);
+        let image_row = depth.as_ref().map_or(0.0, |d| {
+            texel_centre(((d.first_pixel + row_start) / width) as f64)
+        });
         for x in x0..x1 {
             // The triangles of texels a little ahead, on their way from memory (see
             // `crate::prefetch`): the triangle's indices first, its corners once they are here.
@@ -187,7 +187,7 @@ pub(super) fn resolve_run<F, V>(
                 face
             });
             if let Some(d) = depth.as_mut() {
-                let centre = DVec2::new((x - row_start) as f64 + 0.5, image_row);
+                let centre = DVec2::new(texel_centre((x - row_start) as f64), image_row);
                 let (n, p) = (face.as_dvec3(), s.position.as_dvec3());
                 if let Some(gd) = d.spoc.gd_on_plane(centre, n, p, d.gd[x] as f64) {
                     d.gd[x] = gd as f32;

@@ -101,7 +101,8 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let (cx, cy, r) = (w as f32 * 0.42, h as f32 * 0.38, h as f32 * 0.09);
     for y in 0..h {
         for x in 0..w {
-            let (dx, dy) = (x as f32 + 0.5 - cx, y as f32 + 0.5 - cy);
+            let c = trompe::frame::pixel_centre(f64::from(x), f64::from(y)).as_vec2();
+            let (dx, dy) = (c.x - cx, c.y - cy);
             if dx * dx + dy * dy < r * r && painted.get(x, y).w > 0.0 {
                 painted.set(x, y, Vec4::new(0.05, 0.15, 0.85, 1.0));
             }
