@@ -79,6 +79,36 @@ impl Bvh {
         self.corners.len()
     }
 
+    /// The hierarchy's nodes, root first: obvhs's compressed wide nodes (80 bytes each, `Pod`),
+    /// for walkers outside this crate (the GPU tracer uploads them as they are).
+    pub fn wide_nodes(&self) -> &[obvhs::cwbvh::node::CwBvhNode] {
+        &self.bvh.nodes
+    }
+
+    /// The triangles' corners in the order the nodes' leaves index them.
+    pub fn leaf_corners(&self) -> &[[Vec3; 3]] {
+        &self.corners
+    }
+
+    /// `(object, triangle)` of each leaf-ordered triangle.
+    pub fn leaf_sources(&self) -> &[(u32, u32)] {
+        &self.source
+    }
+
+    /// The hit of `ray` on leaf-ordered triangle `leaf` at distance `t` with barycentrics
+    /// `(b1, b2)` of corners 1 and 2: the same surface point a query here would have made, for
+    /// a hit found elsewhere (on the GPU). `None` when `leaf` is not a triangle of this BVH.
+    pub fn hit_on_leaf(&self, leaf: u32, ray: &Ray, t: f32, bary: Vec2) -> Option<Hit> {
+        let &(o, tri) = self.source.get(leaf as usize)?;
+        Some(surface_hit(
+            &self.meshes[o as usize],
+            o,
+            tri,
+            ray,
+            TriangleHit { t, bary },
+        ))
+    }
+
     fn obvhs_ray(ray: &Ray, t_max: f32) -> obvhs::ray::Ray {
         // `+ 0.0` turns −0.0 components into +0.0: obvhs 0.4 picks the traversal octant with
         // `d < 0.0` (so −0.0 counts as positive) but inverts −0.0 to −1/ε, and the two disagree:

@@ -1,0 +1,23 @@
+//! trompe on the GPU: a device layer on wgpu and the library's methods run where their papers
+//! ran them, each checked against its CPU twin in the library.
+//!
+//! - [`device`]: which adapter, found by backend, name and kind; its report; a clear error when
+//!   there is none.
+//! - [`bvh`]: the exact ray query (the library's BVH walked by a compute shader), the GPU's
+//!   ground truth and the peer every GPU method is timed against.
+//!
+//! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
+//! uploads and runs, and answers come back as the library's types.
+//!
+//! ```no_run
+//! use trompe_gpu::GpuRequest;
+//! let gpu = GpuRequest::new().open()?;
+//! println!("{}", gpu.report());
+//! # Ok::<(), trompe_gpu::GpuError>(())
+//! ```
+
+pub mod bvh;
+pub mod device;
+
+pub use bvh::GpuBvh;
+pub use device::{AdapterReport, Backends, Gpu, GpuError, GpuRequest, adapters};

@@ -1,0 +1,101 @@
+//! The GPU crate's tests: each runs the GPU path on a real adapter (Mesa's lavapipe runs the same
+//! shaders on the CPU) and checks it against the library's CPU answer. Without any adapter a
+//! test is *ignored* — counted in the summary, the reason printed above it — or failed where
+//! `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets it.
+
+mod bvh;
+
+use libtest_mimic::{Arguments, Failed, Trial};
+use trompe_gpu::{Gpu, GpuRequest};
+
+/// A test function over an open device as a trial: a panic fails it.
+fn on_gpu(name: &str, test: fn(&Gpu)) -> Trial {
+    Trial::test(name, move || -> Result<(), Failed> {
+        let gpu = GpuRequest::new().open().map_err(|e| e.to_string())?;
+        test(&gpu);
+        Ok(())
+    })
+}
+
+/// A test that needs no device.
+fn plain(name: &str, test: fn()) -> Trial {
+    Trial::test(name, move || -> Result<(), Failed> {
+        test();
+        Ok(())
+    })
+}
+
+fn main() {
+    let args = Arguments::from_args();
+    let adapters = trompe_gpu::adapters(trompe_gpu::Backends::All);
+    match adapters.first() {
+        Some(a) => println!("the GPU tests run on {} ({})", a.name, a.backend),
+        None => println!("no GPU adapter found"),
+    }
+    let device_trials = [
+        on_gpu(
+            "bvh::the_gpu_walk_hits_the_cpu_bvhs_triangles_on_ten_thousand_incoherent_rays",
+            bvh::the_gpu_walk_hits_the_cpu_bvhs_triangles_on_ten_thousand_incoherent_rays,
+        ),
+        on_gpu(
+            "bvh::shadow_rays_agree_with_the_cpu_any_hit",
+            bvh::shadow_rays_agree_with_the_cpu_any_hit,
+        ),
+        on_gpu(
+            "bvh::the_same_rays_give_the_same_bits_on_repeated_runs",
+            bvh::the_same_rays_give_the_same_bits_on_repeated_runs,
+        ),
+        on_gpu(
+            "bvh::an_empty_scene_misses_and_no_rays_is_no_work",
+            bvh::an_empty_scene_misses_and_no_rays_is_no_work,
+        ),
+    ];
+    let mut trials = vec![
+        plain(
+            "bvh::the_shader_parses_and_validates",
+            bvh::the_shader_parses_and_validates,
+        ),
+        plain(
+            "device::an_adapter_that_cannot_be_had_is_an_error_naming_what_was_looked_for",
+            an_adapter_that_cannot_be_had_is_an_error_naming_what_was_looked_for,
+        ),
+    ];
+    trials.extend(
+        device_trials
+            .into_iter()
+            .map(|t| needs_adapter(t, !adapters.is_empty())),
+    );
+    libtest_mimic::run(&args, trials).exit();
+}
+
+/// `trial` as it is where an adapter is present; otherwise ignored (counted), or failed under
+/// `TROMPE_REQUIRE_SYSTEM`.
+fn needs_adapter(trial: Trial, present: bool) -> Trial {
+    const WHAT: &str =
+        "a GPU adapter (without a GPU: Mesa's lavapipe, package mesa-vulkan-drivers)";
+    if present {
+        return trial;
+    }
+    let name = trial.name().to_string();
+    if std::env::var_os("TROMPE_REQUIRE_SYSTEM").is_some() {
+        return Trial::test(name, move || {
+            Err(format!(
+                "{WHAT} is missing, and TROMPE_REQUIRE_SYSTEM is set (.ci/run installs it)"
+            )
+            .into())
+        });
+    }
+    println!("ignored {name}: {WHAT} is missing (.ci/run installs it)");
+    trial.with_ignored_flag(true)
+}
+
+/// Asking for an adapter nobody has is an error (not a panic) that says what was looked for
+/// and what was found.
+fn an_adapter_that_cannot_be_had_is_an_error_naming_what_was_looked_for() {
+    let error = match GpuRequest::new().named("no such adapter 7f3a").open() {
+        Ok(gpu) => panic!("opened {}", gpu.name()),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.contains("no such adapter 7f3a"), "{error}");
+    assert!(error.starts_with("no GPU adapter found"), "{error}");
+}
