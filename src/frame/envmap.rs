@@ -84,6 +84,22 @@ impl EnvMap {
     pub fn image(&self) -> &Image<Vec3> {
         &self.radiance
     }
+
+    /// The cosine-convolved irradiance grid [`EnvMap::irradiance`] looks up (longitude ×
+    /// latitude, texel centres at `((x + ½)/W, (y + ½)/H)`).
+    pub fn irradiance_image(&self) -> &Image<Vec3> {
+        &self.irradiance
+    }
+
+    /// Rotation about `y`, in radians.
+    pub fn rotation(&self) -> f32 {
+        self.rotation
+    }
+
+    /// The factor every lookup is scaled by.
+    pub fn intensity(&self) -> f32 {
+        self.intensity
+    }
 }
 
 /// `d` (unit) ↦ equirectangular `(u, v)`.

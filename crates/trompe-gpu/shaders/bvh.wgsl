@@ -29,12 +29,14 @@ struct Hit {
 
 struct Params {
     rays: u32,
-    nodes: u32,
     any_hit: u32,
+    _pad: u32,
     // Rays a row of workgroups covers, for dispatches wider than one dimension allows.
     row: u32,
 }
 
+// The hierarchy (bindings 0 and 1) is all `query` reads: a shader that includes this file binds
+// its own inputs from binding 5 on.
 @group(0) @binding(0) var<storage, read> nodes: array<u32>;
 @group(0) @binding(1) var<storage, read> corners: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> rays: array<Ray>;
@@ -158,7 +160,8 @@ fn intersect_triangle(origin: vec3<f32>, d: vec3<f32>, k: u32, t_max: f32) -> ve
 // The closest hit along `ray` below its t_max (any hit, the first found, when `any_hit`).
 fn query(ray: Ray, any_hit: bool) -> Hit {
     var best = Hit(ray.t_max, MISS, 0.0, 0.0);
-    if (params.nodes == 0u) {
+    // An empty hierarchy is bound as one padding word short of a node.
+    if (arrayLength(&nodes) < NODE_WORDS) {
         return best;
     }
     let dir = ray.dir;

@@ -50,8 +50,8 @@ pub const MISS: u32 = u32::MAX;
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct Params {
     rays: u32,
-    nodes: u32,
     any_hit: u32,
+    _pad: u32,
     row: u32,
 }
 
@@ -61,7 +61,6 @@ pub struct GpuBvh<'a> {
     bvh: &'a Bvh,
     nodes: wgpu::Buffer,
     corners: wgpu::Buffer,
-    node_count: u32,
     pipeline: wgpu::ComputePipeline,
 }
 
@@ -79,30 +78,20 @@ impl<'a> GpuBvh<'a> {
         gpu.check_storage("the BVH's triangles", corner_bytes.len() as u64)?;
         let nodes = gpu.storage_with("bvh nodes", node_bytes);
         let corners = gpu.storage_with("bvh corners", corner_bytes);
-        let module = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("bvh.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-            });
-        let pipeline = gpu
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("trace_rays"),
-                layout: None,
-                module: &module,
-                entry_point: Some("trace_rays"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+        let pipeline = gpu.compute_pipeline("bvh.wgsl", SHADER, "trace_rays");
         Ok(GpuBvh {
             gpu,
             bvh,
             nodes,
             corners,
-            node_count: bvh.wide_nodes().len() as u32,
             pipeline,
         })
+    }
+
+    /// The node and triangle-corner buffers, for shaders that include `shaders/bvh.wgsl`
+    /// (bindings 0 and 1).
+    pub(crate) fn buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        (&self.nodes, &self.corners)
     }
 
     /// The closest hit of every ray below `t_max`, as the library's hits.
@@ -159,8 +148,8 @@ impl<'a> GpuBvh<'a> {
         let row_groups = groups.min(gpu.max_groups());
         let params = Params {
             rays: rays.len() as u32,
-            nodes: self.node_count,
             any_hit: u32::from(any_hit),
+            _pad: 0,
             row: row_groups * GROUP,
         };
         let ray_buffer = gpu.storage_with("rays", ray_bytes);

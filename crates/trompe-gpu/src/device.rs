@@ -40,6 +40,15 @@ pub enum GpuError {
         /// The adapter's name.
         adapter: String,
     },
+    /// The GPU path does not do what was asked.
+    #[error("the GPU cannot render this: {what}")]
+    Unsupported {
+        /// What it cannot do, and its limit.
+        what: String,
+    },
+    /// The frame's size is not a valid image size.
+    #[error(transparent)]
+    Frame(#[from] trompe::frame::FrameError),
     /// Reading results back from the device failed.
     #[error("reading {what} back from {adapter} failed: {reason}")]
     Readback {
@@ -332,6 +341,30 @@ impl Gpu {
             .to_vec();
         staging.unmap();
         Ok(bytes)
+    }
+
+    /// The compute pipeline of entry point `entry` of WGSL `source`.
+    pub(crate) fn compute_pipeline(
+        &self,
+        label: &str,
+        source: &str,
+        entry: &str,
+    ) -> wgpu::ComputePipeline {
+        let module = self
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        self.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
     }
 
     /// The largest number of workgroups one dispatch may have along x.

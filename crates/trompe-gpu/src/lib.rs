@@ -5,6 +5,7 @@
 //!   there is none.
 //! - [`bvh`]: the exact ray query (the library's BVH walked by a compute shader), the GPU's
 //!   ground truth and the peer every GPU method is timed against.
+//! - [`trace`]: the `trace` method (Whitted ray tracing, hard shadows) as one compute shader.
 //!
 //! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
 //! uploads and runs, and answers come back as the library's types.
@@ -18,6 +19,7 @@
 
 pub mod bvh;
 pub mod device;
+pub mod trace;
 
 pub use bvh::GpuBvh;
 pub use device::{AdapterReport, Backends, Gpu, GpuError, GpuRequest, adapters};

@@ -4,6 +4,7 @@
 //! `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets it.
 
 mod bvh;
+mod trace;
 
 use libtest_mimic::{Arguments, Failed, Trial};
 use trompe_gpu::{Gpu, GpuRequest};
@@ -48,6 +49,10 @@ fn main() {
         on_gpu(
             "bvh::an_empty_scene_misses_and_no_rays_is_no_work",
             bvh::an_empty_scene_misses_and_no_rays_is_no_work,
+        ),
+        on_gpu(
+            "trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu",
+            trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu,
         ),
     ];
     let mut trials = vec![
