@@ -71,10 +71,15 @@ pub enum Command {
         mask: Option<PathBuf>,
     },
     /// Describe a mesh file (counts, bounds, materials, textures) or a baked impostor (its
-    /// camera, size, coverage and box).
+    /// camera, size, coverage and box); with --gpu, the GPU adapters and the one trompe opens.
     Info {
         /// .obj, .ply, .gltf or .glb; or an impostor's .json sidecar.
-        mesh: PathBuf,
+        #[arg(required_unless_present = "gpu")]
+        mesh: Option<PathBuf>,
+        /// List the GPU adapters (name, backend, kind, driver, limits) and open the one
+        /// `--device gpu` would use.
+        #[arg(long, conflicts_with = "mesh")]
+        gpu: bool,
     },
     /// Render the demo scenes and write an HTML report.
     Demo {
@@ -606,7 +611,24 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 eprintln!("wrote {}", h.display());
             }
         }
-        Command::Info { mesh } if has_extension(&mesh, "json") => {
+        Command::Info { gpu: true, .. } => {
+            let adapters = trompe_gpu::adapters(trompe_gpu::Backends::All);
+            println!("{} adapter(s):", adapters.len());
+            for a in &adapters {
+                println!(
+                    "  {} ({}, {}): {} {}",
+                    a.name, a.backend, a.kind, a.driver, a.driver_info
+                );
+            }
+            let gpu = trompe_gpu::GpuRequest::new()
+                .open()
+                .context("opening a GPU")?;
+            println!("opens:\n{}", gpu.report());
+        }
+        Command::Info { mesh: None, .. } => bail!("trompe info: give a file, or --gpu"),
+        Command::Info {
+            mesh: Some(mesh), ..
+        } if has_extension(&mesh, "json") => {
             use trompe::sidecar::SidecarKind;
             match SidecarKind::of(&mesh)? {
                 SidecarKind::Impostor => {
@@ -619,7 +641,9 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 }
             }
         }
-        Command::Info { mesh } => {
+        Command::Info {
+            mesh: Some(mesh), ..
+        } => {
             let loaded = trompe::geom::io::load(&mesh)?;
             println!("{}", loaded.summary(&mesh));
             loaded

@@ -5,6 +5,8 @@
 //!   there is none.
 //! - [`bvh`]: the exact ray query (the library's BVH walked by a compute shader), the GPU's
 //!   ground truth and the peer every GPU method is timed against.
+//! - [`methods`]: the library's list of methods with a device: the GPU path where there is
+//!   one, the CPU renderer otherwise.
 //! - [`trace`]: the `trace` method (Whitted ray tracing, hard shadows) as one compute shader.
 //!
 //! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
@@ -19,7 +21,9 @@
 
 pub mod bvh;
 pub mod device;
+pub mod methods;
 pub mod trace;
 
 pub use bvh::GpuBvh;
 pub use device::{AdapterReport, Backends, Gpu, GpuError, GpuRequest, adapters};
+pub use methods::{Device, DeviceError, DeviceRenderer, check_device, has_gpu_path, open_for};

@@ -11,6 +11,7 @@ use trompe::frame::{io, metrics};
 use trompe::methods::{MethodKind, MethodSettings, Renderer};
 use trompe::render::{self, Timings};
 use trompe::scene::Scene;
+use trompe_gpu::DeviceRenderer;
 
 /// `trompe render`.
 #[derive(clap::Args, Debug)]
@@ -24,6 +25,11 @@ pub struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value = "trace")]
     method: MethodArg,
+    /// Where the method runs: the CPU; the GPU (a hardware adapter, else a software one such
+    /// as Mesa's lavapipe; refused for a method without a GPU path); or auto (the GPU where
+    /// the method has a path and a hardware GPU is present, else the CPU).
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    device: DeviceArg,
     /// How glass refracts what the eye sees through it: traced through the object, or by
     /// Wyman's image-space approximation of its far side (trace, impostor, pinhole-impostor and
     /// envmap methods).
@@ -75,6 +81,27 @@ pub struct RenderArgs {
     /// Also write the shading normals as a float EXR.
     #[arg(long)]
     normals: Option<PathBuf>,
+}
+
+/// `--device`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum DeviceArg {
+    /// The library's CPU path.
+    Cpu,
+    /// The GPU path.
+    Gpu,
+    /// The GPU where it pays and is present, else the CPU.
+    Auto,
+}
+
+impl From<DeviceArg> for trompe_gpu::Device {
+    fn from(d: DeviceArg) -> Self {
+        match d {
+            DeviceArg::Cpu => trompe_gpu::Device::Cpu,
+            DeviceArg::Gpu => trompe_gpu::Device::Gpu,
+            DeviceArg::Auto => trompe_gpu::Device::Auto,
+        }
+    }
 }
 
 /// `--refraction`.
@@ -164,6 +191,8 @@ impl RenderArgs {
     /// Loads the scene, renders it, writes the images; prints what it wrote.
     pub(super) fn render(self, verbose: bool) -> Result<()> {
         let (kind, settings) = (self.kind()?, self.settings()?);
+        // A method without a GPU path is refused before the scene loads.
+        trompe_gpu::check_device(self.device.into(), kind)?;
         if let Some(frames) = self.frames {
             return self.sequence(kind, settings, frames, verbose);
         }
@@ -182,7 +211,11 @@ impl RenderArgs {
         check_plan(plan.reads(s.files.iter().cloned()))?;
         s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         let t = self.time.unwrap_or(s.render.time);
-        let mut renderer = Renderer::new(&s, kind, settings)?;
+        let gpu = trompe_gpu::open_for(self.device.into(), kind).context("opening the GPU")?;
+        let mut renderer = DeviceRenderer::new(&s, kind, settings, gpu.as_ref())?;
+        if gpu.is_some() {
+            eprintln!("rendering on {}", renderer.device_name());
+        }
         let pb = bar(kind.name(), s.camera.height as u64);
         let out = renderer.frame(t, None, pb.as_ref()).context("rendering")?;
         timings.0.extend(out.timings.0);
@@ -235,7 +268,11 @@ impl RenderArgs {
                 .with_context(|| format!("creating the folder {}", dir.display()))?;
         }
         let t0 = self.time.unwrap_or(s.render.time);
-        let mut sequence = Renderer::new(&s, kind, settings.clone())?;
+        let gpu = trompe_gpu::open_for(self.device.into(), kind).context("opening the GPU")?;
+        let mut sequence = DeviceRenderer::new(&s, kind, settings.clone(), gpu.as_ref())?;
+        if gpu.is_some() {
+            eprintln!("rendering on {}", sequence.device_name());
+        }
         let mut exact = Renderer::new(&s, MethodKind::Trace, settings)?;
         let (mut total_ms, mut total_flip) = (0.0, 0.0);
         for (i, path) in paths.iter().enumerate() {

@@ -95,6 +95,21 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
         &format!("{cam}resolution = [8, 8]\nfocal = 3\n"),
     );
     fails_cleanly(&trompe(&["render", &unknown, "-o", out]), "focal");
+    // A method without a GPU path is refused on the GPU before the scene is read (this one
+    // does not exist), whether or not a GPU is present.
+    fails_cleanly(
+        &trompe(&[
+            "render",
+            "nowhere.toml",
+            "--device",
+            "gpu",
+            "--method",
+            "raster",
+            "-o",
+            out,
+        ]),
+        "--method raster has no GPU path yet",
+    );
     let missing = scene(
         "missing.toml",
         &format!("{cam}resolution = [8, 8]\n[[object]]\nmesh = \"nowhere.obj\"\n"),

@@ -1,5 +1,5 @@
 //! The command-line tests that need a system package: the viewer's real window under a virtual
-//! X server (Xvfb). A missing package makes its test *ignored* — counted in the summary, the
+//! X server (Xvfb), and `--device gpu` on a GPU adapter (Mesa's lavapipe where there is no GPU). A missing package makes its test *ignored* — counted in the summary, the
 //! reason printed above it — or failed where `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets
 //! it.
 
@@ -13,17 +13,37 @@ use trompe::frame::metrics;
 
 fn main() {
     let args = Arguments::from_args();
-    let trials = vec![needs(
-        Trial::test(
-            "viewer::the_window_under_a_virtual_x_server_shows_the_headless_frame",
-            || {
-                the_window_under_a_virtual_x_server_shows_the_headless_frame();
-                Ok(())
-            },
+    let adapter = !trompe_gpu::adapters(trompe_gpu::Backends::All).is_empty();
+    const ADAPTER: &str = "a GPU adapter (without a GPU: lavapipe, package mesa-vulkan-drivers)";
+    let trials = vec![
+        needs(
+            Trial::test(
+                "viewer::the_window_under_a_virtual_x_server_shows_the_headless_frame",
+                || {
+                    the_window_under_a_virtual_x_server_shows_the_headless_frame();
+                    Ok(())
+                },
+            ),
+            common::has_command("xvfb-run"),
+            "xvfb-run (package xvfb)",
         ),
-        common::has_command("xvfb-run"),
-        "xvfb-run (package xvfb)",
-    )];
+        needs(
+            Trial::test("gpu::render_on_the_gpu_is_the_cpu_frame", || {
+                render_on_the_gpu_is_the_cpu_frame();
+                Ok(())
+            }),
+            adapter,
+            ADAPTER,
+        ),
+        needs(
+            Trial::test("gpu::info_names_the_adapter_it_opens", || {
+                info_names_the_adapter_it_opens();
+                Ok(())
+            }),
+            adapter,
+            ADAPTER,
+        ),
+    ];
     libtest_mimic::run(&args, trials).exit();
 }
 
@@ -81,4 +101,52 @@ pub fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
         "window against headless: FLIP {}",
         score.flip
     );
+}
+
+/// `render --device gpu` writes the frame `--device cpu` writes (the trace method), one frame
+/// and a sequence.
+pub fn render_on_the_gpu_is_the_cpu_frame() {
+    let dir = scratch("render-gpu");
+    let (cpu, gpu) = (dir.join("cpu.png"), dir.join("gpu.png"));
+    for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
+        let o = trompe(&[
+            "render",
+            "scenes/diffuse.toml",
+            "--device",
+            device,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
+    let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
+    assert!(score.flip < 0.01, "GPU against CPU: FLIP {}", score.flip);
+    let pattern = dir.join("frame_%02d.png");
+    let o = trompe(&[
+        "render",
+        "scenes/turntable.toml",
+        "--device",
+        "gpu",
+        "--frames",
+        "3",
+        "-o",
+        pattern.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("3 frames by trace"), "{out}");
+    for i in 0..3 {
+        assert!(dir.join(format!("frame_{i:02}.png")).is_file());
+    }
+}
+
+/// `info --gpu` lists the adapters and the one it opens, with its limits.
+pub fn info_names_the_adapter_it_opens() {
+    let o = trompe(&["info", "--gpu"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let first = &trompe_gpu::adapters(trompe_gpu::Backends::All)[0];
+    assert!(out.contains(&first.name), "{out}");
+    assert!(out.contains("opens:") && out.contains("limits"), "{out}");
 }

@@ -7,8 +7,13 @@ use trompe::geom::{Mesh, Ray};
 use trompe::trace::{Bvh, RayQuery};
 use trompe_gpu::{Gpu, GpuBvh};
 
-pub fn the_shader_parses_and_validates() {
-    let source = trompe_gpu::bvh::SHADER;
+pub fn the_shaders_parse_and_validate() {
+    validate(trompe_gpu::bvh::SHADER);
+    validate(&trompe_gpu::trace::shader_source());
+}
+
+/// Parses and validates WGSL with naga, as wgpu would before compiling it.
+fn validate(source: &str) {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
     naga::valid::Validator::new(

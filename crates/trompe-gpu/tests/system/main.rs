@@ -57,8 +57,8 @@ fn main() {
     ];
     let mut trials = vec![
         plain(
-            "bvh::the_shader_parses_and_validates",
-            bvh::the_shader_parses_and_validates,
+            "bvh::the_shaders_parse_and_validate",
+            bvh::the_shaders_parse_and_validate,
         ),
         plain(
             "device::an_adapter_that_cannot_be_had_is_an_error_naming_what_was_looked_for",

@@ -1,0 +1,171 @@
+//! The library's one list of methods ([`trompe::methods::MethodKind`]) with a device: a
+//! [`DeviceRenderer`] runs a method on the GPU where this crate has its GPU path, and is the
+//! library's CPU [`Renderer`] otherwise. `trompe render --device` and `trompe bench gpu` go
+//! through it.
+//!
+//! | method | on the GPU |
+//! |---|---|
+//! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]) |
+//! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
+//!
+//! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
+//! on either device; the two devices' frames of one input agree within the bounds the tests
+//! state (`tests/system/trace.rs`).
+
+use crate::device::{Gpu, GpuError, GpuRequest};
+use trompe::camera::Pinhole;
+use trompe::methods::{MethodError, MethodFrame, MethodKind, MethodSettings, Renderer};
+use trompe::progress::{Progress, Timings};
+use trompe::scene::Scene;
+
+/// Where a method runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Device {
+    /// The library's CPU path.
+    #[default]
+    Cpu,
+    /// The GPU path (a hardware adapter, or a software one such as lavapipe); a method without
+    /// one is refused.
+    Gpu,
+    /// The GPU path where the method has one and a hardware GPU is present, else the CPU.
+    Auto,
+}
+
+/// Whether `kind` has a GPU path in this crate.
+pub fn has_gpu_path(kind: MethodKind) -> bool {
+    matches!(kind, MethodKind::Trace)
+}
+
+/// The methods with a GPU path, by name.
+pub fn gpu_methods() -> Vec<&'static str> {
+    MethodKind::ALL
+        .into_iter()
+        .filter(|k| has_gpu_path(*k))
+        .map(MethodKind::name)
+        .collect()
+}
+
+/// The GPU `device` calls for with `kind`: `None` for the CPU. `Gpu` refuses a method without
+/// a GPU path, and fails when no adapter opens; `Auto` falls back to the CPU in both cases.
+pub fn open_for(device: Device, kind: MethodKind) -> Result<Option<Gpu>, GpuError> {
+    check_device(device, kind)?;
+    match device {
+        Device::Cpu => Ok(None),
+        Device::Gpu => GpuRequest::new().open().map(Some),
+        Device::Auto if !has_gpu_path(kind) => Ok(None),
+        Device::Auto => Ok(GpuRequest::new().software(false).open().ok()),
+    }
+}
+
+/// Refuses `--device gpu` for a method without a GPU path, before any work.
+pub fn check_device(device: Device, kind: MethodKind) -> Result<(), GpuError> {
+    match device {
+        Device::Gpu if !has_gpu_path(kind) => Err(no_gpu_path(kind)),
+        _ => Ok(()),
+    }
+}
+
+/// The refusal of a method without a GPU path.
+fn no_gpu_path(kind: MethodKind) -> GpuError {
+    GpuError::Unsupported {
+        what: format!(
+            "--method {} has no GPU path yet (methods on the GPU: {})",
+            kind.name(),
+            gpu_methods().join(", ")
+        ),
+    }
+}
+
+/// Why a frame could not be made, on either device.
+#[derive(Debug, thiserror::Error)]
+pub enum DeviceError {
+    /// The CPU method's error.
+    #[error(transparent)]
+    Method(#[from] MethodError),
+    /// The GPU's.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// The scene's camera at that time.
+    #[error(transparent)]
+    Camera(#[from] trompe::camera::CameraError),
+}
+
+/// A method prepared over a scene on one device.
+pub enum DeviceRenderer<'a> {
+    /// The library's CPU renderer.
+    Cpu(Box<Renderer<'a>>),
+    /// A GPU path.
+    Gpu {
+        /// The device.
+        gpu: &'a Gpu,
+        /// The scene.
+        scene: &'a Scene,
+        /// The method (one with [`has_gpu_path`]).
+        kind: MethodKind,
+    },
+}
+
+impl<'a> DeviceRenderer<'a> {
+    /// `kind` over `scene` on `gpu`, or on the CPU without one.
+    pub fn new(
+        scene: &'a Scene,
+        kind: MethodKind,
+        settings: MethodSettings,
+        gpu: Option<&'a Gpu>,
+    ) -> Result<Self, DeviceError> {
+        match gpu {
+            None => Ok(DeviceRenderer::Cpu(Box::new(Renderer::new(
+                scene, kind, settings,
+            )?))),
+            Some(_) if !has_gpu_path(kind) => Err(no_gpu_path(kind).into()),
+            Some(gpu) => {
+                if let Some(reason) = kind.refusal() {
+                    return Err(MethodError::Refused {
+                        method: kind,
+                        reason,
+                    }
+                    .into());
+                }
+                Ok(DeviceRenderer::Gpu { gpu, scene, kind })
+            }
+        }
+    }
+
+    /// The adapter's name, or `"CPU"`.
+    pub fn device_name(&self) -> &str {
+        match self {
+            DeviceRenderer::Cpu(_) => "CPU",
+            DeviceRenderer::Gpu { gpu, .. } => gpu.name(),
+        }
+    }
+
+    /// The frame at time `t` through `camera`, or the scene's camera at `t`.
+    pub fn frame(
+        &mut self,
+        t: f32,
+        camera: Option<Pinhole>,
+        progress: &dyn Progress,
+    ) -> Result<MethodFrame, DeviceError> {
+        match self {
+            DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
+            DeviceRenderer::Gpu { gpu, scene, kind } => {
+                debug_assert!(has_gpu_path(*kind));
+                let mut timings = Timings::default();
+                let mut view = scene.view(t)?;
+                if let Some(camera) = camera {
+                    view.camera = camera;
+                }
+                let frame = timings.time("GPU frame", || {
+                    crate::trace::render(gpu, &view, &scene.lighting, &scene.render)
+                })?;
+                progress.advance(u64::from(frame.color.height()));
+                Ok(MethodFrame {
+                    frame,
+                    timings,
+                    report: format!("on {}", gpu.name()),
+                    state: Vec::new(),
+                })
+            }
+        }
+    }
+}
