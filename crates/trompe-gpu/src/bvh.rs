@@ -55,6 +55,24 @@ struct Params {
     row: u32,
 }
 
+/// The node and triangle-corner buffers of `bvh`, bindings 0 and 1 of every shader that
+/// includes `shaders/bvh.wgsl`.
+pub(crate) fn upload(gpu: &Gpu, bvh: &Bvh) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
+    let node_bytes: &[u8] = bytemuck::cast_slice(bvh.wide_nodes());
+    let corners: Vec<[f32; 4]> = bvh
+        .leaf_corners()
+        .iter()
+        .flat_map(|t| t.map(|c| c.extend(0.0).to_array()))
+        .collect();
+    let corner_bytes: &[u8] = bytemuck::cast_slice(&corners);
+    gpu.check_storage("the BVH's nodes", node_bytes.len() as u64)?;
+    gpu.check_storage("the BVH's triangles", corner_bytes.len() as u64)?;
+    Ok((
+        gpu.storage_with("bvh nodes", node_bytes),
+        gpu.storage_with("bvh corners", corner_bytes),
+    ))
+}
+
 /// A BVH on the device, ready for ray queries.
 pub struct GpuBvh<'a> {
     gpu: &'a Gpu,
@@ -67,17 +85,7 @@ pub struct GpuBvh<'a> {
 impl<'a> GpuBvh<'a> {
     /// Uploads `bvh` to `gpu`.
     pub fn upload(gpu: &'a Gpu, bvh: &'a Bvh) -> Result<GpuBvh<'a>, GpuError> {
-        let node_bytes: &[u8] = bytemuck::cast_slice(bvh.wide_nodes());
-        let corners: Vec<[f32; 4]> = bvh
-            .leaf_corners()
-            .iter()
-            .flat_map(|t| t.map(|c| c.extend(0.0).to_array()))
-            .collect();
-        let corner_bytes: &[u8] = bytemuck::cast_slice(&corners);
-        gpu.check_storage("the BVH's nodes", node_bytes.len() as u64)?;
-        gpu.check_storage("the BVH's triangles", corner_bytes.len() as u64)?;
-        let nodes = gpu.storage_with("bvh nodes", node_bytes);
-        let corners = gpu.storage_with("bvh corners", corner_bytes);
+        let (nodes, corners) = upload(gpu, bvh)?;
         let pipeline = gpu.compute_pipeline("bvh.wgsl", SHADER, "trace_rays");
         Ok(GpuBvh {
             gpu,
@@ -86,12 +94,6 @@ impl<'a> GpuBvh<'a> {
             corners,
             pipeline,
         })
-    }
-
-    /// The node and triangle-corner buffers, for shaders that include `shaders/bvh.wgsl`
-    /// (bindings 0 and 1).
-    pub(crate) fn buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
-        (&self.nodes, &self.corners)
     }
 
     /// The closest hit of every ray below `t_max`, as the library's hits.
@@ -181,7 +183,9 @@ impl<'a> GpuBvh<'a> {
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(row_groups, groups.div_ceil(row_groups), 1);
         }
-        let bytes = gpu.read_back(encoder, &hits, "the hits")?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        let bytes = gpu.read_back(encoder, &[hits], "the hits")?;
+        Ok(bytemuck::pod_collect_to_vec(
+            &bytes[0][..hit_bytes as usize],
+        ))
     }
 }

@@ -303,26 +303,35 @@ impl Gpu {
         self.buffer_with(label, data, wgpu::BufferUsages::UNIFORM)
     }
 
-    /// Submits `encoder`, then copies `source` back and waits for it.
+    /// Submits `encoder`, then copies each of `sources` back and waits for them (one
+    /// submission, one wait).
     pub(crate) fn read_back(
         &self,
         mut encoder: wgpu::CommandEncoder,
-        source: &wgpu::Buffer,
+        sources: &[wgpu::Buffer],
         what: &'static str,
-    ) -> Result<Vec<u8>, GpuError> {
-        let size = source.size();
-        let staging = self.buffer(
-            "read back",
-            size,
-            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        );
-        encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+    ) -> Result<Vec<Vec<u8>>, GpuError> {
+        let staging: Vec<wgpu::Buffer> = sources
+            .iter()
+            .map(|source| {
+                let staging = self.buffer(
+                    "read back",
+                    source.size(),
+                    wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                );
+                encoder.copy_buffer_to_buffer(source, 0, &staging, 0, source.size());
+                staging
+            })
+            .collect();
         self.queue.submit([encoder.finish()]);
         let (sender, receiver) = std::sync::mpsc::channel();
-        staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            // The receiver waits below; a send fails only if it is gone.
-            let _ = sender.send(r);
-        });
+        for s in &staging {
+            let sender = sender.clone();
+            s.map_async(wgpu::MapMode::Read, .., move |r| {
+                // The receiver waits below; a send fails only if it is gone.
+                let _ = sender.send(r);
+            });
+        }
         let failed = |reason: String| GpuError::Readback {
             what,
             adapter: self.info.name.clone(),
@@ -331,16 +340,23 @@ impl Gpu {
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| failed(e.to_string()))?;
-        receiver
-            .recv()
-            .map_err(|e| failed(e.to_string()))?
-            .map_err(|e| failed(e.to_string()))?;
-        let bytes = staging
-            .get_mapped_range(..)
-            .map_err(|e| failed(e.to_string()))?
-            .to_vec();
-        staging.unmap();
-        Ok(bytes)
+        for _ in &staging {
+            receiver
+                .recv()
+                .map_err(|e| failed(e.to_string()))?
+                .map_err(|e| failed(e.to_string()))?;
+        }
+        staging
+            .iter()
+            .map(|s| {
+                let bytes = s
+                    .get_mapped_range(..)
+                    .map_err(|e| failed(e.to_string()))?
+                    .to_vec();
+                s.unmap();
+                Ok(bytes)
+            })
+            .collect()
     }
 
     /// The compute pipeline of entry point `entry` of WGSL `source`.

@@ -13,6 +13,8 @@
 //! state (`tests/system/trace.rs`).
 
 use crate::device::{Gpu, GpuError, GpuRequest};
+use crate::trace::GpuTracer;
+use glam::Mat4;
 use trompe::camera::Pinhole;
 use trompe::methods::{MethodError, MethodFrame, MethodKind, MethodSettings, Renderer};
 use trompe::progress::{Progress, Timings};
@@ -102,6 +104,9 @@ pub enum DeviceRenderer<'a> {
         scene: &'a Scene,
         /// The method (one with [`has_gpu_path`]).
         kind: MethodKind,
+        /// The scene on the device and the objects' poses it was uploaded at: kept while
+        /// nothing moves or deforms (the camera may move), as the CPU keeps its BVH.
+        kept: Option<(Vec<Mat4>, GpuTracer<'a>)>,
     },
 }
 
@@ -126,7 +131,12 @@ impl<'a> DeviceRenderer<'a> {
                     }
                     .into());
                 }
-                Ok(DeviceRenderer::Gpu { gpu, scene, kind })
+                Ok(DeviceRenderer::Gpu {
+                    gpu,
+                    scene,
+                    kind,
+                    kept: None,
+                })
             }
         }
     }
@@ -148,21 +158,44 @@ impl<'a> DeviceRenderer<'a> {
     ) -> Result<MethodFrame, DeviceError> {
         match self {
             DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
-            DeviceRenderer::Gpu { gpu, scene, kind } => {
+            DeviceRenderer::Gpu {
+                gpu,
+                scene,
+                kind,
+                kept,
+            } => {
                 debug_assert!(has_gpu_path(*kind));
                 let mut timings = Timings::default();
                 let mut view = scene.view(t)?;
                 if let Some(camera) = camera {
                     view.camera = camera;
                 }
-                let frame = timings.time("GPU frame", || {
-                    crate::trace::render(gpu, &view, &scene.lighting, &scene.render)
-                })?;
+                let poses: Vec<Mat4> = scene
+                    .objects
+                    .iter()
+                    .map(|o| o.world_from_object_at(t))
+                    .collect();
+                let still = scene.objects.iter().all(|o| o.deform.is_none());
+                let reused = still && kept.as_ref().is_some_and(|(at, _)| at == &poses);
+                let (_, tracer) = match &mut *kept {
+                    Some(k) if reused => k,
+                    slot => {
+                        let tracer = timings.time("build BVH, upload the scene", || {
+                            GpuTracer::new(gpu, &view, &scene.lighting, &scene.render)
+                        })?;
+                        slot.insert((poses, tracer))
+                    }
+                };
+                let frame = timings.time("GPU frame", || tracer.frame(&view.camera))?;
+                if !still {
+                    *kept = None;
+                }
                 progress.advance(u64::from(frame.color.height()));
+                let scene_state = if reused { "kept" } else { "uploaded" };
                 Ok(MethodFrame {
                     frame,
                     timings,
-                    report: format!("on {}", gpu.name()),
+                    report: format!("on {}: scene {scene_state}", gpu.name()),
                     state: Vec::new(),
                 })
             }
