@@ -97,17 +97,18 @@ pub enum DeviceRenderer<'a> {
     /// The library's CPU renderer.
     Cpu(Box<Renderer<'a>>),
     /// A GPU path.
-    Gpu {
-        /// The device.
-        gpu: &'a Gpu,
-        /// The scene.
-        scene: &'a Scene,
-        /// The method (one with [`has_gpu_path`]).
-        kind: MethodKind,
-        /// The scene on the device and the objects' poses it was uploaded at: kept while
-        /// nothing moves or deforms (the camera may move), as the CPU keeps its BVH.
-        kept: Option<(Vec<Mat4>, GpuTracer<'a>)>,
-    },
+    Gpu(Box<GpuMethod<'a>>),
+}
+
+/// A method on the GPU, over one scene.
+pub struct GpuMethod<'a> {
+    gpu: &'a Gpu,
+    scene: &'a Scene,
+    /// One with [`has_gpu_path`].
+    kind: MethodKind,
+    /// The scene on the device and the objects' poses it was uploaded at: kept while nothing
+    /// moves or deforms (the camera may move), as the CPU keeps its BVH.
+    kept: Option<(Vec<Mat4>, GpuTracer<'a>)>,
 }
 
 impl<'a> DeviceRenderer<'a> {
@@ -131,12 +132,12 @@ impl<'a> DeviceRenderer<'a> {
                     }
                     .into());
                 }
-                Ok(DeviceRenderer::Gpu {
+                Ok(DeviceRenderer::Gpu(Box::new(GpuMethod {
                     gpu,
                     scene,
                     kind,
                     kept: None,
-                })
+                })))
             }
         }
     }
@@ -145,7 +146,7 @@ impl<'a> DeviceRenderer<'a> {
     pub fn device_name(&self) -> &str {
         match self {
             DeviceRenderer::Cpu(_) => "CPU",
-            DeviceRenderer::Gpu { gpu, .. } => gpu.name(),
+            DeviceRenderer::Gpu(m) => m.gpu.name(),
         }
     }
 
@@ -158,12 +159,13 @@ impl<'a> DeviceRenderer<'a> {
     ) -> Result<MethodFrame, DeviceError> {
         match self {
             DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
-            DeviceRenderer::Gpu {
-                gpu,
-                scene,
-                kind,
-                kept,
-            } => {
+            DeviceRenderer::Gpu(m) => {
+                let GpuMethod {
+                    gpu,
+                    scene,
+                    kind,
+                    kept,
+                } = m.as_mut();
                 debug_assert!(has_gpu_path(*kind));
                 let mut timings = Timings::default();
                 let mut view = scene.view(t)?;
