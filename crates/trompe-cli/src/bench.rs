@@ -18,6 +18,7 @@
 //! (a fresh SPOC impostor's maps are 6.3 MB at 512², and returning them to the system is not
 //! building them).
 
+pub mod gpu;
 pub mod hybrid;
 pub mod layers;
 pub mod master;
@@ -702,6 +703,9 @@ pub enum BenchError {
     /// A method of the registry failed.
     #[error(transparent)]
     Method(#[from] trompe::methods::MethodError),
+    /// The GPU could not be opened or failed.
+    #[error(transparent)]
+    Gpu(#[from] trompe_gpu::GpuError),
     /// A thread pool could not be made.
     #[error("a benchmark's thread pool could not be started")]
     Threads,

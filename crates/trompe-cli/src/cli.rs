@@ -153,6 +153,9 @@ pub enum BenchSuite {
     /// Every method of the one list on paper 1's Fig. 2 scene: the first frame and the frames
     /// after it, beside `trace`.
     Methods,
+    /// The GPU beside the CPU, on the adapter `--device gpu` opens: the trace method on every
+    /// reflection scene and against output resolution, the exact ray query as the mesh grows.
+    Gpu,
 }
 
 /// `trompe impostor …`.
@@ -747,6 +750,16 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 figures: figures?,
             };
             println!("{report}");
+        }
+        Command::Bench {
+            suite: BenchSuite::Gpu,
+            quick,
+            ..
+        } => {
+            let inputs = trompe::eval::fixtures::Shipped::locate();
+            let (heading, figures) =
+                with_spinner("timing", || crate::bench::gpu::gpu(&inputs, quick))?;
+            println!("{}", crate::bench::BenchReport { heading, figures });
         }
         Command::Bench {
             quick, mesh, goal, ..
