@@ -3,10 +3,10 @@
 // Ray Traversal on GPUs Through Compressed Wide BVHs") walked front to back in the ray's octant
 // order, with the watertight triangle test of src/geom/mod.rs (Woop, Benthin and Wald 2013).
 //
-// The node layout is obvhs's `CwBvhNode`, 80 bytes read as 20 words:
-//   0-2  p (the node's box minimum, f32)      3  e[0..3] exponents, imask (bytes)
-//   4    first child node                      5  first primitive
-//   6-7  child_meta[8]                         8-19  child min/max x, y, z (8 bytes each)
+// The node layout is obvhs's `CwBvhNode`, 80 bytes read as five vec4<u32>, each loaded once:
+//   q0: p (the node's box minimum, f32 bits) and e[0..3] exponents + imask (bytes)
+//   q1: first child node, first primitive, child_meta[8]
+//   q2, q3, q4: child min x, max x; min y, max y; min z, max z (8 bytes each)
 // Triangles are the BVH's leaf order, three corners a triangle.
 //
 // One invocation answers one ray: its closest hit below `t_max`, or (in any-hit mode) whether
@@ -37,13 +37,13 @@ struct Params {
 
 // The hierarchy (bindings 0 and 1) is all `query` reads: a shader that includes this file binds
 // its own inputs from binding 5 on.
-@group(0) @binding(0) var<storage, read> nodes: array<u32>;
+@group(0) @binding(0) var<storage, read> nodes: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read> corners: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> rays: array<Ray>;
 @group(0) @binding(3) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(4) var<uniform> params: Params;
 
-const NODE_WORDS: u32 = 20u;
+const NODE_QUADS: u32 = 5u;
 const MISS: u32 = 0xffffffffu;
 // obvhs's nearest box entry (its `EPSILON`): a child box that ends before it is skipped.
 const BOX_EPSILON: f32 = 0.0001;
@@ -63,20 +63,19 @@ fn safe_inverse(x: f32) -> f32 {
     return 1.0 / x;
 }
 
-// Byte `i` (0-7) of the 8-byte field starting at word `w` of node word offset `base`.
-fn byte8(base: u32, w: u32, i: u32) -> u32 {
-    return (nodes[base + w + i / 4u] >> ((i % 4u) * 8u)) & 0xffu;
+// Byte `i` (0-7) of the 8-byte field held in words `lo` (bytes 0-3) and `hi` (4-7).
+fn byte8(lo: u32, hi: u32, i: u32) -> u32 {
+    return (select(lo, hi, i >= 4u) >> ((i % 4u) * 8u)) & 0xffu;
 }
 
 // The node's hit mask: for every child box the ray enters before `t_max`, an inner child's bit
 // (high byte, at its octant-ordered slot) or a leaf's primitive bits (low 24 bits).
-fn intersect_node(base: u32, origin: vec3<f32>, inv: vec3<f32>, t_max: f32, oct_inv4: u32) -> u32 {
-    let p = vec3<f32>(
-        bitcast<f32>(nodes[base]),
-        bitcast<f32>(nodes[base + 1u]),
-        bitcast<f32>(nodes[base + 2u]),
-    );
-    let w3 = nodes[base + 3u];
+fn intersect_node(q0: vec4<u32>, q1: vec4<u32>, base: u32, origin: vec3<f32>, inv: vec3<f32>, t_max: f32, oct_inv4: u32) -> u32 {
+    let q2 = nodes[base + 2u];
+    let q3 = nodes[base + 3u];
+    let q4 = nodes[base + 4u];
+    let p = bitcast<vec3<f32>>(q0.xyz);
+    let w3 = q0.w;
     let extent = vec3<f32>(
         bitcast<f32>((w3 & 0xffu) << 23u),
         bitcast<f32>(((w3 >> 8u) & 0xffu) << 23u),
@@ -87,12 +86,12 @@ fn intersect_node(base: u32, origin: vec3<f32>, inv: vec3<f32>, t_max: f32, oct_
     let negative = inv < vec3<f32>(0.0);
     var mask = 0u;
     for (var c = 0u; c < 8u; c = c + 1u) {
-        let info = byte8(base, 6u, c);
+        let info = byte8(q1.z, q1.w, c);
         if (info == 0u) {
             continue;
         }
-        let lo = vec3<f32>(f32(byte8(base, 8u, c)), f32(byte8(base, 12u, c)), f32(byte8(base, 16u, c)));
-        let hi = vec3<f32>(f32(byte8(base, 10u, c)), f32(byte8(base, 14u, c)), f32(byte8(base, 18u, c)));
+        let lo = vec3<f32>(f32(byte8(q2.x, q2.y, c)), f32(byte8(q3.x, q3.y, c)), f32(byte8(q4.x, q4.y, c)));
+        let hi = vec3<f32>(f32(byte8(q2.z, q2.w, c)), f32(byte8(q3.z, q3.w, c)), f32(byte8(q4.z, q4.w, c)));
         let near = select(lo, hi, negative) * scaled_inv + shifted;
         let far = select(hi, lo, negative) * scaled_inv + shifted;
         let t_in = max(max(near.x, near.y), max(near.z, BOX_EPSILON));
@@ -161,7 +160,7 @@ fn intersect_triangle(origin: vec3<f32>, d: vec3<f32>, k: u32, t_max: f32) -> ve
 fn query(ray: Ray, any_hit: bool) -> Hit {
     var best = Hit(ray.t_max, MISS, 0.0, 0.0);
     // An empty hierarchy is bound as one padding word short of a node.
-    if (arrayLength(&nodes) < NODE_WORDS) {
+    if (arrayLength(&nodes) < NODE_QUADS) {
         return best;
     }
     let dir = ray.dir;
@@ -200,10 +199,12 @@ fn query(ray: Ray, any_hit: bool) -> Hit {
             }
             let slot = (offset - 24u) ^ (oct_inv4 & 0xffu);
             let relative = countOneBits(hits_imask & ~(0xffffffffu << slot));
-            let node = (group.x + relative) * NODE_WORDS;
-            let mask = intersect_node(node, ray.origin, inv, best.t, oct_inv4);
-            group = vec2<u32>(nodes[node + 4u], (mask & 0xff000000u) | (nodes[node + 3u] >> 24u));
-            prims = vec2<u32>(nodes[node + 5u], mask & 0x00ffffffu);
+            let node = (group.x + relative) * NODE_QUADS;
+            let q0 = nodes[node];
+            let q1 = nodes[node + 1u];
+            let mask = intersect_node(q0, q1, node, ray.origin, inv, best.t, oct_inv4);
+            group = vec2<u32>(q1.x, (mask & 0xff000000u) | (q0.w >> 24u));
+            prims = vec2<u32>(q1.y, mask & 0x00ffffffu);
         } else {
             group = vec2<u32>(0u, 0u);
         }
