@@ -706,6 +706,9 @@ pub enum BenchError {
     /// The GPU could not be opened or failed.
     #[error(transparent)]
     Gpu(#[from] trompe_gpu::GpuError),
+    /// A method failed on one of its devices.
+    #[error(transparent)]
+    Device(#[from] trompe_gpu::DeviceError),
     /// A thread pool could not be made.
     #[error("a benchmark's thread pool could not be started")]
     Threads,

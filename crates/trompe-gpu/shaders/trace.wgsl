@@ -51,6 +51,8 @@ struct View {
     // The radiance panorama and its irradiance grid: first texel, width, height.
     radiance: vec4<u32>,
     irradiance: vec4<u32>,
+    // x: 1 where the primary hits come from the visibility buffer (the raster method).
+    mode: vec4<u32>,
 }
 
 @group(0) @binding(5) var<storage, read> triangles: array<Triangle>;
@@ -61,6 +63,8 @@ struct View {
 @group(0) @binding(9) var<storage, read_write> out_color: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> out_depth_id: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> out_normal: array<vec4<f32>>;
+// The raster method's visibility buffer (raster.wgsl): leaf triangle + 1, b1 and b2 bits.
+@group(0) @binding(12) var visibility: texture_2d<u32>;
 
 const PI: f32 = 3.14159265358979;
 // The largest f32: no hit lies beyond it (the CPU's queries ask up to infinity).
@@ -178,6 +182,26 @@ struct Pending {
     weight: vec3<f32>,
 }
 
+// The rasterized primary hit at `pixel`: where it lies (the corners interpolated, as the CPU's
+// raster method places it) and its distance along the ray.
+struct Visible {
+    hit: Hit,
+    position: vec3<f32>,
+}
+
+fn visible_hit(pixel: vec2<u32>, origin: vec3<f32>, d: vec3<f32>) -> Visible {
+    let texel = textureLoad(visibility, vec2<i32>(pixel), 0);
+    if (texel.x == 0u) {
+        return Visible(Hit(FAR, MISS, 0.0, 0.0), vec3<f32>(0.0));
+    }
+    let k = texel.x - 1u;
+    let b1 = bitcast<f32>(texel.y);
+    let b2 = bitcast<f32>(texel.z);
+    let position = corners[3u * k].xyz * (1.0 - b1 - b2) + corners[3u * k + 1u].xyz * b1
+        + corners[3u * k + 2u].xyz * b2;
+    return Visible(Hit(dot(position - origin, d), k, b1, b2), position);
+}
+
 // What a primary hit leaves in the pixel's buffers.
 struct Surface {
     t: f32,
@@ -208,9 +232,18 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         count = count - 1u;
         let ray = stack[count];
         let d = ray.dir;
-        let hit = query(Ray(ray.origin, FAR, d, 0.0), false);
         let is_primary = primary;
         primary = false;
+        var hit: Hit;
+        var position: vec3<f32>;
+        if (is_primary && view.mode.x != 0u) {
+            let v = visible_hit(id.xy, ray.origin, d);
+            hit = v.hit;
+            position = v.position;
+        } else {
+            hit = query(Ray(ray.origin, FAR, d, 0.0), false);
+            position = ray.origin + d * hit.t;
+        }
         if (hit.triangle == MISS) {
             sum = sum + ray.weight * environment(d);
             continue;
@@ -219,7 +252,6 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         // the ray as src/geom/optics.rs's `facing` turns it.
         let tri = triangles[hit.triangle];
         let b0 = 1.0 - hit.b1 - hit.b2;
-        let position = ray.origin + d * hit.t;
         let interpolated = tri.n0.xyz * b0 + tri.n1.xyz * hit.b1 + tri.n2.xyz * hit.b2;
         let rcp = 1.0 / length(interpolated);
         var normal = tri.ng.xyz;

@@ -298,6 +298,11 @@ impl Gpu {
         self.buffer_with(label, data, wgpu::BufferUsages::STORAGE)
     }
 
+    /// A vertex buffer holding `data`.
+    pub(crate) fn vertices_with(&self, label: &str, data: &[u8]) -> wgpu::Buffer {
+        self.buffer_with(label, data, wgpu::BufferUsages::VERTEX)
+    }
+
     /// A uniform buffer holding `data`.
     pub(crate) fn uniform_with(&self, label: &str, data: &[u8]) -> wgpu::Buffer {
         self.buffer_with(label, data, wgpu::BufferUsages::UNIFORM)

@@ -5,7 +5,8 @@
 //!
 //! | method | on the GPU |
 //! |---|---|
-//! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]) |
+//! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]); `--primary rasterized` draws the eye's hits with the GPU rasterizer |
+//! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -18,6 +19,8 @@ use glam::Mat4;
 use trompe::camera::Pinhole;
 use trompe::methods::{MethodError, MethodFrame, MethodKind, MethodSettings, Renderer};
 use trompe::progress::{Progress, Timings};
+use trompe::render::{Primary, Refraction};
+use trompe::scene::RenderSettings;
 use trompe::scene::Scene;
 
 /// Where a method runs.
@@ -35,7 +38,7 @@ pub enum Device {
 
 /// Whether `kind` has a GPU path in this crate.
 pub fn has_gpu_path(kind: MethodKind) -> bool {
-    matches!(kind, MethodKind::Trace)
+    matches!(kind, MethodKind::Trace | MethodKind::Raster)
 }
 
 /// The methods with a GPU path, by name.
@@ -106,6 +109,8 @@ pub struct GpuMethod<'a> {
     scene: &'a Scene,
     /// One with [`has_gpu_path`].
     kind: MethodKind,
+    /// How the eye's hits are found.
+    primary: Primary,
     /// The scene on the device and the objects' poses it was uploaded at: kept while nothing
     /// moves or deforms (the camera may move), as the CPU keeps its BVH.
     kept: Option<(Vec<Mat4>, GpuTracer<'a>)>,
@@ -132,10 +137,21 @@ impl<'a> DeviceRenderer<'a> {
                     }
                     .into());
                 }
+                if settings.refraction != Refraction::Exact {
+                    return Err(GpuError::Unsupported {
+                        what: "Wyman's refraction (the GPU traces both interfaces)".into(),
+                    }
+                    .into());
+                }
+                let primary = match kind {
+                    MethodKind::Raster => Primary::Rasterized,
+                    _ => settings.primary,
+                };
                 Ok(DeviceRenderer::Gpu(Box::new(GpuMethod {
                     gpu,
                     scene,
                     kind,
+                    primary,
                     kept: None,
                 })))
             }
@@ -164,6 +180,7 @@ impl<'a> DeviceRenderer<'a> {
                     gpu,
                     scene,
                     kind,
+                    primary,
                     kept,
                 } = m.as_mut();
                 debug_assert!(has_gpu_path(*kind));
@@ -182,8 +199,17 @@ impl<'a> DeviceRenderer<'a> {
                 let (_, tracer) = match &mut *kept {
                     Some(k) if reused => k,
                     slot => {
+                        // The raster method: what mirrors and glass send out takes the
+                        // panorama's radiance (depth 1), as on the CPU.
+                        let settings = match kind {
+                            MethodKind::Raster => RenderSettings {
+                                max_depth: 1,
+                                ..scene.render
+                            },
+                            _ => scene.render,
+                        };
                         let tracer = timings.time("build BVH, upload the scene", || {
-                            GpuTracer::new(gpu, &view, &scene.lighting, &scene.render)
+                            GpuTracer::new(gpu, &view, &scene.lighting, &settings, *primary)
                         })?;
                         slot.insert((poses, tracer))
                     }

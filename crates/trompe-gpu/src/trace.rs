@@ -16,8 +16,12 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::frame::{Frame, Image, NO_OBJECT, Rgba};
+use trompe::render::Primary;
 use trompe::scene::{Lighting, RenderSettings, Surface, View};
 use trompe::trace::Bvh;
+
+/// The rasterized primary pass's source.
+pub const RASTER_SHADER: &str = include_str!("../shaders/raster.wgsl");
 
 /// The tracer's source: the BVH walk, then the tracer.
 pub fn shader_source() -> String {
@@ -64,6 +68,7 @@ struct GpuView {
     sun: [f32; 4],
     radiance: [u32; 4],
     irradiance: [u32; 4],
+    mode: [u32; 4],
 }
 
 /// Every image the shader reads, one after another, as `(first texel, width, height)`.
@@ -108,7 +113,7 @@ pub fn render(
     lighting: &Lighting,
     settings: &RenderSettings,
 ) -> Result<Frame, GpuError> {
-    GpuTracer::new(gpu, view, lighting, settings)?.frame(&view.camera)
+    GpuTracer::new(gpu, view, lighting, settings, Primary::Traced)?.frame(&view.camera)
 }
 
 /// A scene on the device, ready to trace through any camera: its BVH, its triangles' shading
@@ -120,15 +125,45 @@ pub struct GpuTracer<'a> {
     scene: [wgpu::Buffer; 5],
     /// Everything of the view's uniform but the camera's fields.
     uniform: GpuView,
+    /// With rasterized primaries: the draw's pipeline and its vertices (the leaf-ordered
+    /// triangles' corners, each with its corner number and triangle).
+    raster: Option<(wgpu::RenderPipeline, wgpu::Buffer, u32)>,
 }
 
+/// A corner as the rasterizer reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuCorner {
+    position: [f32; 3],
+    corner: u32,
+    leaf: u32,
+}
+
+/// The rasterizer's camera: the rows of `M⁻¹`, the eye with the near plane's `t`, the size.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuRasterCamera {
+    row_u: [f32; 4],
+    row_v: [f32; 4],
+    row_t: [f32; 4],
+    eye: [f32; 4],
+    size: [f32; 4],
+}
+
+/// The visibility buffer's texel format: leaf + 1, b1 bits, b2 bits.
+const VISIBILITY: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
 impl<'a> GpuTracer<'a> {
-    /// Builds the BVH of `view`'s meshes and uploads the scene (`view`'s camera is not used).
+    /// Builds the BVH of `view`'s meshes and uploads the scene (`view`'s camera is not used);
+    /// `primary` says whether the eye's hits are traced or rasterized (the raster method, with
+    /// `settings.max_depth` 1).
     pub fn new(
         gpu: &'a Gpu,
         view: &View,
         lighting: &Lighting,
         settings: &RenderSettings,
+        primary: Primary,
     ) -> Result<GpuTracer<'a>, GpuError> {
         if settings.max_depth > MAX_DEPTH {
             return Err(GpuError::Unsupported {
@@ -224,6 +259,11 @@ impl<'a> GpuTracer<'a> {
             ),
             radiance,
             irradiance,
+            mode: [u32::from(primary == Primary::Rasterized), 0, 0, 0],
+        };
+        let raster = match primary {
+            Primary::Traced => None,
+            Primary::Rasterized => Some(raster_pipeline(gpu, &bvh)?),
         };
         let triangle_bytes: &[u8] = bytemuck::cast_slice(&triangles);
         let texel_bytes: &[u8] = bytemuck::cast_slice(&texels.data);
@@ -242,6 +282,7 @@ impl<'a> GpuTracer<'a> {
             pipeline,
             scene,
             uniform,
+            raster,
         })
     }
 
@@ -263,6 +304,13 @@ impl<'a> GpuTracer<'a> {
         let uniform = gpu.uniform_with("view", bytemuck::bytes_of(&uniform));
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let outputs = ["colour", "depth and id", "normal"].map(|l| gpu.buffer(l, out_bytes, usage));
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let visibility = match &self.raster {
+            Some(raster) => self.draw_visibility(&mut encoder, raster, camera),
+            // Not read: a binding stands in.
+            None => visibility_texture(gpu, 1, 1),
+        };
+        let visibility_view = visibility.create_view(&Default::default());
         let [nodes, corners, triangles, materials, texels] = &self.scene;
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),
@@ -281,9 +329,14 @@ impl<'a> GpuTracer<'a> {
             .map(|(binding, b)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),
-            }),
+            })
+            .into_iter()
+            .chain([wgpu::BindGroupEntry {
+                binding: 12,
+                resource: wgpu::BindingResource::TextureView(&visibility_view),
+            }])
+            .collect::<Vec<_>>(),
         });
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
@@ -308,4 +361,174 @@ impl<'a> GpuTracer<'a> {
         }
         Ok(frame)
     }
+}
+
+impl GpuTracer<'_> {
+    /// Draws the visibility buffer through `camera` into a new texture (recorded in `encoder`).
+    fn draw_visibility(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (pipeline, vertices, vertex_count): &(wgpu::RenderPipeline, wgpu::Buffer, u32),
+        camera: &Pinhole,
+    ) -> wgpu::Texture {
+        let gpu = self.gpu;
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let inverse = camera.mcmillan_inverse();
+        let row = |i: usize| {
+            let r = inverse.row(i).as_vec3();
+            [r.x, r.y, r.z, 0.0]
+        };
+        let t_near = (camera.near() / camera.focal()) as f32;
+        let uniform = GpuRasterCamera {
+            row_u: row(0),
+            row_v: row(1),
+            row_t: row(2),
+            eye: v4(camera.position().as_vec3(), t_near),
+            size: [w as f32, h as f32, 0.0, 0.0],
+        };
+        let uniform = gpu.uniform_with("raster camera", bytemuck::bytes_of(&uniform));
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("raster"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            }],
+        });
+        let visibility = visibility_texture(gpu, w, h);
+        let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("raster depth"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let (color_view, depth_view) = (
+            visibility.create_view(&Default::default()),
+            depth.create_view(&Default::default()),
+        );
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("visibility"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &color_view,
+                resolve_target: None,
+                depth_slice: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    // Reversed depth: 0 is infinitely far.
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_vertex_buffer(0, vertices.slice(..));
+        pass.draw(0..*vertex_count, 0..1);
+        drop(pass);
+        visibility
+    }
+}
+
+/// A `w × h` visibility texture, drawn into and read by the shading pass.
+fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("visibility"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: VISIBILITY,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+/// The primary pass's pipeline and vertices: every leaf-ordered triangle's three corners.
+fn raster_pipeline(
+    gpu: &Gpu,
+    bvh: &Bvh,
+) -> Result<(wgpu::RenderPipeline, wgpu::Buffer, u32), GpuError> {
+    let corners: Vec<GpuCorner> = bvh
+        .leaf_corners()
+        .iter()
+        .enumerate()
+        .flat_map(|(leaf, c)| {
+            (0..3u32).map(move |k| GpuCorner {
+                position: c[k as usize].to_array(),
+                corner: k,
+                leaf: leaf as u32,
+            })
+        })
+        .collect();
+    let bytes: &[u8] = bytemuck::cast_slice(&corners);
+    gpu.check_storage("the triangles' corners", bytes.len() as u64)?;
+    let vertices = gpu.vertices_with("corners", bytes);
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(RASTER_SHADER.into()),
+        });
+    let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32x2];
+    let pipeline = gpu
+        .device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("visibility"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("draw_corner"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<GpuCorner>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &attributes,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("visible"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: VISIBILITY,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+    Ok((pipeline, vertices, corners.len() as u32))
 }

@@ -1,5 +1,5 @@
 //! The GPU beside the CPU in one run, on the adapter `--device gpu` opens (named in the
-//! heading): the `trace` method's frame on every reflection scene, with the scene kept on each
+//! heading): the `trace` and `raster` methods' frames on every reflection scene, the scene kept on each
 //! device (the CPU keeps its BVH, the GPU its uploaded scene); that frame against output
 //! resolution (paper 1's Table 1 axis); and the exact ray query alone — the same incoherent
 //! rays through the CPU BVH and its GPU walk — as the mesh grows 16×.
@@ -13,34 +13,33 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use trompe::geom::{Mesh, Ray};
-use trompe::methods::{MethodKind, MethodSettings, Renderer};
+use trompe::methods::{MethodKind, MethodSettings};
 use trompe::scene::Scene;
 use trompe::trace::{Bvh, RayQuery};
-use trompe_gpu::trace::GpuTracer;
-use trompe_gpu::{Gpu, GpuBvh};
+use trompe_gpu::{DeviceRenderer, Gpu, GpuBvh};
 
 /// Frames each device renders of a scene after its first.
 const FRAMES: u32 = 3;
 
-/// The mean frame time of `kind` on the CPU after its first frame, and of the GPU tracer with
-/// the scene uploaded, both at the scene's time through its camera.
-fn trace_pair(gpu: &Gpu, scene: &Scene) -> Result<(Duration, Duration), BenchError> {
+/// The mean frame time of `kind` after its first frame on the CPU and on the GPU, each keeping
+/// what it keeps while nothing moves (the CPU its BVH, the GPU its uploaded scene), at the
+/// scene's time through its camera.
+fn method_pair(
+    gpu: &Gpu,
+    scene: &Scene,
+    kind: MethodKind,
+) -> Result<(Duration, Duration), BenchError> {
     let t = scene.render.time;
-    let mut cpu = Renderer::new(scene, MethodKind::Trace, MethodSettings::default())?;
-    cpu.frame(t, None, &())?;
-    let start = Instant::now();
-    for _ in 0..FRAMES {
-        cpu.frame(t, None, &())?;
-    }
-    let cpu_time = start.elapsed() / FRAMES;
-    let view = scene.view(t)?;
-    let tracer = GpuTracer::new(gpu, &view, &scene.lighting, &scene.render)?;
-    tracer.frame(&view.camera)?;
-    let start = Instant::now();
-    for _ in 0..FRAMES {
-        tracer.frame(&view.camera)?;
-    }
-    Ok((cpu_time, start.elapsed() / FRAMES))
+    let time = |device: Option<&Gpu>| -> Result<Duration, BenchError> {
+        let mut renderer = DeviceRenderer::new(scene, kind, MethodSettings::default(), device)?;
+        renderer.frame(t, None, &())?;
+        let start = Instant::now();
+        for _ in 0..FRAMES {
+            renderer.frame(t, None, &())?;
+        }
+        Ok(start.elapsed() / FRAMES)
+    };
+    Ok((time(None)?, time(Some(gpu))?))
 }
 
 fn ms(d: Duration) -> f64 {
@@ -98,16 +97,19 @@ pub fn gpu(
         "room",
         "teapots",
     ] {
-        let mut scene = Scene::load(&inputs.scenes.join(format!("{name}.toml"))).map_err(Box::new)?;
+        let mut scene =
+            Scene::load(&inputs.scenes.join(format!("{name}.toml"))).map_err(Box::new)?;
         scene.camera.width = w;
         scene.camera.height = h;
-        let (cpu, on_gpu) = trace_pair(&gpu, &scene)?;
-        out.push(Figure {
-            name: format!("trace, {name}, {w} × {h}: GPU frame"),
-            value: ms(on_gpu),
-            unit: "ms",
-            versus: versus(on_gpu, cpu),
-        });
+        for kind in [MethodKind::Trace, MethodKind::Raster] {
+            let (cpu, on_gpu) = method_pair(&gpu, &scene, kind)?;
+            out.push(Figure {
+                name: format!("{kind}, {name}, {w} × {h}: GPU frame"),
+                value: ms(on_gpu),
+                unit: "ms",
+                versus: versus(on_gpu, cpu),
+            });
+        }
     }
 
     // Frame time against output resolution (paper 1's Table 1), teapot in the bunny.
@@ -121,7 +123,7 @@ pub fn gpu(
         let mut scene = base.clone();
         scene.camera.width = w;
         scene.camera.height = h;
-        let (cpu, on_gpu) = trace_pair(&gpu, &scene)?;
+        let (cpu, on_gpu) = method_pair(&gpu, &scene, MethodKind::Trace)?;
         out.push(Figure {
             name: format!("trace, teapot-in-bunny, {w} × {h}: GPU frame"),
             value: ms(on_gpu),

@@ -10,6 +10,7 @@ use trompe_gpu::{Gpu, GpuBvh};
 pub fn the_shaders_parse_and_validate() {
     validate(trompe_gpu::bvh::SHADER);
     validate(&trompe_gpu::trace::shader_source());
+    validate(trompe_gpu::trace::RASTER_SHADER);
 }
 
 /// Parses and validates WGSL with naga, as wgpu would before compiling it.

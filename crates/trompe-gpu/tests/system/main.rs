@@ -54,6 +54,10 @@ fn main() {
             "trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu,
         ),
+        on_gpu(
+            "trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu",
+            trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu,
+        ),
     ];
     let mut trials = vec![
         plain(

@@ -1,0 +1,52 @@
+// The primary pass by rasterization (paper 1 §6 rasterizes it): every triangle drawn by the GPU
+// rasterizer through the pinhole's McMillan matrix into a visibility buffer — per pixel the
+// BVH-leaf-ordered triangle + 1 (0 where nothing is drawn) and the perspective-correct
+// barycentrics of its corners 1 and 2 — which trace.wgsl shades as the raster method.
+//
+// Depth is reversed: a point t = (M⁻¹(X − C)).z along the image-plane normal (in focal units)
+// has depth t_near / t, 1 on the near plane and 0 at infinity, the nearest kept.
+
+struct Camera {
+    // Rows of M⁻¹.
+    row_u: vec4<f32>,
+    row_v: vec4<f32>,
+    row_t: vec4<f32>,
+    // xyz: the eye; w: the near plane's t.
+    eye: vec4<f32>,
+    // Width and height in pixels.
+    size: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+
+struct Corner {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) bary: vec3<f32>,
+    @location(1) @interpolate(flat) leaf: u32,
+}
+
+@vertex
+fn draw_corner(@location(0) position: vec3<f32>, @location(1) corner_leaf: vec2<u32>) -> Corner {
+    let r = position - camera.eye.xyz;
+    let w = vec3<f32>(dot(camera.row_u.xyz, r), dot(camera.row_v.xyz, r), dot(camera.row_t.xyz, r));
+    var out: Corner;
+    // Pixel (u, v) = (w.x, w.y) / w.z, v down the image: x_ndc = 2u/W − 1, y_ndc = 1 − 2v/H.
+    out.clip = vec4<f32>(
+        2.0 * w.x / camera.size.x - w.z,
+        w.z - 2.0 * w.y / camera.size.y,
+        camera.eye.w,
+        w.z,
+    );
+    out.bary = vec3<f32>(
+        select(0.0, 1.0, corner_leaf.x == 0u),
+        select(0.0, 1.0, corner_leaf.x == 1u),
+        select(0.0, 1.0, corner_leaf.x == 2u),
+    );
+    out.leaf = corner_leaf.y;
+    return out;
+}
+
+@fragment
+fn visible(in: Corner) -> @location(0) vec4<u32> {
+    return vec4<u32>(in.leaf + 1u, bitcast<u32>(in.bary.y), bitcast<u32>(in.bary.z), 0u);
+}
