@@ -6,7 +6,9 @@
 //! last. Invariant: a [`Gpu`] holds an open device and queue on the adapter its report names,
 //! with that adapter's own limits, so the largest buffers it allows are usable.
 
+use std::collections::HashMap;
 use std::fmt;
+use std::sync::Mutex;
 use thiserror::Error;
 
 /// Why no GPU device could be opened.
@@ -198,6 +200,8 @@ impl GpuRequest {
             queue,
             info,
             limits,
+            compute: Mutex::default(),
+            render: Mutex::default(),
         })
     }
 }
@@ -224,6 +228,10 @@ pub struct Gpu {
     pub(crate) queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
     limits: wgpu::Limits,
+    /// Pipelines compiled on this device, by entry point: a shader is compiled once however
+    /// many scenes and frames use it.
+    compute: Mutex<HashMap<&'static str, wgpu::ComputePipeline>>,
+    render: Mutex<HashMap<&'static str, wgpu::RenderPipeline>>,
 }
 
 impl Gpu {
@@ -364,27 +372,47 @@ impl Gpu {
             .collect()
     }
 
-    /// The compute pipeline of entry point `entry` of WGSL `source`.
+    /// The compute pipeline of entry point `entry` of WGSL `source`, compiled on first use.
     pub(crate) fn compute_pipeline(
         &self,
         label: &str,
         source: &str,
-        entry: &str,
+        entry: &'static str,
     ) -> wgpu::ComputePipeline {
-        let module = self
-            .device
+        let mut cache = self.compute.lock().unwrap_or_else(|e| e.into_inner());
+        cache
+            .entry(entry)
+            .or_insert_with(|| {
+                let module = self.module(label, source);
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(entry),
+                        layout: None,
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    })
+            })
+            .clone()
+    }
+
+    /// The render pipeline `name`, made by `make` on first use.
+    pub(crate) fn render_pipeline(
+        &self,
+        name: &'static str,
+        make: impl FnOnce() -> wgpu::RenderPipeline,
+    ) -> wgpu::RenderPipeline {
+        let mut cache = self.render.lock().unwrap_or_else(|e| e.into_inner());
+        cache.entry(name).or_insert_with(make).clone()
+    }
+
+    /// WGSL `source` as a shader module.
+    pub(crate) fn module(&self, label: &str, source: &str) -> wgpu::ShaderModule {
+        self.device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some(label),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-        self.device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
             })
     }
 
