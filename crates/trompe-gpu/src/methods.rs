@@ -158,6 +158,14 @@ impl<'a> DeviceRenderer<'a> {
         }
     }
 
+    /// The method.
+    pub fn kind(&self) -> MethodKind {
+        match self {
+            DeviceRenderer::Cpu(r) => r.kind(),
+            DeviceRenderer::Gpu(m) => m.kind,
+        }
+    }
+
     /// The adapter's name, or `"CPU"`.
     pub fn device_name(&self) -> &str {
         match self {

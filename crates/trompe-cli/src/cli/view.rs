@@ -2,6 +2,7 @@
 //! softbuffer to show a CPU frame — no GPU) over `crate::viewer::Viewer`; or, with `--frames`,
 //! headless: a script's inputs replayed at fixed time steps and every frame written.
 
+use super::render::DeviceArg;
 use super::{check_plan, refuse_foreign_folder};
 use crate::viewer::script::{self, Script};
 use crate::viewer::{Input, Request, Viewer, hud};
@@ -50,6 +51,11 @@ pub struct ViewArgs {
     /// Window: close after this many seconds (for scripted runs).
     #[arg(long)]
     quit_after: Option<f32>,
+    /// Where the methods with a GPU path run (trace, raster): the CPU, the GPU (hardware
+    /// first, else lavapipe), or auto (a hardware GPU if there is one). The other methods run
+    /// on the CPU either way; the split screen's reference is the CPU's trace.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    device: DeviceArg,
 }
 
 impl ViewArgs {
@@ -81,7 +87,13 @@ impl ViewArgs {
         let marker = self.output.join(MARKER);
         std::fs::write(&marker, format!("trompe view {}\n", self.scene.display()))
             .with_context(|| format!("writing {}", marker.display()))?;
-        let viewer = Viewer::new(&scene, self.impostor_resolution)?;
+        // The GPU the methods with a GPU path run on (the trace method's choice stands for them).
+        let gpu = trompe_gpu::open_for(self.device.into(), trompe::methods::MethodKind::Trace)
+            .context("opening the GPU")?;
+        if let Some(g) = &gpu {
+            eprintln!("trace and raster run on {}", g.name());
+        }
+        let viewer = Viewer::new(&scene, self.impostor_resolution, gpu.as_ref())?;
         match self.frames {
             Some(frames) => headless(viewer, &script, frames, self.fps, size, &self.output),
             None => window(viewer.live(), script, size, &self.output, self.quit_after),

@@ -21,6 +21,7 @@ use trompe::frame::{Image, Rgba, metrics};
 use trompe::methods::{MethodError, MethodKind, MethodSettings, Renderer};
 use trompe::render::{Primary, RenderError, Timings};
 use trompe::scene::Scene;
+use trompe_gpu::{DeviceRenderer, Gpu};
 
 /// A control.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -99,6 +100,9 @@ pub enum ViewerError {
     /// A method could not make its frame.
     #[error(transparent)]
     Method(#[from] MethodError),
+    /// A method could not make its frame on its device.
+    #[error(transparent)]
+    Device(#[from] trompe_gpu::DeviceError),
     /// The camera became degenerate.
     #[error(transparent)]
     Camera(#[from] trompe::camera::CameraError),
@@ -202,10 +206,12 @@ pub struct Viewer<'a> {
     speed: f32,
     time: f32,
     paused: bool,
-    /// The methods the number keys switch between, in [`MethodKind::for_scenes`] order.
-    renderers: Vec<Renderer<'a>>,
-    /// `trace`, for the split screen.
+    /// The methods the number keys switch between, in [`MethodKind::for_scenes`] order, each
+    /// on the GPU where one was given and the method has a GPU path.
+    renderers: Vec<DeviceRenderer<'a>>,
+    /// `trace`, for the split screen (on the CPU: the reference).
     exact: Renderer<'a>,
+    gpu: Option<&'a Gpu>,
     impostor_resolution: u32,
     /// The object orbited, if one was chosen.
     selected: Option<usize>,
@@ -215,8 +221,13 @@ pub struct Viewer<'a> {
 }
 
 impl<'a> Viewer<'a> {
-    /// A viewer of `scene` from its camera at its time; impostors of `impostor_resolution²`.
-    pub fn new(scene: &'a Scene, impostor_resolution: u32) -> Result<Self, ViewerError> {
+    /// A viewer of `scene` from its camera at its time; impostors of `impostor_resolution²`;
+    /// the methods with a GPU path on `gpu`, if given.
+    pub fn new(
+        scene: &'a Scene,
+        impostor_resolution: u32,
+        gpu: Option<&'a Gpu>,
+    ) -> Result<Self, ViewerError> {
         let c = &scene.camera;
         let start = scene.camera.at(scene.render.time).ok();
         let (eye, target) = match start {
@@ -227,7 +238,7 @@ impl<'a> Viewer<'a> {
             None => (c.position, c.look_at),
         };
         let target = if c.path.is_empty() { c.look_at } else { target };
-        let renderers = renderers(scene, impostor_resolution, false);
+        let renderers = renderers(scene, impostor_resolution, false, gpu);
         let exact = Renderer::new(scene, MethodKind::Trace, MethodSettings::default())?;
         Ok(Self {
             scene,
@@ -238,6 +249,7 @@ impl<'a> Viewer<'a> {
             paused: false,
             renderers,
             exact,
+            gpu,
             impostor_resolution,
             selected: None,
             current: 1,
@@ -250,7 +262,7 @@ impl<'a> Viewer<'a> {
     /// interactive window wants; by default it uses it [`RELIEF_LATENCY`] frames after the
     /// request, waiting if need be, so that a frame depends only on the inputs.
     pub fn live(mut self) -> Self {
-        self.renderers = renderers(self.scene, self.impostor_resolution, true);
+        self.renderers = renderers(self.scene, self.impostor_resolution, true, self.gpu);
         self
     }
 
@@ -465,8 +477,14 @@ impl<'a> Viewer<'a> {
 /// Every method that renders a scene, prepared over `scene` as the viewer runs them: the
 /// impostor and environment methods find what the eye sees by rasterizing (faster; differs on
 /// silhouette pixels only); the relief method uses a new impostor [`RELIEF_LATENCY`] frames
-/// after its request, or as soon as it is made when `live`.
-fn renderers(scene: &Scene, impostor_resolution: u32, live: bool) -> Vec<Renderer<'_>> {
+/// after its request, or as soon as it is made when `live`. A method with a GPU path runs on
+/// `gpu` when one is given.
+fn renderers<'a>(
+    scene: &'a Scene,
+    impostor_resolution: u32,
+    live: bool,
+    gpu: Option<&'a Gpu>,
+) -> Vec<DeviceRenderer<'a>> {
     MethodKind::for_scenes()
         .filter_map(|kind| {
             let mut settings = MethodSettings {
@@ -480,7 +498,8 @@ fn renderers(scene: &Scene, impostor_resolution: u32, live: bool) -> Vec<Rendere
                 settings.primary = Primary::Rasterized;
             }
             settings.relief.deterministic = (!live).then_some(RELIEF_LATENCY);
-            Renderer::new(scene, kind, settings).ok()
+            let device = gpu.filter(|_| trompe_gpu::has_gpu_path(kind));
+            DeviceRenderer::new(scene, kind, settings, device).ok()
         })
         .collect()
 }

@@ -19,7 +19,7 @@ const SIZE: (u32, u32) = (96, 72);
 
 /// The frames a script gives, `frames` steps of 1/30 s.
 fn replay(scene: &Scene, script: &Script, frames: u32) -> Vec<trompe::Image<trompe::Rgba>> {
-    let mut viewer = Viewer::new(scene, 64).unwrap();
+    let mut viewer = Viewer::new(scene, 64, None).unwrap();
     let dt = 1.0 / 30.0;
     (0..frames)
         .map(|i| {
@@ -58,7 +58,7 @@ fn a_script_replays_the_same_frames_on_one_and_two_threads_and_across_runs() {
 #[test]
 fn a_second_forward_at_speed_s_moves_the_eye_by_s() {
     let s = scene("teapot-in-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64).unwrap();
+    let mut viewer = Viewer::new(&s, 64, None).unwrap();
     let (start, speed) = (viewer.camera().eye, viewer.speed());
     viewer.input(Input::Down(Key::Forward));
     let dt = 1.0 / 30.0;
@@ -80,7 +80,7 @@ fn a_second_forward_at_speed_s_moves_the_eye_by_s() {
 #[test]
 fn orbiting_keeps_the_distance_to_the_target() {
     let s = scene("teapot-in-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64).unwrap();
+    let mut viewer = Viewer::new(&s, 64, None).unwrap();
     viewer.input(Input::Down(Key::Orbit));
     let c = *viewer.camera();
     let distance = c.eye.distance(c.target);
@@ -99,7 +99,7 @@ fn orbiting_keeps_the_distance_to_the_target() {
 #[test]
 fn a_saved_camera_block_parses_as_a_scene_camera_and_reproduces_the_view() {
     let s = scene("teapot-in-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64).unwrap();
+    let mut viewer = Viewer::new(&s, 64, None).unwrap();
     viewer.input(Input::Look(200.0, 40.0));
     viewer.input(Input::Down(Key::Left));
     viewer.step(0.4);
@@ -155,7 +155,7 @@ fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
 #[test]
 fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_away() {
     let s = scene("c3rc-bunny.toml");
-    let mut viewer = Viewer::new(&s, 64).unwrap();
+    let mut viewer = Viewer::new(&s, 64, None).unwrap();
     assert_eq!(viewer.methods().nth(5), Some("c3rc"));
     // The second object, the bunny.
     viewer.input(Input::Down(Key::NextObject));
@@ -184,7 +184,7 @@ fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_a
 #[test]
 fn the_layered_method_is_built_on_first_use_and_comes_close_to_tracing() {
     let s = scene("street.toml");
-    let mut viewer = Viewer::new(&s, 64).unwrap();
+    let mut viewer = Viewer::new(&s, 64, None).unwrap();
     assert_eq!(viewer.methods().nth(6), Some("layered"));
     viewer.input(Input::Down(Key::Method(0)));
     let traced = viewer.frame(SIZE, 1.0).unwrap();
@@ -225,7 +225,7 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
             .build()
             .unwrap()
             .install(|| {
-                let mut viewer = Viewer::new(&s, 64).unwrap();
+                let mut viewer = Viewer::new(&s, 64, None).unwrap();
                 let dt = 1.0 / 30.0;
                 let mut frames = Vec::new();
                 for i in 0..20 {
@@ -240,7 +240,7 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
             })
     };
     assert_eq!(
-        Viewer::new(&s, 64).unwrap().methods().nth(7),
+        Viewer::new(&s, 64, None).unwrap().methods().nth(7),
         Some("relief")
     );
     let (frames, traced) = run(2);

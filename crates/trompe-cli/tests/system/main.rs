@@ -36,6 +36,17 @@ fn main() {
             ADAPTER,
         ),
         needs(
+            Trial::test(
+                "gpu::the_headless_viewer_draws_trace_and_raster_on_the_gpu",
+                || {
+                    the_headless_viewer_draws_trace_and_raster_on_the_gpu();
+                    Ok(())
+                },
+            ),
+            adapter,
+            ADAPTER,
+        ),
+        needs(
             Trial::test("gpu::info_names_the_adapter_it_opens", || {
                 info_names_the_adapter_it_opens();
                 Ok(())
@@ -149,4 +160,40 @@ pub fn info_names_the_adapter_it_opens() {
     let first = &trompe_gpu::adapters(trompe_gpu::Backends::All)[0];
     assert!(out.contains(&first.name), "{out}");
     assert!(out.contains("opens:") && out.contains("limits"), "{out}");
+}
+
+/// The headless viewer with `--device gpu` replays a script whose frames, trace then raster,
+/// are the CPU viewer's.
+pub fn the_headless_viewer_draws_trace_and_raster_on_the_gpu() {
+    let dir = scratch("view-gpu");
+    let keys = dir.join("keys.txt");
+    // Key 1 is trace, key 5 raster (the viewer's order, `trompe::methods::MethodKind::ALL`).
+    std::fs::write(&keys, "0.0 tap 1\n0.05 tap 5\n").unwrap();
+    for device in ["cpu", "gpu"] {
+        let o = trompe(&[
+            "view",
+            "scenes/teapot-in-bunny.toml",
+            "--size",
+            "160x120",
+            "--frames",
+            "3",
+            "--script",
+            keys.to_str().unwrap(),
+            "--device",
+            device,
+            "-o",
+            dir.join(device).to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
+    for frame in ["frame_0000.png", "frame_0002.png"] {
+        let (cpu, gpu) = (dir.join("cpu").join(frame), dir.join("gpu").join(frame));
+        let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
+        assert!(
+            score.flip < 0.01,
+            "{frame}: GPU against CPU, FLIP {}",
+            score.flip
+        );
+    }
 }
