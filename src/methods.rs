@@ -333,6 +333,9 @@ pub enum MethodError {
     /// A camera could not be placed.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
+    /// The scene could not be placed at the time asked.
+    #[error(transparent)]
+    View(#[from] crate::scene::ViewError),
     /// A frame could not be allocated.
     #[error(transparent)]
     Frame(#[from] crate::frame::FrameError),

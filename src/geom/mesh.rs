@@ -151,6 +151,20 @@ pub enum MeshError {
         /// Which vertex.
         element: String,
     },
+    /// A coordinate is finite but beyond [`super::MAX_COORDINATE`].
+    #[error(
+        "{path}: {element}: coordinate {value:e} is beyond ±{:e}, where trompe's arithmetic \
+         overflows f32",
+        super::MAX_COORDINATE
+    )]
+    OutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// Which vertex.
+        element: String,
+        /// The coordinate.
+        value: f32,
+    },
     /// A texture the file names could not be loaded.
     #[error("{path}: texture {texture}: {source}")]
     Texture {
@@ -231,6 +245,14 @@ impl Mesh {
                 return Err(MeshError::NonFinite {
                     path: path_buf,
                     element: format!("vertex {i}"),
+                });
+            }
+            let largest = p.abs().max_element();
+            if largest > super::MAX_COORDINATE {
+                return Err(MeshError::OutOfRange {
+                    path: path_buf,
+                    element: format!("vertex {i}"),
+                    value: largest,
                 });
             }
         }
@@ -367,6 +389,29 @@ impl Mesh {
     }
 
     /// This mesh moved by `m` (normals by its inverse transpose).
+    /// The largest coordinate magnitude of its vertices (NaN if one is not a number; 0 for no
+    /// vertex): what [`super::MAX_COORDINATE`] bounds.
+    pub fn largest_coordinate(&self) -> f32 {
+        // (`f32::max` and glam's `max_element` drop NaNs: they are looked for first.)
+        self.positions
+            .iter()
+            .map(|p| {
+                if p.is_nan() {
+                    f32::NAN
+                } else {
+                    p.abs().max_element()
+                }
+            })
+            .fold(0.0f32, |a, b| {
+                if a.is_nan() || b.is_nan() {
+                    f32::NAN
+                } else {
+                    a.max(b)
+                }
+            })
+    }
+
+    /// This mesh with every vertex and normal transformed by `m`.
     pub fn transformed(&self, m: &Mat4) -> Mesh {
         let normal_m = Mat3::from_mat4(*m).inverse().transpose();
         let flip = Mat3::from_mat4(*m).determinant() < 0.0;

@@ -18,6 +18,13 @@ mod sampling;
 
 /// Object ids: said in [`crate::frame`], the lowest layer, where frames first store them.
 pub use crate::frame::{ENVIRONMENT, NO_OBJECT};
+
+/// The largest coordinate magnitude trompe accepts, in scene units. The BVH builder multiplies
+/// box spans (surface areas) and sums those products; spans up to `2 × 10¹⁸` keep every product
+/// below `4 × 10³⁶`, far from `f32::MAX` (`3.4 × 10³⁸`), where a coordinate merely finite (a
+/// cube at `x = 3 × 10³⁸`) overflows to infinity and the builder fails. Mesh files and scenes
+/// placed at a time are refused past it, naming the vertex or object.
+pub const MAX_COORDINATE: f32 = 1e18;
 pub use hull::convex_hull;
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
 pub use plane::{Plane, clip_polygon};

@@ -182,13 +182,7 @@ pub fn render_frame_from(
         || format!("a {w} × {h} hybrid frame"),
         crate::memory::times(u64::from(w) * u64::from(h), BYTES_PER_PIXEL),
     )?;
-    if let Some(object) = view
-        .meshes
-        .iter()
-        .position(|m| !m.bounds().extent().is_finite())
-    {
-        return Err(RenderError::NonFinite { object });
-    }
+    crate::render::check_finite(&view)?;
     let mut stats = FrameStats::default();
     let start = Instant::now();
     let bvh = Bvh::build(view.meshes.clone());

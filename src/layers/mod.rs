@@ -304,7 +304,7 @@ impl LayerSet {
 /// take them: world-space meshes and names.
 pub fn scene_objects(
     scene: &crate::scene::Scene,
-) -> Result<(Vec<Mesh>, Vec<String>), crate::camera::CameraError> {
+) -> Result<(Vec<Mesh>, Vec<String>), crate::scene::ViewError> {
     let view = scene.view(scene.render.time)?;
     let meshes = view.meshes.iter().map(|m| (**m).clone()).collect();
     let names = scene.objects.iter().map(|o| o.name.clone()).collect();

@@ -27,6 +27,9 @@ pub enum SceneAtlasError {
     /// The camera could not be placed at the time asked.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
+    /// The scene could not be placed at the time asked.
+    #[error(transparent)]
+    View(#[from] crate::scene::ViewError),
     /// An object's atlas could not be baked.
     #[error("object {object}: {source}")]
     Bake {

@@ -73,6 +73,9 @@ pub enum ReliefError {
     /// A camera could not be made.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
+    /// The scene could not be placed at the time asked.
+    #[error(transparent)]
+    View(#[from] crate::scene::ViewError),
     /// Rendering a reference or fallback frame failed.
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),

@@ -164,6 +164,9 @@ pub enum RenderError {
     /// The camera at the requested time is invalid.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
+    /// The scene could not be placed at the time asked.
+    #[error(transparent)]
+    View(#[from] crate::scene::ViewError),
     /// A mirror or glass object cannot have an impostor of an object (ids count from 0 in the
     /// scene file's order).
     #[error("object {object} seen from mirror/glass object {reflector}: {reason}")]
@@ -191,13 +194,18 @@ pub enum RenderError {
     /// The time asked for is not a finite number.
     #[error("time {0}: must be a finite number of seconds")]
     Time(f32),
-    /// An object's coordinates, placed and animated, are not finite.
+    /// An object's coordinates, placed and animated, are beyond
+    /// [`crate::geom::MAX_COORDINATE`] or not finite.
     #[error(
-        "object {object}: its coordinates at this time are not finite (placed or animated too far)"
+        "object {object}: a vertex reaches {value:e}: beyond ±{:e} (or not a number), where \
+         trompe's arithmetic overflows f32 (placed or animated too far)",
+        crate::geom::MAX_COORDINATE
     )]
-    NonFinite {
+    OutOfRange {
         /// The object (ids count from 0 in the scene file's order).
         object: usize,
+        /// The largest coordinate magnitude it reaches.
+        value: f32,
     },
     /// A baked impostor a scene object names could not be loaded.
     #[error("object {object}: {source}")]
@@ -346,15 +354,12 @@ pub fn render_view(
     }
 }
 
-/// Refuses geometry past what f32 holds (a translation of 3e38, an animation run far), before
-/// any structure is built over it.
-fn check_finite(view: &View) -> Result<(), RenderError> {
-    match view
-        .meshes
-        .iter()
-        .position(|m| !m.bounds().extent().is_finite())
-    {
-        Some(object) => Err(RenderError::NonFinite { object }),
+/// Refuses geometry past [`crate::geom::MAX_COORDINATE`] (a translation of 3e38, an animation
+/// run far) before any structure is built over it: a view built by hand, not by
+/// [`crate::scene::Scene::view`], which refuses it itself.
+pub(crate) fn check_finite(view: &View) -> Result<(), RenderError> {
+    match view.out_of_range() {
+        Some((object, value)) => Err(RenderError::OutOfRange { object, value }),
         None => Ok(()),
     }
 }

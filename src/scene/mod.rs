@@ -240,6 +240,32 @@ pub struct RenderSettings {
     pub ray_epsilon: f32,
 }
 
+/// Why a scene could not be placed at a time.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ViewError {
+    /// The camera at that time.
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    /// An object's placement takes it out of the coordinates trompe can compute with.
+    #[error(
+        "object {object} (\"{name}\") at t = {time} s: a vertex reaches {value:e}: beyond ±{:e} \
+         (or not a number), where trompe's arithmetic overflows f32 (check its translate, scale \
+         and animation)",
+        crate::geom::MAX_COORDINATE
+    )]
+    OutOfRange {
+        /// The object (scene file order, from 0).
+        object: usize,
+        /// Its name.
+        name: String,
+        /// The time.
+        time: f32,
+        /// The largest coordinate magnitude it reaches (NaN where one is not a number).
+        value: f32,
+    },
+}
+
 /// A loaded scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -272,6 +298,16 @@ pub struct View {
 }
 
 impl View {
+    /// The first object with a coordinate beyond [`crate::geom::MAX_COORDINATE`] (or not a
+    /// number), and that coordinate's magnitude: what no method can trace or bake. A view
+    /// from [`Scene::view`] has none; one built by hand is checked by the renderers.
+    pub fn out_of_range(&self) -> Option<(usize, f32)> {
+        self.meshes.iter().enumerate().find_map(|(i, m)| {
+            let largest = m.largest_coordinate();
+            (!(largest <= crate::geom::MAX_COORDINATE)).then_some((i, largest))
+        })
+    }
+
     /// Borrowed meshes, in object order (what the rasterizer takes).
     pub fn mesh_refs(&self) -> Vec<&Mesh> {
         self.meshes.iter().map(|m| m.as_ref()).collect()
@@ -448,14 +484,29 @@ impl Scene {
             })
     }
 
-    /// The scene at time `t` (seconds): camera along its path, objects animated.
-    pub fn view(&self, t: f32) -> Result<View, CameraError> {
+    /// The scene at time `t` (seconds): camera along its path, objects animated. Refused where
+    /// an object's placement at `t` takes a vertex beyond [`crate::geom::MAX_COORDINATE`] (or to
+    /// a non-finite coordinate): no method can trace or bake it.
+    pub fn view(&self, t: f32) -> Result<View, ViewError> {
         let camera = self.camera.at(t)?;
         let meshes = self
             .objects
             .iter()
-            .map(|o| Arc::new(o.mesh_at(t).transformed(&o.world_from_object_at(t))))
-            .collect();
+            .enumerate()
+            .map(|(object, o)| {
+                let mesh = o.mesh_at(t).transformed(&o.world_from_object_at(t));
+                let largest = mesh.largest_coordinate();
+                if !(largest <= crate::geom::MAX_COORDINATE) {
+                    return Err(ViewError::OutOfRange {
+                        object,
+                        name: o.name.clone(),
+                        time: t,
+                        value: largest,
+                    });
+                }
+                Ok(Arc::new(mesh))
+            })
+            .collect::<Result<_, _>>()?;
         Ok(View {
             camera,
             meshes,

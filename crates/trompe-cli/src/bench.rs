@@ -682,6 +682,9 @@ pub enum BenchError {
     /// A camera of a shipped scene is invalid.
     #[error(transparent)]
     Camera(#[from] trompe::camera::CameraError),
+    /// A shipped scene could not be placed at its time.
+    #[error(transparent)]
+    View(#[from] trompe::scene::ViewError),
     /// A relief workload failed.
     #[error(transparent)]
     Relief(#[from] trompe::relief::ReliefError),

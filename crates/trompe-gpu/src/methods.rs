@@ -90,9 +90,9 @@ pub enum DeviceError {
     /// The GPU's.
     #[error(transparent)]
     Gpu(#[from] GpuError),
-    /// The scene's camera at that time.
+    /// The scene at that time.
     #[error(transparent)]
-    Camera(#[from] trompe::camera::CameraError),
+    View(#[from] trompe::scene::ViewError),
 }
 
 /// A method prepared over a scene on one device.

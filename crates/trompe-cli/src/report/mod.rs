@@ -68,6 +68,9 @@ pub enum ReportError {
     /// A camera of a shipped scene is invalid.
     #[error(transparent)]
     Camera(#[from] trompe::camera::CameraError),
+    /// A shipped scene could not be placed at its time.
+    #[error(transparent)]
+    View(#[from] trompe::scene::ViewError),
     /// A timed workload failed.
     #[error(transparent)]
     Bench(Box<crate::bench::BenchError>),

@@ -785,7 +785,13 @@ fn non_finite_times_and_placements_are_named_errors() {
             "runs.toml",
             "[[object]]\nshape = \"sphere\"\n[object.animate]\nvelocity = [3e38, 0, 0]\n",
             "10",
-            "not finite",
+            "(or not a number)",
+        ),
+        (
+            "one-far.toml",
+            "[[object]]\nshape = \"cube\"\ntranslate = [3e38, 0, 0]\n",
+            "0",
+            "beyond ±1e18",
         ),
         (
             "nan.toml",
@@ -796,11 +802,38 @@ fn non_finite_times_and_placements_are_named_errors() {
     ] {
         let p = d.join(name);
         std::fs::write(&p, format!("{cam}{body}")).unwrap();
-        fails_cleanly(
-            &trompe(&["render", p.to_str().unwrap(), "--time", time, "-o", out]),
-            expect,
-        );
+        // Every method that places the scene at the time asked, the octahedral one included,
+        // refuses it before building anything.
+        for method in ["trace", "raster", "octahedral", "c3rc", "relief"] {
+            fails_cleanly(
+                &trompe(&[
+                    "render",
+                    p.to_str().unwrap(),
+                    "--time",
+                    time,
+                    "--method",
+                    method,
+                    "-o",
+                    out,
+                ]),
+                expect,
+            );
+        }
     }
+    // A mesh file with a vertex at 3e38: every command that loads it names the vertex.
+    let far = d.join("far.obj");
+    std::fs::write(&far, "v 0 0 0\nv 1 0 0\nv 3e38 1 0\nf 1 2 3\n").unwrap();
+    let json = d.join("far.json");
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "bake",
+            far.to_str().unwrap(),
+            "-o",
+            json.to_str().unwrap(),
+        ]),
+        "vertex 2: coordinate 3e38 is beyond ±1e18",
+    );
 }
 
 /// What used to pass silently or be named wrongly: NaN colours, tints and light intensities; an
