@@ -25,6 +25,11 @@ pub use crate::frame::{ENVIRONMENT, NO_OBJECT};
 /// cube at `x = 3 × 10³⁸`) overflows to infinity and the builder fails. Mesh files and scenes
 /// placed at a time are refused past it, naming the vertex or object.
 pub const MAX_COORDINATE: f32 = 1e18;
+
+/// Whether a coordinate magnitude is past [`MAX_COORDINATE`] or not a number.
+pub fn out_of_range(magnitude: f32) -> bool {
+    magnitude.is_nan() || magnitude > MAX_COORDINATE
+}
 pub use hull::convex_hull;
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
 pub use plane::{Plane, clip_polygon};

@@ -304,7 +304,7 @@ impl View {
     pub fn out_of_range(&self) -> Option<(usize, f32)> {
         self.meshes.iter().enumerate().find_map(|(i, m)| {
             let largest = m.largest_coordinate();
-            (!(largest <= crate::geom::MAX_COORDINATE)).then_some((i, largest))
+            crate::geom::out_of_range(largest).then_some((i, largest))
         })
     }
 
@@ -496,7 +496,7 @@ impl Scene {
             .map(|(object, o)| {
                 let mesh = o.mesh_at(t).transformed(&o.world_from_object_at(t));
                 let largest = mesh.largest_coordinate();
-                if !(largest <= crate::geom::MAX_COORDINATE) {
+                if crate::geom::out_of_range(largest) {
                     return Err(ViewError::OutOfRange {
                         object,
                         name: o.name.clone(),
