@@ -203,12 +203,23 @@ pub fn flip(
     Ok(masked_mean(map.pixels().iter().map(|&v| v as f64), mask))
 }
 
-/// PSNR, SSIM and FLIP of `test` against `reference`.
+/// PSNR, SSIM and FLIP of `test` against `reference`; refused, naming the image and the pixel,
+/// where either holds a pixel that is not a number.
 pub fn compare(
     reference: &Image<Rgba>,
     test: &Image<Rgba>,
     mask: Option<&Mask>,
 ) -> Result<Scores, FrameError> {
+    for (image, which) in [(reference, "reference"), (test, "test")] {
+        if let Some(i) = image.pixels().iter().position(|p| p.is_nan()) {
+            let w = image.width() as usize;
+            return Err(FrameError::NotANumber {
+                image: which,
+                x: (i % w) as u32,
+                y: (i / w) as u32,
+            });
+        }
+    }
     Ok(Scores {
         psnr: psnr(reference, test, mask)?,
         ssim: ssim(reference, test, mask)?,

@@ -89,6 +89,16 @@ pub enum FrameError {
         /// Second size.
         b: (u32, u32),
     },
+    /// A pixel that must be a number is not (a score of it would be NaN).
+    #[error("the {image} image's pixel ({x}, {y}) is not a number")]
+    NotANumber {
+        /// Which image ("reference", "test").
+        image: &'static str,
+        /// Column.
+        x: u32,
+        /// Row.
+        y: u32,
+    },
 }
 
 /// Parses an image size written `WIDTHxHEIGHT` (`x`, `X` or `×` between the sides), checked by

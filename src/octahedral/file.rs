@@ -93,6 +93,23 @@ pub fn read_sidecar(path: &Path) -> Result<Sidecar, OctahedralFileError> {
             sidecar.format
         )));
     }
+    // The sphere places every frame: a radius of 0 (or one not finite) makes no atlas.
+    if !(sidecar.radius.is_finite() && sidecar.radius > 0.0) {
+        return Err(invalid(format!(
+            "radius {}: the bounding sphere's radius must be a positive number",
+            sidecar.radius
+        )));
+    }
+    if let Some(c) = sidecar
+        .centre
+        .iter()
+        .find(|c| crate::geom::out_of_range(c.abs()))
+    {
+        return Err(invalid(format!(
+            "centre coordinate {c}: must be a number within ±{:e}",
+            crate::geom::MAX_COORDINATE
+        )));
+    }
     Ok(sidecar)
 }
 

@@ -428,7 +428,16 @@ impl Scene {
                     },
                 )?
             }
-            None => EnvMap::constant(vec3(file.render.background)),
+            None => {
+                finite("render.background", &file.render.background)?;
+                if file.render.background.iter().any(|c| *c < 0.0) {
+                    return Err(invalid(
+                        "render.background",
+                        "a radiance is not negative".into(),
+                    ));
+                }
+                EnvMap::constant(vec3(file.render.background))
+            }
         };
         let light = match &file.light {
             Some(l) => {

@@ -604,7 +604,13 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 |p: &Path| io::read_color(p).with_context(|| format!("reading {}", p.display()));
             let (a, b) = (read(&reference)?, read(&test)?);
             let mask = read_mask(mask.as_deref())?;
-            let s = metrics::compare(&a, &b, mask.as_ref()).context("comparing")?;
+            let s = metrics::compare(&a, &b, mask.as_ref()).with_context(|| {
+                format!(
+                    "comparing {} (reference) with {} (test)",
+                    reference.display(),
+                    test.display()
+                )
+            })?;
             println!(
                 "PSNR {:.3} dB\nSSIM {:.5}\nFLIP {:.5}",
                 s.psnr, s.ssim, s.flip

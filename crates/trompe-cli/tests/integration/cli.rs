@@ -95,6 +95,26 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
         &format!("{cam}resolution = [8, 8]\nfocal = 3\n"),
     );
     fails_cleanly(&trompe(&["render", &unknown, "-o", out]), "focal");
+    let background = scene(
+        "background.toml",
+        &format!("{cam}resolution = [8, 8]\n[render]\nbackground = [nan, 0, 0]\n"),
+    );
+    fails_cleanly(
+        &trompe(&["render", &background, "-o", out]),
+        "render.background",
+    );
+    // A NaN pixel is named, not scored as PSNR NaN.
+    let nan = d.join("nan.exr");
+    let mut img = trompe::frame::Image::new(4, 3, glam::Vec4::new(0.5, 0.5, 0.5, 1.0)).unwrap();
+    img.set(2, 1, glam::Vec4::new(f32::NAN, 0.5, 0.5, 1.0));
+    trompe::frame::io::write_color(&nan, &img).unwrap();
+    let fine = d.join("fine.exr");
+    img.set(2, 1, glam::Vec4::new(0.5, 0.5, 0.5, 1.0));
+    trompe::frame::io::write_color(&fine, &img).unwrap();
+    fails_cleanly(
+        &trompe(&["compare", fine.to_str().unwrap(), nan.to_str().unwrap()]),
+        "the test image's pixel (2, 1) is not a number",
+    );
     // A method without a GPU path is refused on the GPU before the scene is read (this one
     // does not exist), whether or not a GPU is present.
     fails_cleanly(
@@ -104,11 +124,11 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
             "--device",
             "gpu",
             "--method",
-            "raster",
+            "c3rc",
             "-o",
             out,
         ]),
-        "--method raster has no GPU path yet",
+        "--method c3rc has no GPU path yet",
     );
     let missing = scene(
         "missing.toml",

@@ -80,6 +80,23 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
         ]),
         "something-else",
     );
+    // A sidecar whose bounding sphere has no size makes no atlas: refused on load, not
+    // exported as an unloadable glTF.
+    let flat = d.join("flat.json");
+    let mut text: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    text["radius"] = serde_json::json!(0.0);
+    std::fs::write(&flat, text.to_string()).unwrap();
+    fails_cleanly(
+        &trompe(&[
+            "impostor",
+            "export",
+            flat.to_str().unwrap(),
+            "-o",
+            d.join("flat.glb").to_str().unwrap(),
+        ]),
+        "radius 0: the bounding sphere's radius must be a positive number",
+    );
     fails_cleanly(
         &trompe(&[
             "impostor",
