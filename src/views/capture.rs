@@ -233,10 +233,25 @@ fn check(settings: &CaptureSettings) -> Result<(), CaptureError> {
         )));
     }
     let fov_ok = settings.fov_y > 1.0 && settings.fov_y < 170.0;
-    if !fov_ok || settings.distance.is_nan() || settings.distance <= 1.0 {
+    let distance_ok = settings.distance > 1.0 && settings.distance <= 1e6;
+    if !fov_ok || !distance_ok {
         return Err(CaptureError::Settings(
-            "the field of view must be in (1°, 170°) and the distance above 1 radius".into(),
+            "the field of view must be in (1°, 170°) and the distance in (1, 10⁶] radii".into(),
         ));
+    }
+    // A calibration error larger than the cameras' distance from the model records no camera
+    // of this capture at all.
+    if !(settings.pose_noise >= 0.0 && settings.pose_noise <= settings.distance) {
+        return Err(CaptureError::Settings(format!(
+            "--pose-noise {:e}: must be between 0 and the distance ({} radii)",
+            settings.pose_noise, settings.distance
+        )));
+    }
+    if !(settings.colour_noise >= 0.0 && settings.colour_noise <= 1.0) {
+        return Err(CaptureError::Settings(format!(
+            "--colour-noise {}: must be between 0 and 1",
+            settings.colour_noise
+        )));
     }
     Ok(())
 }

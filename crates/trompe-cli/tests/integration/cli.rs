@@ -675,6 +675,19 @@ fn views_capture_score_and_render() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(cap.join("cameras.txt").is_file() && cap.join("images/view0015.png").is_file());
+    // Noise past the rig's own distance records no camera of the capture: refused.
+    fails_cleanly(
+        &trompe(&[
+            "views",
+            "capture",
+            t,
+            "--pose-noise",
+            "1e308",
+            "-o",
+            d.join("noisy").to_str().unwrap(),
+        ]),
+        "--pose-noise 1e308: must be between 0 and the distance (3 radii)",
+    );
     let o = trompe(&[
         "views",
         "score",
