@@ -51,6 +51,18 @@ pub enum GpuError {
     /// The frame's size is not a valid image size.
     #[error(transparent)]
     Frame(#[from] trompe::frame::FrameError),
+    /// A texture the work needs is wider or taller than the device allows.
+    #[error("{what} needs a texture {side} texels a side; {adapter} allows {limit}")]
+    TextureTooLarge {
+        /// What the texture holds.
+        what: &'static str,
+        /// Its longer side.
+        side: u32,
+        /// The device's limit.
+        limit: u32,
+        /// The adapter's name.
+        adapter: String,
+    },
     /// Reading results back from the device failed.
     #[error("reading {what} back from {adapter} failed: {reason}")]
     Readback {
@@ -414,6 +426,21 @@ impl Gpu {
                 label: Some(label),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             })
+    }
+
+    /// A `w × h` 2-D texture for `what`, refused with [`GpuError::TextureTooLarge`] past the device's
+    /// side limit (instead of wgpu's validation panic).
+    pub(crate) fn check_texture(&self, what: &'static str, w: u32, h: u32) -> Result<(), GpuError> {
+        let limit = self.limits.max_texture_dimension_2d;
+        if w.max(h) > limit {
+            return Err(GpuError::TextureTooLarge {
+                what,
+                side: w.max(h),
+                limit,
+                adapter: self.info.name.clone(),
+            });
+        }
+        Ok(())
     }
 
     /// The largest number of workgroups one dispatch may have along x.

@@ -304,6 +304,9 @@ impl<'a> GpuTracer<'a> {
         let uniform = gpu.uniform_with("view", bytemuck::bytes_of(&uniform));
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let outputs = ["colour", "depth and id", "normal"].map(|l| gpu.buffer(l, out_bytes, usage));
+        if self.raster.is_some() {
+            gpu.check_texture("the visibility buffer", w, h)?;
+        }
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let visibility = match &self.raster {
             Some(raster) => self.draw_visibility(&mut encoder, raster, camera),

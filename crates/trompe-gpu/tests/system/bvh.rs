@@ -11,6 +11,15 @@ pub fn the_shaders_parse_and_validate() {
     validate(trompe_gpu::bvh::SHADER);
     validate(&trompe_gpu::trace::shader_source());
     validate(trompe_gpu::trace::RASTER_SHADER);
+    // The tracer's stack holds one pending ray more than the recursion limit it accepts.
+    let pending = format!(
+        "const PENDING: u32 = {}u;",
+        trompe_gpu::trace::MAX_DEPTH + 1
+    );
+    assert!(
+        trompe_gpu::trace::shader_source().contains(&pending),
+        "{pending}"
+    );
 }
 
 /// Parses and validates WGSL with naga, as wgpu would before compiling it.
