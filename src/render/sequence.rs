@@ -146,12 +146,8 @@ impl<'a> Sequence<'a> {
             )?;
             return Ok((frame, timings, FrameReport::default()));
         }
-        let poses: Vec<Mat4> = scene
-            .objects
-            .iter()
-            .map(|o| o.world_from_object_at(t))
-            .collect();
-        let still = scene.objects.iter().all(|o| o.deform.is_none());
+        let poses = scene.poses_at(t);
+        let still = !scene.deforms();
         // Nothing moved since the last frame (the camera may have): its BVH stands.
         let bvh = match &self.bvh {
             Some((at, bvh)) if still && at == &poses => bvh.clone(),

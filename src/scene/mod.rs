@@ -493,6 +493,21 @@ impl Scene {
             })
     }
 
+    /// Every object's pose (world from object) at time `t`: what a renderer compares, with
+    /// [`Scene::deforms`], to keep what it built over the scene (a BVH, an upload) while
+    /// nothing moves.
+    pub fn poses_at(&self, t: f32) -> Vec<glam::Mat4> {
+        self.objects
+            .iter()
+            .map(|o| o.world_from_object_at(t))
+            .collect()
+    }
+
+    /// Whether an object deforms (its shape changes with time, not only its pose).
+    pub fn deforms(&self) -> bool {
+        self.objects.iter().any(|o| o.deform.is_some())
+    }
+
     /// The scene at time `t` (seconds): camera along its path, objects animated. Refused where
     /// an object's placement at `t` takes a vertex beyond [`crate::geom::MAX_COORDINATE`] (or to
     /// a non-finite coordinate): no method can trace or bake it.

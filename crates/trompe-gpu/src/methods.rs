@@ -197,12 +197,8 @@ impl<'a> DeviceRenderer<'a> {
                 if let Some(camera) = camera {
                     view.camera = camera;
                 }
-                let poses: Vec<Mat4> = scene
-                    .objects
-                    .iter()
-                    .map(|o| o.world_from_object_at(t))
-                    .collect();
-                let still = scene.objects.iter().all(|o| o.deform.is_none());
+                let poses = scene.poses_at(t);
+                let still = !scene.deforms();
                 let reused = still && kept.as_ref().is_some_and(|(at, _)| at == &poses);
                 let (_, tracer) = match &mut *kept {
                     Some(k) if reused => k,

@@ -11,46 +11,41 @@ use libtest_mimic::{Arguments, Trial};
 use std::path::Path;
 use trompe::frame::metrics;
 
+/// A test function as a trial that needs `what` (present or not): a panic fails it.
+fn trial(name: &str, test: fn(), present: bool, what: &'static str) -> Trial {
+    let run = move || {
+        test();
+        Ok(())
+    };
+    needs(Trial::test(name, run), present, what)
+}
+
 fn main() {
     let args = Arguments::from_args();
     let adapter = !trompe_gpu::adapters(trompe_gpu::Backends::All).is_empty();
     const ADAPTER: &str = "a GPU adapter (without a GPU: lavapipe, package mesa-vulkan-drivers)";
     let trials = vec![
-        needs(
-            Trial::test(
-                "viewer::the_window_under_a_virtual_x_server_shows_the_headless_frame",
-                || {
-                    the_window_under_a_virtual_x_server_shows_the_headless_frame();
-                    Ok(())
-                },
-            ),
+        trial(
+            "viewer::the_window_under_a_virtual_x_server_shows_the_headless_frame",
+            the_window_under_a_virtual_x_server_shows_the_headless_frame,
             common::has_command("xvfb-run"),
             "xvfb-run (package xvfb)",
         ),
-        needs(
-            Trial::test("gpu::render_on_the_gpu_is_the_cpu_frame", || {
-                render_on_the_gpu_is_the_cpu_frame();
-                Ok(())
-            }),
+        trial(
+            "gpu::render_on_the_gpu_is_the_cpu_frame",
+            render_on_the_gpu_is_the_cpu_frame,
             adapter,
             ADAPTER,
         ),
-        needs(
-            Trial::test(
-                "gpu::the_headless_viewer_draws_trace_and_raster_on_the_gpu",
-                || {
-                    the_headless_viewer_draws_trace_and_raster_on_the_gpu();
-                    Ok(())
-                },
-            ),
+        trial(
+            "gpu::the_headless_viewer_draws_trace_and_raster_on_the_gpu",
+            the_headless_viewer_draws_trace_and_raster_on_the_gpu,
             adapter,
             ADAPTER,
         ),
-        needs(
-            Trial::test("gpu::info_names_the_adapter_it_opens", || {
-                info_names_the_adapter_it_opens();
-                Ok(())
-            }),
+        trial(
+            "gpu::info_names_the_adapter_it_opens",
+            info_names_the_adapter_it_opens,
             adapter,
             ADAPTER,
         ),
