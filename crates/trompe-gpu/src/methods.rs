@@ -192,6 +192,10 @@ impl<'a> DeviceRenderer<'a> {
                     kept,
                 } = m.as_mut();
                 debug_assert!(has_gpu_path(*kind));
+                // The same refusal as the CPU renderer's, before any work.
+                if !t.is_finite() {
+                    return Err(MethodError::from(trompe::render::RenderError::Time(t)).into());
+                }
                 let mut timings = Timings::default();
                 let mut view = scene.view(t)?;
                 if let Some(camera) = camera {
