@@ -6,7 +6,7 @@
 #[path = "../integration/common/mod.rs"]
 mod common;
 
-use common::{needs, scratch, stderr, trompe};
+use common::{fails_cleanly, needs, scratch, stderr, trompe};
 use libtest_mimic::{Arguments, Trial};
 use std::path::Path;
 use trompe::frame::metrics;
@@ -128,6 +128,20 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
     let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
     let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
     assert!(score.flip < 0.01, "GPU against CPU: FLIP {}", score.flip);
+    // A time that is not a number is refused on the GPU as on the CPU.
+    fails_cleanly(
+        &trompe(&[
+            "render",
+            "scenes/diffuse.toml",
+            "--device",
+            "gpu",
+            "--time",
+            "nan",
+            "-o",
+            gpu.to_str().unwrap(),
+        ]),
+        "must be a finite number of seconds",
+    );
     let pattern = dir.join("frame_%02d.png");
     let o = trompe(&[
         "render",
