@@ -46,20 +46,18 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-/// `n` incoherent rays from around the box `(lo, hi)` toward points inside it.
+/// `n` incoherent rays from the box `(lo, hi)` grown by a quarter on each side toward points
+/// inside it.
 fn incoherent_rays(n: usize, lo: Vec3, hi: Vec3) -> Vec<Ray> {
-    let mut state = 17u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = trompe::geom::SplitMix64::new(17);
     let size = hi - lo;
+    let mut point = |grow: f32| {
+        let s = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        lo - size * grow + size * (1.0 + 2.0 * grow) * s
+    };
     (0..n)
         .map(|_| {
-            let mut point = || lo + size * Vec3::new(next(), next(), next());
-            let (from, to) = (point() * 1.5 - size * 0.25, point());
+            let (from, to) = (point(0.25), point(0.0));
             Ray::new(from, (to - from).normalize_or(Vec3::Y))
         })
         .collect()

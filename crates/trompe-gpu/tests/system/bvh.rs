@@ -55,19 +55,12 @@ fn scene() -> Bvh {
 
 /// `n` incoherent rays: origins spread through (and around) the scene, directions uniform.
 fn incoherent_rays(n: usize, seed: u64) -> Vec<Ray> {
-    let mut state = seed;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = trompe::geom::SplitMix64::new(seed);
     (0..n)
         .map(|_| {
-            let origin = Vec3::new(next() * 1.5 - 0.1, next() * 0.7 - 0.1, next() * 0.7 - 0.1);
-            let (a, z) = (next() * std::f32::consts::TAU, next() * 2.0 - 1.0);
-            let r = (1.0 - z * z).sqrt();
-            Ray::new(origin, Vec3::new(r * a.cos(), z, r * a.sin()))
+            let s = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let origin = Vec3::new(1.5, 0.7, 0.7) * s - Vec3::splat(0.1);
+            Ray::new(origin, rng.unit_vector())
         })
         .collect()
 }

@@ -86,10 +86,15 @@ fn needs_adapter(trial: Trial, present: bool) -> Trial {
         return trial;
     }
     let name = trial.name().to_string();
-    if std::env::var_os("TROMPE_REQUIRE_SYSTEM").is_some() {
+    // `.ci/run` sets TROMPE_REQUIRE_SYSTEM; TROMPE_REQUIRE_VULKAN asks the same of the GPU
+    // tests alone.
+    let required = ["TROMPE_REQUIRE_SYSTEM", "TROMPE_REQUIRE_VULKAN"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some());
+    if required {
         return Trial::test(name, move || {
             Err(format!(
-                "{WHAT} is missing, and TROMPE_REQUIRE_SYSTEM is set (.ci/run installs it)"
+                "{WHAT} is missing, and TROMPE_REQUIRE_SYSTEM or TROMPE_REQUIRE_VULKAN is set (.ci/run installs it)"
             )
             .into())
         });
