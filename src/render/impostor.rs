@@ -222,6 +222,46 @@ impl ReflectorImpostors {
             .flatten()
             .map(|s| s.impostor.as_ref())
     }
+
+    /// The impostors the rays of object `reflector` meet, each with where its object has moved
+    /// since it was built and whether its hits carry its colour: what a device that walks the
+    /// impostors itself needs (`trompe-gpu`).
+    pub fn seen_by(&self, reflector: u32) -> impl Iterator<Item = SeenImpostor<'_>> {
+        self.per_object
+            .get(reflector as usize)
+            .into_iter()
+            .flatten()
+            .map(|s| SeenImpostor {
+                impostor: s.impostor.as_ref(),
+                now_from_built: s
+                    .placement
+                    .map_or(Mat4::IDENTITY, |p| Mat4::from(p.now_from_built)),
+                radiance: s.radiance,
+            })
+    }
+
+    /// The objects the rays of object `reflector` meet exactly (through a BVH of them alone),
+    /// by scene id; empty for a diffuse object.
+    pub fn seen_exactly_by(&self, reflector: u32) -> &[u32] {
+        self.exact
+            .get(reflector as usize)
+            .and_then(Option::as_ref)
+            .map_or(&[], |e| e.ids.as_slice())
+    }
+}
+
+/// One impostor a mirror or glass object's rays meet, as [`ReflectorImpostors::seen_by`] lists
+/// it.
+#[derive(Clone, Copy, Debug)]
+pub struct SeenImpostor<'a> {
+    /// The impostor, in the frame its object was built in.
+    pub impostor: &'a Impostor,
+    /// The rigid motion from where its object was when it was built to where it is now (the
+    /// identity when it has not moved).
+    pub now_from_built: Mat4,
+    /// Whether its hits carry its colour (a diffuse object's); otherwise the surface it stores
+    /// is shaded as a mirror (its object's surface).
+    pub radiance: bool,
 }
 
 impl SecondaryQuery for ReflectorImpostors {

@@ -23,9 +23,9 @@ mod trace;
 pub mod wyman;
 
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
-pub use impostor::{ImpostorInputs, ReflectorImpostors, StandIns, placed_cameras};
+pub use impostor::{ImpostorInputs, ReflectorImpostors, SeenImpostor, StandIns, placed_cameras};
 pub use raster::{primary_hits, render_raster};
-pub use sequence::{FrameReport, Sequence};
+pub use sequence::{FrameReport, PreparedFrame, Sequence};
 pub use trace::{Tracer, render_trace, shade_pixels, shade_rows};
 
 use crate::frame::{Frame, FrameError};

@@ -73,6 +73,21 @@ pub struct Sequence<'a> {
     builder: ImpostorBuilder,
 }
 
+/// What [`Sequence::impostor_answers`] gives: a frame of an impostor method, ready to trace.
+pub struct PreparedFrame {
+    /// The scene at the frame's time, through the frame's camera.
+    pub view: crate::scene::View,
+    /// Its BVH (kept between frames while nothing moves or deforms).
+    pub bvh: Arc<Bvh>,
+    /// The answers to the rays its mirrors and glass send out (the same `Arc` as the last
+    /// frame's while nothing moved).
+    pub answers: Arc<ReflectorImpostors>,
+    /// What preparing it took.
+    pub timings: Timings,
+    /// What it did with impostors.
+    pub report: FrameReport,
+}
+
 /// A baked impostor and its object's pose when it was loaded.
 type Baked = (Arc<Impostor>, Mat4);
 
@@ -126,7 +141,6 @@ impl<'a> Sequence<'a> {
             return Err(RenderError::Time(t));
         }
         let scene = self.scene;
-        let stand_ins = self.stand_ins.clone();
         let mut timings = Timings::default();
         let mut view = timings.time("evaluate scene", || scene.view(t))?;
         if let Some(camera) = camera {
@@ -146,33 +160,86 @@ impl<'a> Sequence<'a> {
             )?;
             return Ok((frame, timings, FrameReport::default()));
         }
-        let poses = scene.poses_at(t);
-        let still = !scene.deforms();
-        // Nothing moved since the last frame (the camera may have): its BVH stands.
-        let bvh = match &self.bvh {
+        let bvh = self.bvh_at(&view, t, &mut timings);
+        let Some(resolution) = self.options.method.impostor_resolution() else {
+            // (The raster method returned above.)
+            let exact = crate::trace::Exact(bvh.as_ref());
+            let secondary: &dyn crate::trace::SecondaryQuery =
+                if self.options.method == Method::Trace {
+                    &exact
+                } else {
+                    &crate::trace::EnvironmentOnly
+                };
+            let frame = self.trace(&view, &bvh, secondary, progress, &mut timings)?;
+            return Ok((frame, timings, FrameReport::default()));
+        };
+        let secondary = self.answers(&view, &bvh, (t, resolution), &mut timings)?;
+        let report = self.last_report.clone();
+        let frame = self.trace(&view, &bvh, secondary.as_ref(), progress, &mut timings)?;
+        Ok((frame, timings, report))
+    }
+
+    /// What the frame at time `t` is traced with under an impostor method — the view (seen
+    /// through `camera` when given), the scene's BVH and the impostors' answers, kept, placed
+    /// and lit as [`Sequence::frame_from`] keeps, places and lights them — for a device that
+    /// traces it itself (`trompe-gpu`); `None` for a method without impostors.
+    pub fn impostor_answers(
+        &mut self,
+        t: f32,
+        camera: Option<crate::camera::Pinhole>,
+    ) -> Result<Option<PreparedFrame>, RenderError> {
+        if !t.is_finite() {
+            return Err(RenderError::Time(t));
+        }
+        let Some(resolution) = self.options.method.impostor_resolution() else {
+            return Ok(None);
+        };
+        let mut timings = Timings::default();
+        let mut view = timings.time("evaluate scene", || self.scene.view(t))?;
+        if let Some(camera) = camera {
+            view.camera = camera;
+        }
+        super::check_memory(&view, self.options.method)?;
+        super::check_finite(&view)?;
+        let bvh = self.bvh_at(&view, t, &mut timings);
+        let answers = self.answers(&view, &bvh, (t, resolution), &mut timings)?;
+        Ok(Some(PreparedFrame {
+            view,
+            bvh,
+            answers,
+            timings,
+            report: self.last_report.clone(),
+        }))
+    }
+
+    /// The BVH of `view` (the scene at `t`): the last one while nothing moved or deformed.
+    fn bvh_at(&mut self, view: &crate::scene::View, t: f32, timings: &mut Timings) -> Arc<Bvh> {
+        let poses = self.scene.poses_at(t);
+        let still = !self.scene.deforms();
+        match &self.bvh {
             Some((at, bvh)) if still && at == &poses => bvh.clone(),
             _ => {
                 let bvh = Arc::new(timings.time("build BVH", || Bvh::build(view.meshes.clone())));
-                self.bvh = still.then(|| (poses.clone(), bvh.clone()));
+                self.bvh = still.then(|| (poses, bvh.clone()));
                 bvh
             }
-        };
-        let bvh = bvh.as_ref();
-        let resolution = match self.options.method {
-            Method::Impostor(r) | Method::PinholeImpostor(r) => r,
-            // (The raster method returned above.)
-            Method::Trace | Method::EnvMap | Method::Raster => {
-                let exact = crate::trace::Exact(bvh);
-                let secondary: &dyn crate::trace::SecondaryQuery =
-                    if self.options.method == Method::Trace {
-                        &exact
-                    } else {
-                        &crate::trace::EnvironmentOnly
-                    };
-                let frame = self.trace(&view, bvh, secondary, progress, &mut timings)?;
-                return Ok((frame, timings, FrameReport::default()));
-            }
-        };
+        }
+    }
+
+    /// The answers to the rays mirrors and glass of `view` (the scene at `t`) send out, from
+    /// impostors of `resolution²` texels: the last frame's while nothing moved, otherwise kept
+    /// or built, placed and lit ([`Sequence::impostors`]); records what it did.
+    fn answers(
+        &mut self,
+        view: &crate::scene::View,
+        bvh: &Bvh,
+        (t, resolution): (f32, u32),
+        timings: &mut Timings,
+    ) -> Result<Arc<ReflectorImpostors>, RenderError> {
+        let scene = self.scene;
+        let stand_ins = self.stand_ins.clone();
+        let poses = scene.poses_at(t);
+        let still = !scene.deforms();
         let inputs = ImpostorInputs {
             shadows: Some(Shadows {
                 occluders: bvh,
@@ -190,7 +257,7 @@ impl<'a> Sequence<'a> {
         let moved = self.lit_at.as_ref() != Some(&poses) || !still;
         if self.baked.is_none() {
             let files = &self.stand_ins.baked;
-            let loaded = timings.time("load baked impostors", || load_baked(&view, files))?;
+            let loaded = timings.time("load baked impostors", || load_baked(view, files))?;
             self.baked = Some(
                 loaded
                     .into_iter()
@@ -213,20 +280,18 @@ impl<'a> Sequence<'a> {
             _ => {
                 let mut report = FrameReport::default();
                 let per_object = timings.time("build, keep and light impostors", || {
-                    self.impostors(&view, &inputs, &poses, moved, &mut report)
+                    self.impostors(view, &inputs, &poses, moved, &mut report)
                 })?;
                 let answers = Arc::new(timings.time("specular BVH", || {
-                    ReflectorImpostors::assemble(&view, per_object, self.options.mirrors)
+                    ReflectorImpostors::assemble(view, per_object, self.options.mirrors)
                 }));
                 self.answers = Some(answers.clone());
                 self.last_report = report;
                 answers
             }
         };
-        let report = self.last_report.clone();
         self.lit_at = Some(poses);
-        let frame = self.trace(&view, bvh, secondary.as_ref(), progress, &mut timings)?;
-        Ok((frame, timings, report))
+        Ok(secondary)
     }
 
     /// Traces `view` through `bvh`, the rays mirrors and glass send out answered by

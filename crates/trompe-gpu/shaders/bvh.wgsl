@@ -44,6 +44,7 @@ struct Params {
 @group(0) @binding(4) var<uniform> params: Params;
 
 const NODE_QUADS: u32 = 5u;
+const EVERY_TRIANGLE: u32 = 1u;
 const MISS: u32 = 0xffffffffu;
 // obvhs's nearest box entry (its `EPSILON`): a child box that ends before it is skipped.
 const BOX_EPSILON: f32 = 0.0001;
@@ -158,6 +159,12 @@ fn intersect_triangle(origin: vec3<f32>, d: vec3<f32>, k: u32, t_max: f32) -> ve
 
 // The closest hit along `ray` below its t_max (any hit, the first found, when `any_hit`).
 fn query(ray: Ray, any_hit: bool) -> Hit {
+    return query_classes(ray, any_hit, EVERY_TRIANGLE);
+}
+
+// `query` over the triangles in one of `classes` (bits; the first corner's w holds a
+// triangle's, and every triangle is in EVERY_TRIANGLE).
+fn query_classes(ray: Ray, any_hit: bool, classes: u32) -> Hit {
     var best = Hit(ray.t_max, MISS, 0.0, 0.0);
     // An empty hierarchy is bound as one padding word short of a node.
     if (arrayLength(&nodes) < NODE_QUADS) {
@@ -178,6 +185,9 @@ fn query(ray: Ray, any_hit: bool) -> Hit {
             let local = firstLeadingBit(prims.y);
             prims.y = prims.y & ~(1u << local);
             let k = prims.x + local;
+            if ((bitcast<u32>(corners[3u * k].w) & classes) == 0u) {
+                continue;
+            }
             let h = intersect_triangle(ray.origin, dir, k, best.t);
             if (h.w != 0.0) {
                 best = Hit(h.x, k, h.y, h.z);

@@ -7,7 +7,10 @@
 //!   ground truth and the peer every GPU method is timed against.
 //! - [`methods`]: the library's list of methods with a device: the GPU path where there is
 //!   one, the CPU renderer otherwise.
-//! - [`trace`]: the `trace` method (Whitted ray tracing, hard shadows) as one compute shader.
+//! - [`trace`]: the `trace` method (Whitted ray tracing, hard shadows) as one compute shader,
+//!   and the impostor methods: the same tracer with what mirrors and glass send out answered
+//!   by walking impostors.
+//! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
 //!
 //! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
 //! uploads and runs, and answers come back as the library's types.
@@ -23,6 +26,7 @@ pub mod bvh;
 pub mod device;
 pub mod methods;
 pub mod trace;
+pub mod walk;
 
 pub use bvh::GpuBvh;
 pub use device::{AdapterReport, Backends, Gpu, GpuError, GpuRequest, adapters};

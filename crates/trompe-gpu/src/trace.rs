@@ -174,7 +174,7 @@ impl<'a> GpuTracer<'a> {
             });
         }
         let bvh = Bvh::build(view.meshes.clone());
-        let (nodes, corners) = crate::bvh::upload(gpu, &bvh)?;
+        let (nodes, corners) = crate::bvh::upload(gpu, &bvh, &|_| crate::bvh::EVERY_TRIANGLE)?;
         // Materials: one a (object, mesh material), the scene's surface deciding.
         let mut texels = Texels::default();
         let environment = &lighting.environment;

@@ -5,6 +5,7 @@
 
 mod bvh;
 mod trace;
+mod walk;
 
 use libtest_mimic::{Arguments, Failed, Trial};
 use trompe_gpu::{Gpu, GpuRequest};
@@ -49,6 +50,18 @@ fn main() {
         on_gpu(
             "bvh::an_empty_scene_misses_and_no_rays_is_no_work",
             bvh::an_empty_scene_misses_and_no_rays_is_no_work,
+        ),
+        on_gpu(
+            "walk::the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays",
+            walk::the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays,
+        ),
+        on_gpu(
+            "walk::a_moved_impostor_is_walked_where_it_was_built",
+            walk::a_moved_impostor_is_walked_where_it_was_built,
+        ),
+        on_gpu(
+            "walk::the_same_walks_give_the_same_bits_on_repeated_runs",
+            walk::the_same_walks_give_the_same_bits_on_repeated_runs,
         ),
         on_gpu(
             "trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu",
