@@ -7,6 +7,11 @@
 //
 // Recursion becomes a stack of pending rays, each with the weight its radiance carries to the
 // pixel: a mirror passes one ray on, glass two. The pixel is the sum of weight × radiance.
+//
+// The rays mirrors and glass send out into the open are answered by `secondary_hit`, which the
+// file compiled after this one defines: exact_secondary.wgsl (the BVH: the `trace` method) or
+// impostor_secondary.wgsl (impostors: paper 1 §6's methods), as the library's
+// src/render/trace.rs asks its `SecondaryQuery`.
 
 // A triangle's shading data, in the BVH's leaf order.
 struct Triangle {
@@ -174,12 +179,22 @@ fn fresnel(cos_i: f32, eta: f32) -> f32 {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-// A ray still to follow: origin, direction, the weight its radiance carries, its depth.
+// A ray still to follow: origin, direction, the weight its radiance carries, its depth, and
+// the object it leaves into the open (NO_OBJECT for the eye's rays and rays into glass).
 struct Pending {
     origin: vec3<f32>,
     depth: u32,
     dir: vec3<f32>,
+    source: u32,
     weight: vec3<f32>,
+}
+
+// The answer to a ray an object sends out into the open (`secondary_hit`, defined by the file
+// compiled after this one): a hit on the scene's triangles to shade, or (w = 1) the radiance
+// the ray carries (an impostor's texel).
+struct Answer {
+    hit: Hit,
+    radiance: vec4<f32>,
 }
 
 // The rasterized primary hit at `pixel`: where it lies (the corners interpolated, as the CPU's
@@ -222,7 +237,7 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     let eps = view.eye.w;
     let max_depth = view.size.z;
     var stack: array<Pending, PENDING>;
-    stack[0] = Pending(eye, 0u, normalize(view.a.xyz * uv.x + view.b.xyz * uv.y + view.c.xyz), vec3<f32>(1.0));
+    stack[0] = Pending(eye, 0u, normalize(view.a.xyz * uv.x + view.b.xyz * uv.y + view.c.xyz), NO_OBJECT, vec3<f32>(1.0));
     var count = 1u;
     var sum = vec3<f32>(0.0);
     var first = Surface(FAR, NO_OBJECT, vec3<f32>(0.0));
@@ -240,6 +255,14 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
             let v = visible_hit(id.xy, ray.origin, d);
             hit = v.hit;
             position = v.position;
+        } else if (ray.source != NO_OBJECT) {
+            let answer = secondary_hit(ray.source, Ray(ray.origin, FAR, d, 0.0));
+            if (answer.radiance.w != 0.0) {
+                sum = sum + ray.weight * answer.radiance.xyz;
+                continue;
+            }
+            hit = answer.hit;
+            position = ray.origin + d * hit.t;
         } else {
             hit = query(Ray(ray.origin, FAR, d, 0.0), false);
             position = ray.origin + d * hit.t;
@@ -261,8 +284,9 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         let front = dot(d, tri.ng.xyz) < 0.0;
         let ng = select(-tri.ng.xyz, tri.ng.xyz, front);
         let n = select(normal, -normal, dot(normal, ng) < 0.0);
+        let object = bitcast<u32>(tri.n1.w);
         if (is_primary) {
-            first = Surface(hit.t, bitcast<u32>(tri.n1.w), n);
+            first = Surface(hit.t, object, n);
         }
         let material = materials[bitcast<u32>(tri.n0.w)];
         let kind = bitcast<u32>(material.color.w);
@@ -302,7 +326,9 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
                 if (last) {
                     sum = sum + weight * environment(t.xyz);
                 } else if (count < PENDING) {
-                    stack[count] = Pending(position - ng * eps, ray.depth + 1u, t.xyz, weight);
+                    // Out of the glass (into the open) when the ray met its back.
+                    let source = select(object, NO_OBJECT, front);
+                    stack[count] = Pending(position - ng * eps, ray.depth + 1u, t.xyz, source, weight);
                     count = count + 1u;
                 }
             }
@@ -311,7 +337,9 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         if (last) {
             sum = sum + reflected_weight * environment(r);
         } else if (count < PENDING) {
-            stack[count] = Pending(position + ng * eps, ray.depth + 1u, r, reflected_weight);
+            // A mirror's reflection goes into the open, and so does glass's from outside.
+            let source = select(NO_OBJECT, object, kind == MIRROR || front);
+            stack[count] = Pending(position + ng * eps, ray.depth + 1u, r, source, reflected_weight);
             count = count + 1u;
         }
     }

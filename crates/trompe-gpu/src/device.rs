@@ -257,6 +257,11 @@ impl Gpu {
         &self.info.name
     }
 
+    /// The limits the device was opened with (the adapter's own).
+    pub fn limits(&self) -> &wgpu::Limits {
+        &self.limits
+    }
+
     /// Whether the adapter is a software rasterizer (lavapipe).
     pub fn is_software(&self) -> bool {
         is_software(&self.info)

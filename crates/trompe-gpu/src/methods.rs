@@ -7,6 +7,7 @@
 //! |---|---|
 //! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]); `--primary rasterized` draws the eye's hits with the GPU rasterizer |
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
+//! | `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); the impostors built, kept across frames, placed and lit by the library's [`Sequence`] |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -14,12 +15,13 @@
 //! state (`tests/system/trace.rs`).
 
 use crate::device::{Gpu, GpuError, GpuRequest};
-use crate::trace::GpuTracer;
+use crate::trace::{GpuTracer, Secondary};
 use glam::Mat4;
+use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::methods::{MethodError, MethodFrame, MethodKind, MethodSettings, Renderer};
 use trompe::progress::{Progress, Timings};
-use trompe::render::{Primary, Refraction};
+use trompe::render::{Method, Primary, ReflectorImpostors, Refraction, RenderOptions, Sequence};
 use trompe::scene::RenderSettings;
 use trompe::scene::Scene;
 
@@ -38,7 +40,10 @@ pub enum Device {
 
 /// Whether `kind` has a GPU path in this crate.
 pub fn has_gpu_path(kind: MethodKind) -> bool {
-    matches!(kind, MethodKind::Trace | MethodKind::Raster)
+    matches!(
+        kind,
+        MethodKind::Trace | MethodKind::Raster | MethodKind::PinholeImpostor
+    )
 }
 
 /// The methods with a GPU path, by name.
@@ -114,6 +119,9 @@ pub struct GpuMethod<'a> {
     /// The scene on the device and the objects' poses it was uploaded at: kept while nothing
     /// moves or deforms (the camera may move), as the CPU keeps its BVH.
     kept: Option<(Vec<Mat4>, GpuTracer<'a>)>,
+    /// Under an impostor method: the library's sequence, which builds, keeps, places and lights
+    /// the impostors, and the answers the kept upload holds.
+    impostors: Option<(Sequence<'a>, Option<Arc<ReflectorImpostors>>)>,
 }
 
 impl<'a> DeviceRenderer<'a> {
@@ -147,12 +155,23 @@ impl<'a> DeviceRenderer<'a> {
                     MethodKind::Raster => Primary::Rasterized,
                     _ => settings.primary,
                 };
+                let impostors = (kind == MethodKind::PinholeImpostor).then(|| {
+                    let method = Method::PinholeImpostor(settings.impostor_resolution);
+                    let options = RenderOptions {
+                        method,
+                        refraction: settings.refraction,
+                        mirrors: settings.mirrors,
+                        primary,
+                    };
+                    (Sequence::new(scene, options), None)
+                });
                 Ok(DeviceRenderer::Gpu(Box::new(GpuMethod {
                     gpu,
                     scene,
                     kind,
                     primary,
                     kept: None,
+                    impostors,
                 })))
             }
         }
@@ -190,20 +209,42 @@ impl<'a> DeviceRenderer<'a> {
                     kind,
                     primary,
                     kept,
+                    impostors,
                 } = m.as_mut();
                 debug_assert!(has_gpu_path(*kind));
                 // The same refusal as the CPU renderer's, before any work.
                 if !t.is_finite() {
                     return Err(MethodError::from(trompe::render::RenderError::Time(t)).into());
                 }
-                let mut timings = Timings::default();
-                let mut view = scene.view(t)?;
-                if let Some(camera) = camera {
-                    view.camera = camera;
-                }
                 let poses = scene.poses_at(t);
                 let still = !scene.deforms();
-                let reused = still && kept.as_ref().is_some_and(|(at, _)| at == &poses);
+                // Under an impostor method the library prepares the frame (the view, the
+                // impostors kept, placed and lit); the upload stands while its answers do.
+                let (view, answers, mut timings, built) = match impostors {
+                    Some((sequence, _)) => {
+                        let prepared = sequence
+                            .impostor_answers(t, camera)
+                            .map_err(MethodError::from)?
+                            .expect("an impostor method prepares its frames");
+                        let report = prepared.report.to_string();
+                        let answers = Some(prepared.answers);
+                        (prepared.view, answers, prepared.timings, Some(report))
+                    }
+                    None => {
+                        let mut view = scene.view(t)?;
+                        if let Some(camera) = camera {
+                            view.camera = camera;
+                        }
+                        (view, None, Timings::default(), None)
+                    }
+                };
+                let same_answers = match (impostors.as_ref().and_then(|i| i.1.as_ref()), &answers) {
+                    (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                    (None, None) => true,
+                    _ => false,
+                };
+                let reused =
+                    still && same_answers && kept.as_ref().is_some_and(|(at, _)| at == &poses);
                 let (_, tracer) = match &mut *kept {
                     Some(k) if reused => k,
                     slot => {
@@ -216,22 +257,42 @@ impl<'a> DeviceRenderer<'a> {
                             },
                             _ => scene.render,
                         };
+                        let secondary = match &answers {
+                            Some(a) => Secondary::Impostors(a),
+                            None => Secondary::Exact,
+                        };
                         let tracer = timings.time("build BVH, upload the scene", || {
-                            GpuTracer::new(gpu, &view, &scene.lighting, &settings, *primary)
+                            GpuTracer::with_secondary(
+                                gpu,
+                                &view,
+                                &scene.lighting,
+                                &settings,
+                                *primary,
+                                secondary,
+                            )
                         })?;
                         slot.insert((poses, tracer))
                     }
                 };
+                if let Some((_, held)) = impostors {
+                    *held = answers;
+                }
                 let frame = timings.time("GPU frame", || tracer.frame(&view.camera))?;
                 if !still {
                     *kept = None;
                 }
                 progress.advance(u64::from(frame.color.height()));
                 let scene_state = if reused { "kept" } else { "uploaded" };
+                let report = match built {
+                    Some(impostors) => {
+                        format!("on {}: scene {scene_state}; {impostors}", gpu.name())
+                    }
+                    None => format!("on {}: scene {scene_state}", gpu.name()),
+                };
                 Ok(MethodFrame {
                     frame,
                     timings,
-                    report: format!("on {}: scene {scene_state}", gpu.name()),
+                    report,
                     state: Vec::new(),
                 })
             }

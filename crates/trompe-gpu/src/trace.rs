@@ -10,23 +10,46 @@
 //! (one invocation a pixel, no atomics), so the same inputs give the same pixels on one device.
 
 use crate::device::{Gpu, GpuError};
+use crate::walk::{UploadedWalks, WalkSet};
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::frame::{Frame, Image, NO_OBJECT, Rgba};
-use trompe::render::Primary;
+use trompe::render::{Primary, ReflectorImpostors};
 use trompe::scene::{Lighting, RenderSettings, Surface, View};
 use trompe::trace::Bvh;
 
 /// The rasterized primary pass's source.
 pub const RASTER_SHADER: &str = include_str!("../shaders/raster.wgsl");
 
-/// The tracer's source: the BVH walk, then the tracer.
+/// The tracer's source: the BVH walk, then the tracer, its open rays answered exactly.
 pub fn shader_source() -> String {
-    [crate::bvh::SHADER, include_str!("../shaders/trace.wgsl")].join("\n")
+    [
+        crate::bvh::SHADER,
+        include_str!("../shaders/trace.wgsl"),
+        include_str!("../shaders/exact_secondary.wgsl"),
+    ]
+    .join("\n")
 }
+
+/// The impostor methods' source: the tracer with its open rays answered by impostors.
+pub fn impostor_shader_source() -> String {
+    [
+        crate::walk::shader_source(),
+        include_str!("../shaders/trace.wgsl").into(),
+        include_str!("../shaders/impostor_secondary.wgsl").into(),
+    ]
+    .join("\n")
+}
+
+/// The class of the triangles of mirror and glass objects (`shaders/impostor_secondary.wgsl`'s
+/// `SPECULAR`).
+const SPECULAR: u32 = 2;
+
+/// Storage buffers the impostor methods' shader reads and writes.
+const IMPOSTOR_STORAGE_BUFFERS: u32 = 14;
 
 /// Pending rays a pixel may hold (the shader's `PENDING`): a depth-first walk of mirrors and
 /// glass holds at most one more than the recursion limit.
@@ -128,6 +151,19 @@ pub struct GpuTracer<'a> {
     /// With rasterized primaries: the draw's pipeline and its vertices (the leaf-ordered
     /// triangles' corners, each with its corner number and triangle).
     raster: Option<(wgpu::RenderPipeline, wgpu::Buffer, u32)>,
+    /// Under an impostor method: the impostors and each object's list of those it sees
+    /// (binding 18).
+    impostors: Option<(UploadedWalks, wgpu::Buffer)>,
+}
+
+/// What answers the rays mirrors and glass send out into the open.
+#[derive(Clone, Copy)]
+pub enum Secondary<'s> {
+    /// The exact BVH (the `trace` method).
+    Exact,
+    /// The impostors the library built, placed and lit for this frame, and the mirror and glass
+    /// objects seen exactly (paper 1 §6: the `impostor` and `pinhole-impostor` methods).
+    Impostors(&'s ReflectorImpostors),
 }
 
 /// A corner as the rasterizer reads it.
@@ -165,6 +201,19 @@ impl<'a> GpuTracer<'a> {
         settings: &RenderSettings,
         primary: Primary,
     ) -> Result<GpuTracer<'a>, GpuError> {
+        Self::with_secondary(gpu, view, lighting, settings, primary, Secondary::Exact)
+    }
+
+    /// [`GpuTracer::new`], the rays mirrors and glass send out into the open answered as
+    /// `secondary` says.
+    pub fn with_secondary(
+        gpu: &'a Gpu,
+        view: &View,
+        lighting: &Lighting,
+        settings: &RenderSettings,
+        primary: Primary,
+        secondary: Secondary<'_>,
+    ) -> Result<GpuTracer<'a>, GpuError> {
         if settings.max_depth > MAX_DEPTH {
             return Err(GpuError::Unsupported {
                 what: format!(
@@ -173,8 +222,16 @@ impl<'a> GpuTracer<'a> {
                 ),
             });
         }
+        let impostors = match secondary {
+            Secondary::Exact => None,
+            Secondary::Impostors(answers) => Some(upload_impostors(gpu, view, answers)?),
+        };
+        let specular = |o: u32| match view.surfaces.get(o as usize) {
+            Some(Surface::Diffuse(_)) | None => crate::bvh::EVERY_TRIANGLE,
+            Some(_) => SPECULAR,
+        };
         let bvh = Bvh::build(view.meshes.clone());
-        let (nodes, corners) = crate::bvh::upload(gpu, &bvh, &|_| crate::bvh::EVERY_TRIANGLE)?;
+        let (nodes, corners) = crate::bvh::upload(gpu, &bvh, &specular)?;
         // Materials: one a (object, mesh material), the scene's surface deciding.
         let mut texels = Texels::default();
         let environment = &lighting.environment;
@@ -276,13 +333,21 @@ impl<'a> GpuTracer<'a> {
             gpu.storage_with("materials", bytemuck::cast_slice(&materials)),
             gpu.storage_with("texels", texel_bytes),
         ];
-        let pipeline = gpu.compute_pipeline("trace.wgsl", &shader_source(), "trace_pixels");
+        let pipeline = match impostors {
+            None => gpu.compute_pipeline("trace.wgsl", &shader_source(), "trace_pixels"),
+            Some(_) => gpu.compute_pipeline(
+                "trace.wgsl with impostors",
+                &impostor_shader_source(),
+                "trace_pixels",
+            ),
+        };
         Ok(GpuTracer {
             gpu,
             pipeline,
             scene,
             uniform,
             raster,
+            impostors,
         })
     }
 
@@ -315,6 +380,10 @@ impl<'a> GpuTracer<'a> {
         };
         let visibility_view = visibility.create_view(&Default::default());
         let [nodes, corners, triangles, materials, texels] = &self.scene;
+        let walks = self
+            .impostors
+            .iter()
+            .flat_map(|(walks, reflectors)| walks.entries().into_iter().chain([(18, reflectors)]));
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("trace"),
             layout: &self.pipeline.get_bind_group_layout(0),
@@ -329,6 +398,8 @@ impl<'a> GpuTracer<'a> {
                 (10, &outputs[1]),
                 (11, &outputs[2]),
             ]
+            .into_iter()
+            .chain(walks)
             .map(|(binding, b)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),
@@ -530,4 +601,66 @@ fn raster_pipeline(
             })
     });
     Ok((pipeline, vertices, corners.len() as u32))
+}
+
+/// The impostors every mirror and glass object of `view` sees, walked by the shader, and the
+/// table of which each sees (`shaders/impostor_secondary.wgsl`'s `reflectors`).
+fn upload_impostors(
+    gpu: &Gpu,
+    view: &View,
+    answers: &ReflectorImpostors,
+) -> Result<(UploadedWalks, wgpu::Buffer), GpuError> {
+    let storage = gpu.limits().max_storage_buffers_per_shader_stage;
+    if storage < IMPOSTOR_STORAGE_BUFFERS {
+        return Err(GpuError::Unsupported {
+            what: format!(
+                "the impostor methods on an adapter with {storage} storage buffers a shader \
+                 stage (they read {IMPOSTOR_STORAGE_BUFFERS})"
+            ),
+        });
+    }
+    let objects = view.surfaces.len() as u32;
+    let specular: Vec<u32> = (0..objects)
+        .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
+        .collect();
+    let mut set = WalkSet::new();
+    // One upload of an impostor several objects see.
+    let mut placed: HashMap<*const trompe::impostor::Impostor, u32> = HashMap::new();
+    let mut table = vec![0u32; 2 * objects as usize];
+    for o in 0..objects {
+        let mut seen = Vec::new();
+        for s in answers.seen_by(o) {
+            if !s.radiance {
+                return Err(GpuError::Unsupported {
+                    what: "mirrors seen as impostors (--mirrors impostor); the GPU sees them \
+                           exactly"
+                        .into(),
+                });
+            }
+            let index = match placed.get(&std::ptr::from_ref(s.impostor)) {
+                Some(&i) => i,
+                None => {
+                    let i = set.push(s.impostor, s.now_from_built, true)?;
+                    placed.insert(std::ptr::from_ref(s.impostor), i);
+                    i
+                }
+            };
+            seen.push(index);
+        }
+        let exactly = answers.seen_exactly_by(o);
+        if !exactly.is_empty() && exactly != specular.as_slice() {
+            return Err(GpuError::Unsupported {
+                what: "a mirror that sees only some of the mirrors and glass exactly".into(),
+            });
+        }
+        table[2 * o as usize] = table.len() as u32;
+        table[2 * o as usize + 1] = seen.len() as u32 | (u32::from(!exactly.is_empty()) << 31);
+        table.extend(seen);
+    }
+    let walks = set.upload(gpu)?;
+    let bytes: &[u8] = bytemuck::cast_slice(&table);
+    gpu.check_storage("the impostors each object sees", bytes.len() as u64)?;
+    let mut padded = bytes.to_vec();
+    padded.resize(padded.len().max(16), 0);
+    Ok((walks, gpu.storage_with("reflectors", &padded)))
 }

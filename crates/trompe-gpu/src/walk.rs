@@ -188,10 +188,10 @@ impl WalkSet {
 
     /// The set on `gpu`: bindings 13 to 17 of a shader that includes `shaders/walk.wgsl`.
     pub fn upload(&self, gpu: &Gpu) -> Result<UploadedWalks, GpuError> {
-        // A binding is never empty: an empty set is one zeroed word.
+        // A binding is never empty: an empty set is one zeroed record.
         fn bytes<T: Pod>(data: &[T]) -> Vec<u8> {
             let mut b = bytemuck::cast_slice(data).to_vec();
-            b.resize(b.len().max(16), 0);
+            b.resize(b.len().max(std::mem::size_of::<GpuImpostor>()), 0);
             b
         }
         let parts = [
