@@ -404,7 +404,6 @@ impl<'a> GpuTracer<'a> {
                 binding,
                 resource: b.as_entire_binding(),
             })
-            .into_iter()
             .chain([wgpu::BindGroupEntry {
                 binding: 12,
                 resource: wgpu::BindingResource::TextureView(&visibility_view),

@@ -168,7 +168,7 @@ impl WalkSet {
         }
         let bounds = impostor.bounds();
         let moved = now_from_built != Mat4::IDENTITY;
-        let flags = u32::from(radiance) * RADIANCE | u32::from(moved) * MOVED;
+        let flags = (u32::from(radiance) * RADIANCE) | (u32::from(moved) * MOVED);
         self.impostors.push(GpuImpostor {
             u_row,
             v_row,
