@@ -7,7 +7,7 @@
 //! |---|---|
 //! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]); `--primary rasterized` draws the eye's hits with the GPU rasterizer |
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
-//! | `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); the impostors built, kept across frames, placed and lit by the library's [`Sequence`] |
+//! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); the impostors built, kept across frames, placed and lit by the library's [`Sequence`] |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -42,7 +42,7 @@ pub enum Device {
 pub fn has_gpu_path(kind: MethodKind) -> bool {
     matches!(
         kind,
-        MethodKind::Trace | MethodKind::Raster | MethodKind::PinholeImpostor
+        MethodKind::Trace | MethodKind::Raster | MethodKind::Impostor | MethodKind::PinholeImpostor
     )
 }
 
@@ -155,8 +155,13 @@ impl<'a> DeviceRenderer<'a> {
                     MethodKind::Raster => Primary::Rasterized,
                     _ => settings.primary,
                 };
-                let impostors = (kind == MethodKind::PinholeImpostor).then(|| {
-                    let method = Method::PinholeImpostor(settings.impostor_resolution);
+                let resolution = settings.impostor_resolution;
+                let method = match kind {
+                    MethodKind::Impostor => Some(Method::Impostor(resolution)),
+                    MethodKind::PinholeImpostor => Some(Method::PinholeImpostor(resolution)),
+                    _ => None,
+                };
+                let impostors = method.map(|method| {
                     let options = RenderOptions {
                         method,
                         refraction: settings.refraction,

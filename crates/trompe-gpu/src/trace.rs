@@ -49,7 +49,7 @@ pub fn impostor_shader_source() -> String {
 const SPECULAR: u32 = 2;
 
 /// Storage buffers the impostor methods' shader reads and writes.
-const IMPOSTOR_STORAGE_BUFFERS: u32 = 14;
+const IMPOSTOR_STORAGE_BUFFERS: u32 = 15;
 
 /// Pending rays a pixel may hold (the shader's `PENDING`): a depth-first walk of mirrors and
 /// glass holds at most one more than the recursion limit.

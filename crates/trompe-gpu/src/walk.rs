@@ -4,13 +4,15 @@
 //! box, its layers and its pyramid of front bounds — and walked one invocation a ray.
 //!
 //! The shader is the library's texel walk (`src/impostor/texels.rs`) in `f32`: the same samples,
-//! the same acceptance rules, every layer, nearest wins, pyramid nodes stepped over. Cameras
-//! with straight image paths — pinhole (a cube map is six) and orthographic — walk on the GPU;
-//! a SPOC or a graph camera is refused with [`GpuError::Unsupported`].
+//! the same acceptance rules, every layer, nearest wins, pyramid nodes stepped over; for every
+//! impostor camera — pinhole (a cube map is six), orthographic, SPOC (its curved path cut where
+//! its coordinates turn) and graph camera (the ray cut at its frusta's faces, none stepped
+//! over). A graph camera of more than [`MAX_FRUSTA`] frusta is refused with
+//! [`GpuError::Unsupported`].
 //!
 //! Invariant: record `r` of the texel buffers is texel `(r − first) mod width, (r − first) /
 //! width` of the layer whose first record is `first`; a set's buffers are what the shader's
-//! bindings 13–17 read.
+//! bindings 13–17 and 19 read.
 
 use crate::bvh::{LeafHit, MISS, ray_pass};
 use crate::device::{Gpu, GpuError};
@@ -27,6 +29,13 @@ pub fn shader_source() -> String {
 /// The shader's camera kinds.
 const PINHOLE: u32 = 0;
 const ORTHOGRAPHIC: u32 = 1;
+const SPOC: u32 = 2;
+const GRAPH: u32 = 3;
+/// A frustum's record in the shader: a header, its matrix, its inverse, its planes.
+const FRUSTUM_STRIDE: usize = 17;
+const FRUSTUM_PLANES: usize = 8;
+/// The most frusta a graph camera the shader walks may have (its `MAX_FRUSTA`).
+pub const MAX_FRUSTA: usize = 64;
 /// The shader's flags.
 const RADIANCE: u32 = 1;
 const MOVED: u32 = 2;
@@ -41,10 +50,14 @@ struct GpuImpostor {
     g_row: [f32; 4],
     clip_row: [f32; 4],
     eye: [f32; 4],
+    m_a: [f32; 4],
+    m_b: [f32; 4],
+    m_c: [f32; 4],
     box_min: [f32; 4],
     box_max: [f32; 4],
     size: [u32; 4],
     info: [u32; 4],
+    graph: [u32; 4],
     built_from_now: [[f32; 4]; 3],
     now_from_built: [[f32; 4]; 3],
 }
@@ -58,6 +71,17 @@ pub struct WalkSet {
     planes: Vec<[f32; 4]>,
     looks: Vec<[f32; 4]>,
     pyramid: Vec<f32>,
+    /// Every graph camera's frusta, [`FRUSTUM_STRIDE`] rows each.
+    frusta: Vec<[f32; 4]>,
+}
+
+/// The shader's camera record: its kind, the rows, and McMillan's vectors (a SPOC's).
+struct CameraRecord {
+    kind: u32,
+    rows: [[f32; 4]; 5],
+    eye: [f32; 4],
+    mcmillan: [[f32; 4]; 3],
+    graph: [u32; 4],
 }
 
 /// A row `(r, −r·origin)`: `r·(p − origin)` as a dot product with `(p, 1)`.
@@ -95,47 +119,7 @@ impl WalkSet {
         radiance: bool,
     ) -> Result<u32, GpuError> {
         let (w, h) = impostor.gd().size();
-        let (kind, u_row, v_row, w_row, g_row, clip_row, eye) = match impostor.camera() {
-            ImpostorCamera::Pinhole(c) => {
-                let (a, b, _) = c.mcmillan();
-                let inverse = c.mcmillan_inverse();
-                let centre = c.position();
-                let forward = c.forward();
-                let mut clip = row(forward, centre);
-                clip[3] -= c.near() as f32;
-                (
-                    PINHOLE,
-                    row(inverse.row(0), centre),
-                    row(inverse.row(1), centre),
-                    row(inverse.row(2), centre),
-                    [0.0; 4],
-                    clip,
-                    centre.extend(a.length().max(b.length())).as_vec4(),
-                )
-            }
-            ImpostorCamera::Orthographic(c) => {
-                let (corner, a, b, dir, depth) = c.parameters();
-                let mut g = row(-dir / depth, corner);
-                g[3] += 1.0;
-                (
-                    ORTHOGRAPHIC,
-                    row(a / a.length_squared(), corner),
-                    row(b / b.length_squared(), corner),
-                    [0.0, 0.0, 0.0, 1.0],
-                    g,
-                    row(dir, corner),
-                    (-dir).extend(a.length().max(b.length())).as_vec4(),
-                )
-            }
-            other => {
-                return Err(GpuError::Unsupported {
-                    what: format!(
-                        "walking a {} impostor (the GPU walks pinhole and orthographic ones)",
-                        other.kind()
-                    ),
-                });
-            }
-        };
+        let camera = self.camera_record(impostor.camera())?;
         let index = self.impostors.len() as u32;
         let first_layer = self.layers.len() as u32;
         for layer in impostor.layers() {
@@ -169,24 +153,153 @@ impl WalkSet {
         let bounds = impostor.bounds();
         let moved = now_from_built != Mat4::IDENTITY;
         let flags = (u32::from(radiance) * RADIANCE) | (u32::from(moved) * MOVED);
+        let [u_row, v_row, w_row, g_row, clip_row] = camera.rows;
+        let [m_a, m_b, m_c] = camera.mcmillan;
         self.impostors.push(GpuImpostor {
             u_row,
             v_row,
             w_row,
             g_row,
             clip_row,
-            eye: eye.to_array(),
+            eye: camera.eye,
+            m_a,
+            m_b,
+            m_c,
             box_min: bounds.min.extend(impostor.exit_margin()).to_array(),
             box_max: bounds.max.extend(0.0).to_array(),
             size: [w, h, first_layer, impostor.layer_count() as u32],
-            info: [pyramid.level_count() as u32, first_node, kind, flags],
+            info: [pyramid.level_count() as u32, first_node, camera.kind, flags],
+            graph: camera.graph,
             built_from_now: rows(now_from_built.inverse()),
             now_from_built: rows(now_from_built),
         });
         Ok(index)
     }
 
-    /// The set on `gpu`: bindings 13 to 17 of a shader that includes `shaders/walk.wgsl`.
+    /// What the shader reads of `camera` (a graph camera's frusta added to the set's).
+    fn camera_record(&mut self, camera: &ImpostorCamera) -> Result<CameraRecord, GpuError> {
+        let pinhole_rows = |c: &trompe::camera::Pinhole| {
+            let inverse = c.mcmillan_inverse();
+            let centre = c.position();
+            let mut clip = row(c.forward(), centre);
+            clip[3] -= c.near() as f32;
+            [
+                row(inverse.row(0), centre),
+                row(inverse.row(1), centre),
+                row(inverse.row(2), centre),
+                [0.0; 4],
+                clip,
+            ]
+        };
+        let texel = |a: DVec3, b: DVec3| a.length().max(b.length()) as f32;
+        Ok(match camera {
+            ImpostorCamera::Pinhole(c) => {
+                let (a, b, _) = c.mcmillan();
+                CameraRecord {
+                    kind: PINHOLE,
+                    rows: pinhole_rows(c),
+                    eye: c.position().as_vec3().extend(texel(a, b)).to_array(),
+                    mcmillan: [[0.0; 4]; 3],
+                    graph: [0; 4],
+                }
+            }
+            ImpostorCamera::Orthographic(c) => {
+                let (corner, a, b, dir, depth) = c.parameters();
+                let mut g = row(-dir / depth, corner);
+                g[3] += 1.0;
+                CameraRecord {
+                    kind: ORTHOGRAPHIC,
+                    rows: [
+                        row(a / a.length_squared(), corner),
+                        row(b / b.length_squared(), corner),
+                        [0.0, 0.0, 0.0, 1.0],
+                        g,
+                        row(dir, corner),
+                    ],
+                    eye: (-dir).as_vec3().extend(texel(a, b)).to_array(),
+                    mcmillan: [[0.0; 4]; 3],
+                    graph: [0; 4],
+                }
+            }
+            ImpostorCamera::Spoc(c) => {
+                let pinhole = c.pinhole();
+                let (a, b, m_c) = pinhole.mcmillan();
+                let (z_near, z_far) = c.depth_range();
+                let pole = c.pole();
+                let mut rows = pinhole_rows(pinhole);
+                rows[3] = [
+                    pole.x as f32,
+                    pole.y as f32,
+                    z_near as f32,
+                    (c.strength() / (z_far - z_near)) as f32,
+                ];
+                CameraRecord {
+                    kind: SPOC,
+                    rows,
+                    eye: pinhole.position().as_vec3().extend(texel(a, b)).to_array(),
+                    mcmillan: [
+                        a.as_vec3().extend(pinhole.focal() as f32).to_array(),
+                        b.as_vec3().extend(0.0).to_array(),
+                        m_c.as_vec3().extend(0.0).to_array(),
+                    ],
+                    graph: [0; 4],
+                }
+            }
+            ImpostorCamera::Graph(g) => {
+                let frusta = g.frusta();
+                if frusta.len() > MAX_FRUSTA {
+                    return Err(GpuError::Unsupported {
+                        what: format!(
+                            "a graph camera of {} frusta (the GPU walks at most {MAX_FRUSTA})",
+                            frusta.len()
+                        ),
+                    });
+                }
+                let first = self.frusta.len() / FRUSTUM_STRIDE;
+                for f in frusta {
+                    let planes: Vec<_> = std::iter::once(&f.entry)
+                        .chain(&f.sides)
+                        .chain(f.exit.as_ref())
+                        .collect();
+                    if planes.len() > FRUSTUM_PLANES {
+                        return Err(GpuError::Unsupported {
+                            what: format!(
+                                "a graph camera's frustum of {} planes (the GPU walks at most \
+                                 {FRUSTUM_PLANES})",
+                                planes.len()
+                            ),
+                        });
+                    }
+                    let count = f32::from_bits(planes.len() as u32);
+                    self.frusta.push(f.apex.as_vec3().extend(count).to_array());
+                    for m in [f.matrix, f.matrix.inverse()] {
+                        for i in 0..4 {
+                            self.frusta.push(m.row(i).as_vec4().to_array());
+                        }
+                    }
+                    for k in 0..FRUSTUM_PLANES {
+                        self.frusta.push(
+                            planes
+                                .get(k)
+                                .map_or([0.0; 4], |p| p.n.extend(p.e).as_vec4().to_array()),
+                        );
+                    }
+                }
+                let root = g.root();
+                let (a, b, _) = root.mcmillan();
+                CameraRecord {
+                    kind: GRAPH,
+                    rows: [[0.0; 4]; 5],
+                    eye: root.position().as_vec3().extend(texel(a, b)).to_array(),
+                    mcmillan: [[0.0; 4]; 3],
+                    graph: [first as u32, frusta.len() as u32, 0, 0],
+                }
+            }
+        })
+    }
+
+    /// The set on `gpu`: bindings 13 to 17 and 19 of a shader that includes `shaders/walk.wgsl`.
+
     pub fn upload(&self, gpu: &Gpu) -> Result<UploadedWalks, GpuError> {
         // A binding is never empty: an empty set is one zeroed record.
         fn bytes<T: Pod>(data: &[T]) -> Vec<u8> {
@@ -200,6 +313,7 @@ impl WalkSet {
             ("the impostors' texel planes", bytes(&self.planes)),
             ("the impostors' colours and normals", bytes(&self.looks)),
             ("the impostors' pyramids", bytes(&self.pyramid)),
+            ("the graph cameras' frusta", bytes(&self.frusta)),
         ];
         for (what, b) in &parts {
             gpu.check_storage(what, b.len() as u64)?;
@@ -215,7 +329,7 @@ impl WalkSet {
 
 /// A [`WalkSet`] on the device.
 pub struct UploadedWalks {
-    buffers: [wgpu::Buffer; 5],
+    buffers: [wgpu::Buffer; 6],
     layers: Vec<u32>,
     widths: Vec<u32>,
     first_layers: Vec<u32>,
@@ -234,9 +348,9 @@ pub struct WalkHit {
 
 impl UploadedWalks {
     /// The buffers at their bindings.
-    pub(crate) fn entries(&self) -> [(u32, &wgpu::Buffer); 5] {
-        let [a, b, c, d, e] = &self.buffers;
-        [(13, a), (14, b), (15, c), (16, d), (17, e)]
+    pub(crate) fn entries(&self) -> [(u32, &wgpu::Buffer); 6] {
+        let [a, b, c, d, e, f] = &self.buffers;
+        [(13, a), (14, b), (15, c), (16, d), (17, e), (19, f)]
     }
 
     /// Every ray's walk of impostor `index` (the library's [`Impostor::walk`], kept where

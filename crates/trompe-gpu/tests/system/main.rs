@@ -68,6 +68,10 @@ fn main() {
             trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu,
         ),
         on_gpu(
+            "trace::every_shipped_scene_renders_through_impostors_on_the_gpu_as_on_the_cpu",
+            trace::every_shipped_scene_renders_through_impostors_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
             "trace::every_shipped_scene_renders_through_pinhole_impostors_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_renders_through_pinhole_impostors_on_the_gpu_as_on_the_cpu,
         ),

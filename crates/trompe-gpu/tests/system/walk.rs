@@ -92,6 +92,8 @@ pub fn the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays(gpu: &Gpu) {
         ("pinhole", ViewCamera::Pinhole, Layers::ONE),
         ("pinhole, 3 layers", ViewCamera::Pinhole, Layers::Count(3)),
         ("orthographic", ViewCamera::Orthographic, Layers::ONE),
+        ("SPOC", ViewCamera::Spoc(None), Layers::ONE),
+        ("SPOC, 3 layers", ViewCamera::Spoc(None), Layers::Count(3)),
     ] {
         let camera =
             ImpostorCamera::fitted(kind, eye, centre, radius, region, 256, &mesh.positions)
