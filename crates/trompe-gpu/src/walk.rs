@@ -299,7 +299,6 @@ impl WalkSet {
     }
 
     /// The set on `gpu`: bindings 13 to 17 and 19 of a shader that includes `shaders/walk.wgsl`.
-
     pub fn upload(&self, gpu: &Gpu) -> Result<UploadedWalks, GpuError> {
         // A binding is never empty: an empty set is one zeroed record.
         fn bytes<T: Pod>(data: &[T]) -> Vec<u8> {
