@@ -242,7 +242,8 @@ pub struct Gpu {
     limits: wgpu::Limits,
     /// Pipelines compiled on this device, by entry point: a shader is compiled once however
     /// many scenes and frames use it.
-    compute: Mutex<HashMap<&'static str, wgpu::ComputePipeline>>,
+    /// By (module label, entry point): two modules may share an entry point's name.
+    compute: Mutex<HashMap<(String, &'static str), wgpu::ComputePipeline>>,
     render: Mutex<HashMap<&'static str, wgpu::RenderPipeline>>,
 }
 
@@ -389,7 +390,8 @@ impl Gpu {
             .collect()
     }
 
-    /// The compute pipeline of entry point `entry` of WGSL `source`, compiled on first use.
+    /// The compute pipeline of entry point `entry` of WGSL `source` (its module named `label`),
+    /// compiled on first use.
     pub(crate) fn compute_pipeline(
         &self,
         label: &str,
@@ -398,7 +400,7 @@ impl Gpu {
     ) -> wgpu::ComputePipeline {
         let mut cache = self.compute.lock().unwrap_or_else(|e| e.into_inner());
         cache
-            .entry(entry)
+            .entry((label.to_string(), entry))
             .or_insert_with(|| {
                 let module = self.module(label, source);
                 self.device

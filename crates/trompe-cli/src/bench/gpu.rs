@@ -1,8 +1,10 @@
 //! The GPU beside the CPU in one run, on the adapter `--device gpu` opens (named in the
-//! heading): the `trace` and `raster` methods' frames on every reflection scene, the scene kept on each
-//! device (the CPU keeps its BVH, the GPU its uploaded scene); that frame against output
-//! resolution (paper 1's Table 1 axis); and the exact ray query alone — the same incoherent
-//! rays through the CPU BVH and its GPU walk — as the mesh grows 16×.
+//! heading): every method with a GPU path on every reflection scene, what it keeps kept on each
+//! device (the BVH, the uploaded scene, the impostors); the `trace` and `impostor` frames
+//! against output resolution (paper 1's Table 1 axis) and the impostor frame against impostor
+//! resolution (Table 2's); the impostor secondary pass — paper 1's walk of reflected rays —
+//! beside the exact BVH pass on the same rays, on each device, as the reflected mesh grows 16×
+//! to over a million triangles; and the exact ray query alone on incoherent rays.
 //!
 //! Without a hardware GPU the adapter is Mesa's lavapipe, which runs the shaders on the CPU's
 //! cores: its figures say what the shaders cost there, not what a GPU does.
@@ -22,16 +24,17 @@ use trompe_gpu::{DeviceRenderer, Gpu, GpuBvh};
 const FRAMES: u32 = 3;
 
 /// The mean frame time of `kind` after its first frame on the CPU and on the GPU, each keeping
-/// what it keeps while nothing moves (the CPU its BVH, the GPU its uploaded scene), at the
-/// scene's time through its camera.
+/// what it keeps while nothing moves (the CPU its BVH and impostors, the GPU its uploaded scene),
+/// at the scene's time through its camera.
 fn method_pair(
     gpu: &Gpu,
     scene: &Scene,
     kind: MethodKind,
+    settings: MethodSettings,
 ) -> Result<(Duration, Duration), BenchError> {
     let t = scene.render.time;
     let time = |device: Option<&Gpu>| -> Result<Duration, BenchError> {
-        let mut renderer = DeviceRenderer::new(scene, kind, MethodSettings::default(), device)?;
+        let mut renderer = DeviceRenderer::new(scene, kind, settings.clone(), device)?;
         renderer.frame(t, None, &())?;
         let start = Instant::now();
         for _ in 0..FRAMES {
@@ -99,8 +102,11 @@ pub fn gpu(
             Scene::load(&inputs.scenes.join(format!("{name}.toml"))).map_err(Box::new)?;
         scene.camera.width = w;
         scene.camera.height = h;
-        for kind in [MethodKind::Trace, MethodKind::Raster] {
-            let (cpu, on_gpu) = method_pair(&gpu, &scene, kind)?;
+        for kind in MethodKind::ALL
+            .into_iter()
+            .filter(|k| trompe_gpu::has_gpu_path(*k))
+        {
+            let (cpu, on_gpu) = method_pair(&gpu, &scene, kind, MethodSettings::default())?;
             out.push(Figure {
                 name: format!("{kind}, {name}, {w} × {h}: GPU frame"),
                 value: ms(on_gpu),
@@ -121,14 +127,44 @@ pub fn gpu(
         let mut scene = base.clone();
         scene.camera.width = w;
         scene.camera.height = h;
-        let (cpu, on_gpu) = method_pair(&gpu, &scene, MethodKind::Trace)?;
+        for kind in [MethodKind::Trace, MethodKind::Impostor] {
+            let (cpu, on_gpu) = method_pair(&gpu, &scene, kind, MethodSettings::default())?;
+            out.push(Figure {
+                name: format!("{kind}, teapot-in-bunny, {w} × {h}: GPU frame"),
+                value: ms(on_gpu),
+                unit: "ms",
+                versus: versus(on_gpu, cpu),
+            });
+        }
+    }
+
+    // Frame time against impostor resolution (paper 1's Table 2), teapot in the bunny at
+    // 640 × 480, impostors kept.
+    let resolutions: &[u32] = if quick {
+        &[64, 128]
+    } else {
+        &[128, 256, 512, 1024]
+    };
+    for &r in resolutions {
+        let mut scene = base.clone();
+        (scene.camera.width, scene.camera.height) = if quick { (160, 120) } else { (640, 480) };
+        let settings = MethodSettings {
+            impostor_resolution: r,
+            ..MethodSettings::default()
+        };
+        let (cpu, on_gpu) = method_pair(&gpu, &scene, MethodKind::Impostor, settings)?;
         out.push(Figure {
-            name: format!("trace, teapot-in-bunny, {w} × {h}: GPU frame"),
+            name: format!(
+                "impostor, teapot-in-bunny, {} × {}, impostors {r}²: GPU frame",
+                scene.camera.width, scene.camera.height
+            ),
             value: ms(on_gpu),
             unit: "ms",
             versus: versus(on_gpu, cpu),
         });
     }
+
+    out.extend(secondary_pass(&gpu, inputs, quick)?);
 
     // The exact ray query alone: the same rays through the CPU BVH and its GPU walk, the bunny
     // then 16 of them.
@@ -173,4 +209,100 @@ pub fn gpu(
         });
     }
     Ok((heading, out))
+}
+
+/// Paper 1's claim on one device: the rays a mirror reflects toward an object, answered by a
+/// SPOC impostor of it (the walk) and by the exact BVH (the query), on the same rays — the
+/// bunny, then the bunny subdivided twice (16× the triangles); on the GPU, each beside the GPU
+/// BVH pass, and on the CPU, each beside the CPU BVH pass.
+fn secondary_pass(
+    gpu: &Gpu,
+    inputs: &trompe::eval::fixtures::Shipped,
+    quick: bool,
+) -> Result<Vec<Figure>, BenchError> {
+    use trompe::impostor::{ImpostorCamera, ViewCamera};
+    let bunny = trompe::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
+    let rays_n = if quick { 1 << 15 } else { 1 << 18 };
+    let resolution = if quick { 128 } else { 512 };
+    let mut out = Vec::new();
+    let mut mesh = bunny;
+    for grown in [1u32, 16] {
+        if grown == 16 {
+            mesh = mesh.subdivided().subdivided();
+        }
+        let triangles = mesh.triangle_count();
+        let b = mesh.bounds();
+        let (centre, radius) = (b.center(), b.radius());
+        // A mirror ball of a third of the bunny's radius, two and a half radii away.
+        let eye = centre + Vec3::new(0.7, 0.25, 0.6).normalize() * (2.5 * radius);
+        let region = radius / 3.0;
+        let camera = ImpostorCamera::fitted(
+            ViewCamera::Spoc(None),
+            eye,
+            centre,
+            radius,
+            f64::from(region),
+            resolution,
+            &mesh.positions,
+        )?;
+        let impostor = trompe::impostor::build(camera, &mesh, 0, &|_| Vec3::ONE)?;
+        impostor.prepare_walks();
+        let mut rng = trompe::geom::SplitMix64::new(23);
+        let rays: Vec<Ray> = (0..rays_n)
+            .map(|_| {
+                let origin = eye + rng.unit_vector() * region;
+                let target = centre + rng.unit_vector() * (radius * rng.next_f32().cbrt());
+                Ray::new(origin, (target - origin).normalize_or(Vec3::Y))
+            })
+            .collect();
+        let bvh = Bvh::build(vec![Arc::new(mesh.clone())]);
+        let timed = |f: &dyn Fn()| {
+            let start = Instant::now();
+            f();
+            start.elapsed()
+        };
+        let cpu_bvh = timed(&|| {
+            let _: Vec<_> = rays
+                .par_iter()
+                .map(|r| bvh.closest_hit(r, f32::INFINITY))
+                .collect();
+        });
+        let cpu_walk = timed(&|| {
+            let _: Vec<_> = rays
+                .par_iter()
+                .map(|r| impostor.closest_hit(r, f32::INFINITY))
+                .collect();
+        });
+        let on_gpu = GpuBvh::upload(gpu, &bvh)?;
+        let mut set = trompe_gpu::walk::WalkSet::new();
+        set.push(&impostor, Mat4::IDENTITY, true)?;
+        let walks = set.upload(gpu)?;
+        // First passes compile the pipelines.
+        on_gpu.leaf_hits(&rays[..1024], f32::INFINITY, false)?;
+        walks.walk(gpu, 0, &rays[..1024], f32::INFINITY)?;
+        let start = Instant::now();
+        on_gpu.leaf_hits(&rays, f32::INFINITY, false)?;
+        let gpu_bvh = start.elapsed();
+        let start = Instant::now();
+        walks.walk(gpu, 0, &rays, f32::INFINITY)?;
+        let gpu_walk = start.elapsed();
+        let mrays = |d: Duration| rays.len() as f64 / d.as_secs_f64().max(1e-12) / 1e6;
+        let k = triangles / 1000;
+        for (device, walk, exact) in [("GPU", gpu_walk, gpu_bvh), ("CPU", cpu_walk, cpu_bvh)] {
+            out.push(Figure {
+                name: format!(
+                    "secondary pass, {} reflected rays, {k}k triangles, SPOC {resolution}²: \
+                     {device} impostor walk",
+                    rays.len()
+                ),
+                value: mrays(walk),
+                unit: "Mrays/s",
+                versus: Some((
+                    walk.as_secs_f64() / exact.as_secs_f64().max(1e-12),
+                    format!("{device} BVH (time)"),
+                )),
+            });
+        }
+    }
+    Ok(out)
 }
