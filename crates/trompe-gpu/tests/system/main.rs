@@ -76,6 +76,10 @@ fn main() {
             trace::every_shipped_scene_renders_through_pinhole_impostors_on_the_gpu_as_on_the_cpu,
         ),
         on_gpu(
+            "trace::impostors_are_kept_across_frames_on_the_gpu_as_on_the_cpu",
+            trace::impostors_are_kept_across_frames_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
             "trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu,
         ),
