@@ -5,15 +5,19 @@
 //
 // Depth is reversed: a point t = (M⁻¹(X − C)).z along the image-plane normal (in focal units)
 // has depth t_near / t, 1 on the near plane and 0 at infinity, the nearest kept.
+//
+// The same pass draws impostors (paper 1 §3.1, crates/trompe-gpu/src/build.rs): through a
+// pinhole as above, or through an orthographic camera, whose image coordinates and gd are affine
+// in the point (depth = gd: 1 on the image plane, 0 as deep as it sees; nothing behind it).
 
 struct Camera {
-    // Rows of M⁻¹.
+    // Rows of M⁻¹ (orthographic: the affine rows of u, v and gd, times (X, 1)).
     row_u: vec4<f32>,
     row_v: vec4<f32>,
     row_t: vec4<f32>,
     // xyz: the eye; w: the near plane's t.
     eye: vec4<f32>,
-    // Width and height in pixels.
+    // Width and height in pixels; z: 1 for an orthographic camera.
     size: vec4<f32>,
 }
 
@@ -27,16 +31,23 @@ struct Corner {
 
 @vertex
 fn draw_corner(@location(0) position: vec3<f32>, @location(1) corner_leaf: vec2<u32>) -> Corner {
-    let r = position - camera.eye.xyz;
-    let w = vec3<f32>(dot(camera.row_u.xyz, r), dot(camera.row_v.xyz, r), dot(camera.row_t.xyz, r));
     var out: Corner;
-    // Pixel (u, v) = (w.x, w.y) / w.z, v down the image: x_ndc = 2u/W − 1, y_ndc = 1 − 2v/H.
-    out.clip = vec4<f32>(
-        2.0 * w.x / camera.size.x - w.z,
-        w.z - 2.0 * w.y / camera.size.y,
-        camera.eye.w,
-        w.z,
-    );
+    if (camera.size.z == 1.0) {
+        let p = vec4<f32>(position, 1.0);
+        let u = dot(camera.row_u, p);
+        let v = dot(camera.row_v, p);
+        out.clip = vec4<f32>(2.0 * u / camera.size.x - 1.0, 1.0 - 2.0 * v / camera.size.y, dot(camera.row_t, p), 1.0);
+    } else {
+        let r = position - camera.eye.xyz;
+        let w = vec3<f32>(dot(camera.row_u.xyz, r), dot(camera.row_v.xyz, r), dot(camera.row_t.xyz, r));
+        // Pixel (u, v) = (w.x, w.y) / w.z, v down the image: x_ndc = 2u/W − 1, y_ndc = 1 − 2v/H.
+        out.clip = vec4<f32>(
+            2.0 * w.x / camera.size.x - w.z,
+            w.z - 2.0 * w.y / camera.size.y,
+            camera.eye.w,
+            w.z,
+        );
+    }
     out.bary = vec3<f32>(
         select(0.0, 1.0, corner_leaf.x == 0u),
         select(0.0, 1.0, corner_leaf.x == 1u),

@@ -334,6 +334,51 @@ impl Gpu {
         self.buffer_with(label, data, wgpu::BufferUsages::UNIFORM)
     }
 
+    /// Submits `encoder`, then copies `texture` (`w × h`, four 32-bit words a texel) back: its
+    /// texels, row-major.
+    pub(crate) fn read_texture(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        (w, h): (u32, u32),
+        what: &'static str,
+    ) -> Result<Vec<[u32; 4]>, GpuError> {
+        let row =
+            (u64::from(w) * 16).next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+        let buffer = self.buffer(
+            "texture read back",
+            row * u64::from(h),
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row as u32),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        let bytes = self.read_back(encoder, &[buffer], what)?;
+        Ok(bytes[0]
+            .chunks(row as usize)
+            .take(h as usize)
+            .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(&r[..w as usize * 16]))
+            .collect())
+    }
+
     /// Submits `encoder`, then copies each of `sources` back and waits for them (one
     /// submission, one wait).
     pub(crate) fn read_back(

@@ -11,6 +11,7 @@
 //!   and the impostor methods: the same tracer with what mirrors and glass send out answered
 //!   by walking impostors.
 //! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
+//! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
 //!
 //! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
 //! uploads and runs, and answers come back as the library's types.
@@ -22,6 +23,7 @@
 //! # Ok::<(), trompe_gpu::GpuError>(())
 //! ```
 
+pub mod build;
 pub mod bvh;
 pub mod device;
 pub mod methods;

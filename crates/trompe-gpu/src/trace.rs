@@ -175,15 +175,55 @@ struct GpuCorner {
     leaf: u32,
 }
 
-/// The rasterizer's camera: the rows of `M⁻¹`, the eye with the near plane's `t`, the size.
+/// The rasterizer's camera (`shaders/raster.wgsl`'s `Camera`). A pinhole: the rows of `M⁻¹`,
+/// the eye with the near plane's `t`, the size. An orthographic camera: the affine rows of its
+/// image coordinates and its `gd`, the size, and kind 1.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuRasterCamera {
+pub(crate) struct GpuRasterCamera {
     row_u: [f32; 4],
     row_v: [f32; 4],
     row_t: [f32; 4],
     eye: [f32; 4],
     size: [f32; 4],
+}
+
+impl GpuRasterCamera {
+    /// Through a pinhole.
+    pub(crate) fn pinhole(camera: &Pinhole) -> Self {
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let inverse = camera.mcmillan_inverse();
+        let row = |i: usize| {
+            let r = inverse.row(i).as_vec3();
+            [r.x, r.y, r.z, 0.0]
+        };
+        let t_near = (camera.near() / camera.focal()) as f32;
+        GpuRasterCamera {
+            row_u: row(0),
+            row_v: row(1),
+            row_t: row(2),
+            eye: v4(camera.position().as_vec3(), t_near),
+            size: [w as f32, h as f32, 0.0, 0.0],
+        }
+    }
+
+    /// Through an orthographic camera: `u = (p − corner)·a/|a|²`, `v` likewise, and
+    /// `gd = 1 − (p − corner)·dir/depth`, each a row times `(p, 1)`.
+    pub(crate) fn orthographic(camera: &trompe::camera::Orthographic) -> Self {
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let (corner, a, b, dir, depth) = camera.parameters();
+        let row = |r: glam::DVec3, offset: f64| {
+            let v = r.extend(offset - r.dot(corner)).as_vec4();
+            v.to_array()
+        };
+        GpuRasterCamera {
+            row_u: row(a / a.length_squared(), 0.0),
+            row_v: row(b / b.length_squared(), 0.0),
+            row_t: row(-dir / depth, 1.0),
+            eye: [0.0; 4],
+            size: [w as f32, h as f32, 1.0, 0.0],
+        }
+    }
 }
 
 /// The visibility buffer's texel format: leaf + 1, b1 bits, b2 bits.
@@ -441,85 +481,84 @@ impl GpuTracer<'_> {
     fn draw_visibility(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (pipeline, vertices, vertex_count): &(wgpu::RenderPipeline, wgpu::Buffer, u32),
+        raster: &(wgpu::RenderPipeline, wgpu::Buffer, u32),
         camera: &Pinhole,
     ) -> wgpu::Texture {
-        let gpu = self.gpu;
         let (w, h) = trompe::camera::Projection::resolution(camera);
-        let inverse = camera.mcmillan_inverse();
-        let row = |i: usize| {
-            let r = inverse.row(i).as_vec3();
-            [r.x, r.y, r.z, 0.0]
-        };
-        let t_near = (camera.near() / camera.focal()) as f32;
-        let uniform = GpuRasterCamera {
-            row_u: row(0),
-            row_v: row(1),
-            row_t: row(2),
-            eye: v4(camera.position().as_vec3(), t_near),
-            size: [w as f32, h as f32, 0.0, 0.0],
-        };
-        let uniform = gpu.uniform_with("raster camera", bytemuck::bytes_of(&uniform));
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("raster"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            }],
-        });
-        let visibility = visibility_texture(gpu, w, h);
-        let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("raster depth"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
-        let (color_view, depth_view) = (
-            visibility.create_view(&Default::default()),
-            depth.create_view(&Default::default()),
-        );
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("visibility"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &color_view,
-                resolve_target: None,
-                depth_slice: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    // Reversed depth: 0 is infinitely far.
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.draw(0..*vertex_count, 0..1);
-        drop(pass);
+        let visibility = visibility_texture(self.gpu, w, h);
+        let uniform = GpuRasterCamera::pinhole(camera);
+        draw_into_visibility(self.gpu, encoder, raster, &uniform, &visibility, (w, h));
         visibility
     }
 }
 
-/// A `w × h` visibility texture, drawn into and read by the shading pass.
-fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
+/// Draws `raster`'s triangles through `camera` into `visibility` (`w × h`, cleared first),
+/// recorded in `encoder`.
+pub(crate) fn draw_into_visibility(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    (pipeline, vertices, vertex_count): &(wgpu::RenderPipeline, wgpu::Buffer, u32),
+    camera: &GpuRasterCamera,
+    visibility: &wgpu::Texture,
+    (w, h): (u32, u32),
+) {
+    let uniform = gpu.uniform_with("raster camera", bytemuck::bytes_of(camera));
+    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("raster"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: uniform.as_entire_binding(),
+        }],
+    });
+    let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("raster depth"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: DEPTH,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let (color_view, depth_view) = (
+        visibility.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+    );
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("visibility"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &color_view,
+            resolve_target: None,
+            depth_slice: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &depth_view,
+            depth_ops: Some(wgpu::Operations {
+                // Reversed depth: 0 is infinitely far.
+                load: wgpu::LoadOp::Clear(0.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, &group, &[]);
+    pass.set_vertex_buffer(0, vertices.slice(..));
+    pass.draw(0..*vertex_count, 0..1);
+}
+
+/// A `w × h` visibility texture, drawn into and read by the shading pass (or read back).
+pub(crate) fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
     gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("visibility"),
         size: wgpu::Extent3d {
@@ -531,7 +570,9 @@ fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: VISIBILITY,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     })
 }
@@ -541,8 +582,16 @@ fn raster_pipeline(
     gpu: &Gpu,
     bvh: &Bvh,
 ) -> Result<(wgpu::RenderPipeline, wgpu::Buffer, u32), GpuError> {
-    let corners: Vec<GpuCorner> = bvh
-        .leaf_corners()
+    raster_pipeline_of(gpu, bvh.leaf_corners())
+}
+
+/// The visibility pass's pipeline and vertices: the three corners of every triangle of
+/// `triangles`, each drawn with its index.
+pub(crate) fn raster_pipeline_of(
+    gpu: &Gpu,
+    triangles: &[[Vec3; 3]],
+) -> Result<(wgpu::RenderPipeline, wgpu::Buffer, u32), GpuError> {
+    let corners: Vec<GpuCorner> = triangles
         .iter()
         .enumerate()
         .flat_map(|(leaf, c)| {

@@ -5,10 +5,12 @@
 //! the pieces of the triangles clipped to it, over one image.
 
 mod clip;
+mod drawn;
 mod resolve;
 mod tessellate;
 
 use clip::*;
+pub use drawn::{DrawnError, DrawnTexel, resolve_drawn};
 pub(super) use resolve::impostor_bounds;
 use resolve::*;
 pub(super) use resolve::{

@@ -3,6 +3,7 @@
 //! test is *ignored* — counted in the summary, the reason printed above it — or failed where
 //! `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets it.
 
+mod build;
 mod bvh;
 mod trace;
 mod walk;
@@ -50,6 +51,14 @@ fn main() {
         on_gpu(
             "bvh::an_empty_scene_misses_and_no_rays_is_no_work",
             bvh::an_empty_scene_misses_and_no_rays_is_no_work,
+        ),
+        on_gpu(
+            "build::gpu_built_impostors_match_the_cpu_built_texel_for_texel",
+            build::gpu_built_impostors_match_the_cpu_built_texel_for_texel,
+        ),
+        on_gpu(
+            "build::a_camera_the_gpu_does_not_draw_is_refused",
+            build::a_camera_the_gpu_does_not_draw_is_refused,
         ),
         on_gpu(
             "walk::the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays",

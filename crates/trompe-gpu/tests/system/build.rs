@@ -1,0 +1,139 @@
+//! Impostors built on the GPU (`trompe_gpu::build`) against the library's own build of the same
+//! mesh through the same camera, texel for texel.
+
+use glam::Vec3;
+use std::path::Path;
+use trompe::geom::{Mesh, Ray};
+use trompe::impostor::{Impostor, ImpostorCamera, SurfaceSample, ViewCamera};
+use trompe_gpu::Gpu;
+
+fn bunny() -> Mesh {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes/bunny.obj");
+    trompe::geom::io::load(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .mesh
+}
+
+/// A colour that names the triangle a texel stores (its index in the three channels), so equal
+/// colours mean the same triangle.
+fn triangle_colour(s: &SurfaceSample) -> Vec3 {
+    let t = s.triangle;
+    Vec3::new(
+        (t & 0xff) as f32,
+        ((t >> 8) & 0xff) as f32,
+        (t >> 16) as f32,
+    ) / 255.0
+}
+
+/// How two impostors of one mesh through one camera differ: texels covered by one only, texels
+/// storing another triangle, the largest relative `gd` difference where they store the same.
+fn differences(cpu: &Impostor, gpu: &Impostor) -> (usize, usize, usize, f32) {
+    let (w, h) = cpu.gd().size();
+    let (mut covered, mut one_only, mut other, mut worst) = (0, 0, 0, 0.0f32);
+    for y in 0..h {
+        for x in 0..w {
+            let (a, b) = (cpu.gd().get(x, y), gpu.gd().get(x, y));
+            match (a > 0.0, b > 0.0) {
+                (true, true) => {
+                    covered += 1;
+                    if cpu.color_at(x, y) != gpu.color_at(x, y) {
+                        other += 1;
+                    } else {
+                        worst = worst.max((a - b).abs() / a);
+                    }
+                }
+                (false, false) => {}
+                _ => one_only += 1,
+            }
+        }
+    }
+    (covered, one_only, other, worst)
+}
+
+pub fn gpu_built_impostors_match_the_cpu_built_texel_for_texel(gpu: &Gpu) {
+    let mesh = bunny();
+    let b = mesh.bounds();
+    let (centre, radius) = (b.center(), b.radius());
+    let eye = centre + Vec3::new(0.7, 0.25, 0.6).normalize() * (2.5 * radius);
+    let mut cameras: Vec<(String, ImpostorCamera)> =
+        [ViewCamera::Pinhole, ViewCamera::Orthographic]
+            .into_iter()
+            .map(|kind| {
+                let c =
+                    ImpostorCamera::fitted(kind, eye, centre, radius, 0.1, 256, &mesh.positions)
+                        .unwrap();
+                (c.kind().to_string(), c)
+            })
+            .collect();
+    // A cube-map face from inside the bunny's bounding box, its near plane a hair ahead.
+    let inside =
+        trompe::camera::Pinhole::look_at(centre, centre + Vec3::Z, Vec3::Y, 90.0, 192, 192)
+            .unwrap()
+            .with_near(f64::from(radius) * 1e-4);
+    cameras.push(("cube face".into(), ImpostorCamera::Pinhole(inside)));
+    for (name, camera) in cameras {
+        let cpu = trompe::impostor::build(camera.clone(), &mesh, 3, &triangle_colour).unwrap();
+        let on_gpu =
+            trompe_gpu::build::build_impostor(gpu, camera, (&mesh, 3), &triangle_colour).unwrap();
+        let (covered, one_only, other, worst) = differences(&cpu, &on_gpu);
+        let texels = cpu.gd().pixels().len();
+        println!(
+            "{name}: {covered} texels covered by both, {one_only} by one only, {other} store \
+             another triangle; gd within {worst:.1e} relative"
+        );
+        assert!(covered > texels / 10, "{name}: {covered} covered");
+        // Two rasterizers' coverage rules and depth rounding: at most 0.5 % of the covered
+        // texels differ, and depths agree to 1e-5.
+        assert!(
+            one_only + other <= covered / 200,
+            "{name}: {one_only} + {other} of {covered}"
+        );
+        assert!(worst <= 1e-5, "{name}: gd differs by {worst:e}");
+        assert_eq!(on_gpu.bounds(), cpu.bounds());
+        // Walked by the library, the two answer reflected rays alike.
+        let mut rng = trompe::geom::SplitMix64::new(5);
+        let rays: Vec<Ray> = (0..4000)
+            .map(|_| {
+                let origin = eye + rng.unit_vector() * 0.1 * radius;
+                let target = centre + rng.unit_vector() * radius * rng.next_f32().cbrt();
+                Ray::new(origin, (target - origin).normalize())
+            })
+            .collect();
+        let texel = |imp: &Impostor, r: &Ray| {
+            imp.walk(r, f32::INFINITY)
+                .0
+                .map(|h| (h.uv.x as u32, h.uv.y as u32))
+        };
+        let same = rays
+            .iter()
+            .filter(|r| texel(&cpu, r) == texel(&on_gpu, r))
+            .count();
+        assert!(
+            same * 1000 >= 995 * rays.len(),
+            "{name}: {same} of {} walks agree",
+            rays.len()
+        );
+    }
+}
+
+/// A SPOC or a graph camera is refused with an error naming it, not a panic.
+pub fn a_camera_the_gpu_does_not_draw_is_refused(gpu: &Gpu) {
+    let mesh = bunny();
+    let b = mesh.bounds();
+    let eye = b.center() + Vec3::Z * (3.0 * b.radius());
+    let spoc = ImpostorCamera::fitted(
+        ViewCamera::Spoc(None),
+        eye,
+        b.center(),
+        b.radius(),
+        0.1,
+        64,
+        &mesh.positions,
+    )
+    .unwrap();
+    let e = trompe_gpu::build::build_impostor(gpu, spoc, (&mesh, 0), &|_| Vec3::ONE).unwrap_err();
+    assert!(
+        e.to_string().contains("spoc") || e.to_string().contains("SPOC"),
+        "{e}"
+    );
+}

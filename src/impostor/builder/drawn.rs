@@ -1,0 +1,124 @@
+//! Impostors from a visibility image drawn elsewhere (paper 1 §3.1 builds impostors by
+//! rasterization on graphics hardware): a GPU's rasterizer draws the mesh through the
+//! impostor's camera — per texel the triangle its centre sees and that point's barycentrics —
+//! and the library resolves the image into the maps exactly as it resolves its own
+//! (`resolve.rs`), so an impostor built either way is walked, saved and lit alike.
+//!
+//! Invariants: the depth of a texel is that of the point its barycentrics name (for a projective
+//! camera the depth a rasterizer interpolates at the texel's centre); an image naming a triangle
+//! the mesh does not have, or of the wrong size, is refused, never read past.
+
+use super::SurfaceSample;
+use super::resolve::{MapsBefore, Visible, full_barycentrics, resolve, zeroed_impostor};
+use crate::frame::FrameError;
+use crate::geom::Mesh;
+use crate::impostor::{Impostor, ImpostorCamera};
+use glam::{Vec2, Vec3};
+use thiserror::Error;
+
+/// What a visibility image drawn elsewhere holds at one texel: the triangle of the mesh its
+/// centre sees and the barycentric weights of that triangle's corners 1 and 2 there (`None`:
+/// nothing).
+pub type DrawnTexel = Option<(u32, Vec2)>;
+
+/// Why a visibility image drawn elsewhere could not be resolved.
+#[derive(Debug, Error)]
+pub enum DrawnError {
+    /// The image is not the camera's size.
+    #[error("a visibility image of {got} texels for a camera of {width} × {height}")]
+    Size {
+        /// Texels given.
+        got: usize,
+        /// The camera's width.
+        width: u32,
+        /// The camera's height.
+        height: u32,
+    },
+    /// A texel names a triangle the mesh does not have.
+    #[error("texel {texel} of the visibility image names triangle {triangle} of a mesh of {count}")]
+    Triangle {
+        /// The texel, row-major.
+        texel: usize,
+        /// The triangle it names.
+        triangle: u32,
+        /// The mesh's triangles.
+        count: usize,
+    },
+    /// A camera whose image a rasterizer does not draw straight (a SPOC's is drawn tessellated,
+    /// a graph camera's frustum by frustum).
+    #[error(
+        "a {0} camera's visibility image is not drawn in one pass; build it with `ImpostorBuilder::build`"
+    )]
+    Camera(&'static str),
+    /// The maps could not be allocated.
+    #[error(transparent)]
+    Maps(#[from] FrameError),
+}
+
+/// An impostor of `mesh` (object id `object`) through `camera` — a pinhole or an orthographic
+/// camera — from `drawn`, the visibility image a rasterizer drew of it through that camera
+/// (row-major), each texel coloured by `color` as [`super::build`] colours it.
+pub fn resolve_drawn<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    camera: ImpostorCamera,
+    (mesh, object): (&Mesh, u32),
+    color: &F,
+    drawn: &[DrawnTexel],
+) -> Result<Impostor, DrawnError> {
+    if matches!(camera, ImpostorCamera::Spoc(_) | ImpostorCamera::Graph(_)) {
+        return Err(DrawnError::Camera(camera.kind()));
+    }
+    let (width, height) = camera.resolution();
+    if drawn.len() as u64 != u64::from(width) * u64::from(height) {
+        return Err(DrawnError::Size {
+            got: drawn.len(),
+            width,
+            height,
+        });
+    }
+    let count = mesh.triangle_count();
+    if let Some((texel, &Some((triangle, _)))) = drawn
+        .iter()
+        .enumerate()
+        .find(|(_, d)| d.is_some_and(|(t, _)| t as usize >= count))
+    {
+        return Err(DrawnError::Triangle {
+            texel,
+            triangle,
+            count,
+        });
+    }
+    let mut impostor = zeroed_impostor(camera)?;
+    // Each texel's depth: that of the point it sees (0, empty, where the camera refuses the
+    // point: a hair behind its near plane).
+    let depth: Vec<f32> = drawn
+        .iter()
+        .map(|d| {
+            d.map_or(0.0, |(t, b)| {
+                let corners = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
+                let w = full_barycentrics(b);
+                let p = corners[0] * w.x + corners[1] * w.y + corners[2] * w.z;
+                impostor
+                    .camera
+                    .project(p.as_dvec3())
+                    .map_or(0.0, |q| q.gd as f32)
+            })
+        })
+        .collect();
+    impostor.gd.pixels_mut().copy_from_slice(&depth);
+    let visible = |i: usize| {
+        let (triangle, b) = drawn[i].filter(|_| depth[i] > 0.0)?;
+        Some(Visible {
+            triangle,
+            bary: full_barycentrics(b),
+            frustum: None,
+        })
+    };
+    resolve(
+        &mut impostor,
+        (mesh, object),
+        color,
+        MapsBefore::Zeroed,
+        visible,
+    );
+    Ok(impostor)
+}
