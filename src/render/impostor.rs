@@ -287,6 +287,25 @@ impl SecondaryQuery for ReflectorImpostors {
     }
 }
 
+/// What draws impostors' visibility images elsewhere — a GPU's rasterizer (`trompe-gpu`) — for
+/// the impostor methods to resolve as they resolve their own ([`crate::impostor::resolve_drawn`],
+/// paper 1 §3.1); the cameras it does not draw are built by the library.
+pub trait ImpostorDrawer: Send + Sync {
+    /// The visibility image of `mesh` through `camera`, or `None` where it does not draw this
+    /// camera; `Err` with the device's reason where it failed.
+    fn draw(
+        &self,
+        camera: &ImpostorCamera,
+        mesh: &Mesh,
+    ) -> Option<Result<Vec<crate::impostor::DrawnTexel>, String>>;
+}
+
+impl std::fmt::Debug for dyn ImpostorDrawer + '_ {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ImpostorDrawer")
+    }
+}
+
 /// What the impostor method is given besides the view: the resolution of the impostors it
 /// builds, and per object id the baked impostor to use instead (`None`, or a slice shorter
 /// than the objects: build one).
@@ -310,6 +329,8 @@ pub struct ImpostorInputs<'a> {
     pub mirrors: Mirrors,
     /// What finds the surfaces the eye sees.
     pub primary: super::Primary,
+    /// What draws impostors elsewhere (`None`: the library builds every one).
+    pub drawer: Option<&'a dyn ImpostorDrawer>,
 }
 
 impl ImpostorInputs<'_> {
@@ -325,6 +346,7 @@ impl ImpostorInputs<'_> {
             refraction: super::Refraction::Exact,
             mirrors: Mirrors::Exact,
             primary: super::Primary::Traced,
+            drawer: None,
         }
     }
 }
@@ -460,12 +482,14 @@ pub(super) fn seen_as_impostor(view: &View, o: usize, mirrors: Mirrors) -> bool 
 
 /// The impostors of object `o` that the rays of mirror or glass object `r` meet, built from
 /// `r`'s centre: their colours the albedo of a diffuse object (for [`lit`] to light), black
-/// for a mirror, whose impostors keep only its surface.
+/// for a mirror, whose impostors keep only its surface. Those `inputs.drawer` draws are
+/// resolved from its images, and counted in `drawn`.
 pub(super) fn build_unlit(
     view: &View,
     (r, o): (usize, usize),
     inputs: &ImpostorInputs<'_>,
     builder: &mut ImpostorBuilder,
+    drawn: &mut usize,
 ) -> Result<Vec<Impostor>, RenderError> {
     let outside = if inputs.pinhole {
         ViewCamera::Pinhole
@@ -500,7 +524,20 @@ pub(super) fn build_unlit(
     cameras
         .into_iter()
         .map(|camera| {
-            let imp = builder.build(camera, mesh, o as u32, &color)?;
+            let imp = match inputs.drawer.and_then(|d| d.draw(&camera, mesh)) {
+                Some(image) => {
+                    let failed = |reason: String| RenderError::Drawn {
+                        object: o,
+                        reflector: r,
+                        reason,
+                    };
+                    let image = image.map_err(failed)?;
+                    *drawn += 1;
+                    crate::impostor::resolve_drawn(camera, (mesh, o as u32), &color, &image)
+                        .map_err(|e| failed(e.to_string()))?
+                }
+                None => builder.build(camera, mesh, o as u32, &color)?,
+            };
             imp.prepare_walks();
             Ok(imp)
         })
@@ -546,7 +583,7 @@ fn reflector_impostors(
                 });
                 continue;
             }
-            for unlit in build_unlit(view, (r, o), inputs, &mut builder)? {
+            for unlit in build_unlit(view, (r, o), inputs, &mut builder, &mut 0)? {
                 let impostor = if radiance {
                     lit(&unlit, None, lighting, inputs.shadows)
                 } else {

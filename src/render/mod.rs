@@ -23,7 +23,9 @@ mod trace;
 pub mod wyman;
 
 pub use impostor::{DEFAULT_IMPOSTOR_RESOLUTION, render_impostor};
-pub use impostor::{ImpostorInputs, ReflectorImpostors, SeenImpostor, StandIns, placed_cameras};
+pub use impostor::{
+    ImpostorDrawer, ImpostorInputs, ReflectorImpostors, SeenImpostor, StandIns, placed_cameras,
+};
 pub use raster::{primary_hits, render_raster};
 pub use sequence::{FrameReport, PreparedFrame, Sequence};
 pub use trace::{Tracer, render_trace, shade_pixels, shade_rows};
@@ -177,6 +179,18 @@ pub enum RenderError {
         reflector: usize,
         /// Why not.
         reason: &'static str,
+    },
+    /// The device that draws impostors for the impostor methods could not draw one.
+    #[error(
+        "object {object} seen from mirror/glass object {reflector}: drawing its impostor: {reason}"
+    )]
+    Drawn {
+        /// The object the impostor replaces.
+        object: usize,
+        /// The mirror or glass object.
+        reflector: usize,
+        /// The device's, or the library's resolve's, reason.
+        reason: String,
     },
     /// The frame, the BVH or the impostors would need more memory than the budget allows.
     #[error(transparent)]

@@ -41,15 +41,17 @@ pub struct FrameReport {
     pub reused: usize,
     /// Kept impostors lit again because something in the scene moved.
     pub relit: usize,
+    /// Of those built, how many a device drew ([`Sequence::with_drawer`]).
+    pub drawn: usize,
 }
 
 impl std::fmt::Display for FrameReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "impostors: {} built, {} reused ({} relit)",
-            self.built, self.reused, self.relit
-        )
+        write!(f, "impostors: {} built", self.built)?;
+        if self.drawn > 0 {
+            write!(f, " ({} drawn by the device)", self.drawn)?;
+        }
+        write!(f, ", {} reused ({} relit)", self.reused, self.relit)
     }
 }
 
@@ -71,6 +73,8 @@ pub struct Sequence<'a> {
     /// The scene's BVH and every object's pose it was built at (no object deforming).
     bvh: Option<(Vec<Mat4>, Arc<Bvh>)>,
     builder: ImpostorBuilder,
+    /// What draws impostors elsewhere (a GPU), if anything.
+    drawer: Option<Arc<dyn super::ImpostorDrawer + 'a>>,
 }
 
 /// What [`Sequence::impostor_answers`] gives: a frame of an impostor method, ready to trace.
@@ -117,6 +121,16 @@ impl<'a> Sequence<'a> {
             answers: None,
             last_report: FrameReport::default(),
             builder: ImpostorBuilder::new(),
+            drawer: None,
+        }
+    }
+
+    /// The same sequence, the impostors `drawer` draws (a GPU's rasterizer) resolved from its
+    /// images rather than built by the library (paper 1 §3.1 builds impostors on the GPU).
+    pub fn with_drawer(self, drawer: Arc<dyn super::ImpostorDrawer + 'a>) -> Self {
+        Self {
+            drawer: Some(drawer),
+            ..self
         }
     }
 
@@ -240,6 +254,7 @@ impl<'a> Sequence<'a> {
         let stand_ins = self.stand_ins.clone();
         let poses = scene.poses_at(t);
         let still = !scene.deforms();
+        let drawer = self.drawer.clone();
         let inputs = ImpostorInputs {
             shadows: Some(Shadows {
                 occluders: bvh,
@@ -250,6 +265,7 @@ impl<'a> Sequence<'a> {
             mirrors: self.options.mirrors,
             primary: self.options.primary,
             mazes: &stand_ins.mazes,
+            drawer: drawer.as_deref().map(|d| d as &dyn super::ImpostorDrawer),
             ..ImpostorInputs::new(resolution)
         };
         crate::frame::check_size(u64::from(resolution), u64::from(resolution))?;
@@ -271,9 +287,8 @@ impl<'a> Sequence<'a> {
             // stand.
             Some(answers) if !moved => {
                 self.last_report = FrameReport {
-                    built: 0,
                     reused: self.last_report.built + self.last_report.reused,
-                    relit: 0,
+                    ..FrameReport::default()
                 };
                 answers.clone()
             }
@@ -370,7 +385,13 @@ impl<'a> Sequence<'a> {
                         (k, false)
                     }
                     (None, _) => {
-                        let built = build_unlit(view, (r, o), inputs, &mut self.builder)?;
+                        let built = build_unlit(
+                            view,
+                            (r, o),
+                            inputs,
+                            &mut self.builder,
+                            &mut report.drawn,
+                        )?;
                         report.built += built.len();
                         let kept = Kept {
                             unlit: built.into_iter().map(Arc::new).collect(),

@@ -46,6 +46,26 @@ pub fn build_impostor<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     )?)
 }
 
+/// The GPU as the impostor methods' drawer ([`trompe::render::ImpostorDrawer`]): it draws the
+/// pinhole and orthographic impostors (cube maps, floors, pinhole-impostor's planar images)
+/// and leaves SPOCs and graph cameras to the library.
+pub struct GpuDrawer<'a>(pub &'a Gpu);
+
+impl trompe::render::ImpostorDrawer for GpuDrawer<'_> {
+    fn draw(
+        &self,
+        camera: &ImpostorCamera,
+        mesh: &Mesh,
+    ) -> Option<Result<Vec<DrawnTexel>, String>> {
+        match camera {
+            ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {
+                Some(draw(self.0, camera, mesh).map_err(|e| e.to_string()))
+            }
+            ImpostorCamera::Spoc(_) | ImpostorCamera::Graph(_) => None,
+        }
+    }
+}
+
 /// The visibility image of `mesh` through `camera` (pinhole or orthographic), drawn on `gpu`:
 /// per texel, row-major, the triangle its centre sees and the barycentrics of its corners 1 and
 /// 2 there.

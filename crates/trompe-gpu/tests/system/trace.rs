@@ -183,8 +183,15 @@ material = { type = "mirror", tint = [0.9, 0.9, 0.9] }
         let c = cpu.frame(t, None, &()).unwrap();
         let g = on_gpu.frame(t, None, &()).unwrap();
         eprintln!("t = {t}: CPU {} | GPU {}", c.report, g.report);
-        assert!(g.report.ends_with(&c.report), "{} | {}", g.report, c.report);
-        if i > 0 {
+        if i == 0 {
+            // The floor's orthographic impostor drawn by the GPU rasterizer, the bunny's SPOC
+            // by the library.
+            assert!(
+                g.report.contains("2 built (1 drawn by the device)"),
+                "{}",
+                g.report
+            );
+        } else {
             // Kept, not rebuilt: the bunny turned rigidly; both lit again.
             assert!(
                 g.report.contains("0 built, 2 reused (2 relit)"),
