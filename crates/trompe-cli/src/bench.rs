@@ -709,6 +709,9 @@ pub enum BenchError {
     /// The GPU could not be opened or failed.
     #[error(transparent)]
     Gpu(#[from] trompe_gpu::GpuError),
+    /// An impostor built on the GPU.
+    #[error(transparent)]
+    GpuBuild(#[from] trompe_gpu::build::BuildError),
     /// A method failed on one of its devices.
     #[error(transparent)]
     Device(#[from] trompe_gpu::DeviceError),

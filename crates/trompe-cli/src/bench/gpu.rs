@@ -165,6 +165,7 @@ pub fn gpu(
     }
 
     out.extend(secondary_pass(&gpu, inputs, quick)?);
+    out.extend(impostor_builds(&gpu, inputs, quick)?);
 
     // The exact ray query alone: the same rays through the CPU BVH and its GPU walk, the bunny
     // then 16 of them.
@@ -303,6 +304,60 @@ fn secondary_pass(
                 )),
             });
         }
+    }
+    Ok(out)
+}
+
+/// Paper 1 §3.1's construction on each device: a pinhole impostor of the bunny, then of the
+/// bunny subdivided twice, drawn by the GPU rasterizer and resolved by the library, beside the
+/// library's own build (its rasterizer and the same resolve).
+fn impostor_builds(
+    gpu: &Gpu,
+    inputs: &trompe::eval::fixtures::Shipped,
+    quick: bool,
+) -> Result<Vec<Figure>, BenchError> {
+    use trompe::impostor::{ImpostorCamera, ViewCamera};
+    let mut mesh = trompe::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
+    let resolution = if quick { 256 } else { 1024 };
+    let mut out = Vec::new();
+    for grown in [1u32, 16] {
+        if grown == 16 {
+            mesh = mesh.subdivided().subdivided();
+        }
+        let b = mesh.bounds();
+        let eye = b.center() + Vec3::new(0.7, 0.25, 0.6).normalize() * (2.5 * b.radius());
+        let camera = ImpostorCamera::fitted(
+            ViewCamera::Pinhole,
+            eye,
+            b.center(),
+            b.radius(),
+            0.1,
+            resolution,
+            &mesh.positions,
+        )?;
+        let color = |_: &trompe::impostor::SurfaceSample| Vec3::ONE;
+        let mut builder = trompe::impostor::ImpostorBuilder::new();
+        // Each once first: the GPU compiles its pipeline, the builder allocates its memory.
+        builder.build(camera.clone(), &mesh, 0, &color)?;
+        trompe_gpu::build::build_impostor(gpu, camera.clone(), (&mesh, 0), &color)?;
+        let start = Instant::now();
+        builder.build(camera.clone(), &mesh, 0, &color)?;
+        let cpu = start.elapsed();
+        let start = Instant::now();
+        trompe_gpu::build::build_impostor(gpu, camera, (&mesh, 0), &color)?;
+        let on_gpu = start.elapsed();
+        out.push(Figure {
+            name: format!(
+                "impostor build, pinhole {resolution}², {}k triangles: GPU draw + library resolve",
+                mesh.triangle_count() / 1000
+            ),
+            value: ms(on_gpu),
+            unit: "ms",
+            versus: Some((
+                on_gpu.as_secs_f64() / cpu.as_secs_f64().max(1e-12),
+                "CPU".to_string(),
+            )),
+        });
     }
     Ok(out)
 }
