@@ -511,20 +511,13 @@ pub(crate) fn draw_into_visibility(
             resource: uniform.as_entire_binding(),
         }],
     });
-    let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("raster depth"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: DEPTH,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
+    let depth = texture(
+        gpu,
+        "raster depth",
+        (w, h),
+        DEPTH,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
     let (color_view, depth_view) = (
         visibility.create_view(&Default::default()),
         depth.create_view(&Default::default()),
@@ -559,8 +552,22 @@ pub(crate) fn draw_into_visibility(
 
 /// A `w × h` visibility texture, drawn into and read by the shading pass (or read back).
 pub(crate) fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+        | wgpu::TextureUsages::TEXTURE_BINDING
+        | wgpu::TextureUsages::COPY_SRC;
+    texture(gpu, "visibility", (w, h), VISIBILITY, usage)
+}
+
+/// A `w × h` 2-D texture of one level.
+fn texture(
+    gpu: &Gpu,
+    label: &str,
+    (w, h): (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
     gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("visibility"),
+        label: Some(label),
         size: wgpu::Extent3d {
             width: w,
             height: h,
@@ -569,10 +576,8 @@ pub(crate) fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: VISIBILITY,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
+        format,
+        usage,
         view_formats: &[],
     })
 }
