@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The whole GPU bench in one command, on whatever machine has the GPU: builds trompe, names the
-# adapter, runs `trompe bench gpu` (the trace method beside the CPU on every reflection scene,
-# against output resolution up to 1920 × 1080, and the exact ray query as the mesh grows 16×),
-# and writes everything to one file (default: bench/gpu-results.txt).
+# adapter, runs `trompe bench gpu` (every method with a GPU path beside the CPU on every
+# reflection scene; trace and impostor frames against output resolution up to 1920 × 1080, the
+# impostor frame against impostor resolution; the impostor walk beside the BVH on the same
+# reflected rays as the mesh grows 16×; impostor construction; the exact ray query), and writes
+# everything to one file (default: bench/gpu-results.txt).
 #
 #   bench/gpu.sh [OUTPUT_FILE]
 #
