@@ -7,8 +7,10 @@
 // has depth t_near / t, 1 on the near plane and 0 at infinity, the nearest kept.
 //
 // The same pass draws impostors (paper 1 §3.1, crates/trompe-gpu/src/build.rs): through a
-// pinhole as above, or through an orthographic camera, whose image coordinates and gd are affine
-// in the point (depth = gd: 1 on the image plane, 0 as deep as it sees; nothing behind it).
+// pinhole as above; through a SPOC (§3), each corner of the tessellated mesh pushed from the pole
+// by 1 + κ(z) after its pinhole projection, depth and barycentrics as the pinhole's; or through
+// an orthographic camera, whose image coordinates and gd are affine in the point (depth = gd: 1
+// on the image plane, 0 as deep as it sees; nothing behind it).
 
 struct Camera {
     // Rows of M⁻¹ (orthographic: the affine rows of u, v and gd, times (X, 1)).
@@ -17,8 +19,11 @@ struct Camera {
     row_t: vec4<f32>,
     // xyz: the eye; w: the near plane's t.
     eye: vec4<f32>,
-    // Width and height in pixels; z: 1 for an orthographic camera.
+    // Width and height in pixels; z: 1 for an orthographic camera, 2 for a SPOC; w: the SPOC's
+    // focal distance.
     size: vec4<f32>,
+    // The SPOC's pole (xy), z_n, and its ramp's slope k / (z_f − z_n).
+    spoc: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -39,7 +44,13 @@ fn draw_corner(@location(0) position: vec3<f32>, @location(1) corner_leaf: vec2<
         out.clip = vec4<f32>(2.0 * u / camera.size.x - 1.0, 1.0 - 2.0 * v / camera.size.y, dot(camera.row_t, p), 1.0);
     } else {
         let r = position - camera.eye.xyz;
-        let w = vec3<f32>(dot(camera.row_u.xyz, r), dot(camera.row_v.xyz, r), dot(camera.row_t.xyz, r));
+        var w = vec3<f32>(dot(camera.row_u.xyz, r), dot(camera.row_v.xyz, r), dot(camera.row_t.xyz, r));
+        if (camera.size.z == 2.0 && w.z > 0.0) {
+            // The SPOC: q = w.xy / w.z pushed from the pole by 1 + κ(f·w.z).
+            let pole = camera.spoc.xy;
+            let push = 1.0 + camera.spoc.w * max(camera.size.w * w.z - camera.spoc.z, 0.0);
+            w = vec3<f32>((pole + (w.xy / w.z - pole) * push) * w.z, w.z);
+        }
         // Pixel (u, v) = (w.x, w.y) / w.z, v down the image: x_ndc = 2u/W − 1, y_ndc = 1 − 2v/H.
         out.clip = vec4<f32>(
             2.0 * w.x / camera.size.x - w.z,

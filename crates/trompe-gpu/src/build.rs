@@ -4,9 +4,11 @@
 //! primary pass's shader) — read back and resolved into the maps by the library
 //! ([`trompe::impostor::resolve_drawn`]), exactly as it resolves its own rasterizer's image.
 //!
-//! Pinhole and orthographic cameras (a cube map is six pinholes). Not here yet: a SPOC's image
-//! (the library draws it tessellated, each vertex through the SPOC), a graph camera's (frustum
-//! by frustum) and depth layers by peeling; the library builds those.
+//! Pinhole and orthographic cameras (a cube map is six pinholes), and the SPOC: the mesh
+//! tessellated by the library's rule (§3.1: an edge splits while its image strays half a pixel
+//! from its chord), each corner projected through the SPOC in the vertex shader, each texel
+//! named by its source triangle. Not here yet: a graph camera's image (frustum by frustum, each
+//! frustum's triangles clipped to it) and depth layers by peeling; the library builds those.
 //!
 //! Invariant: a GPU-built impostor differs from the CPU-built one only where the two
 //! rasterizers' coverage rules or depth rounding pick another triangle for a texel
@@ -47,8 +49,8 @@ pub fn build_impostor<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
 }
 
 /// The GPU as the impostor methods' drawer ([`trompe::render::ImpostorDrawer`]): it draws the
-/// pinhole and orthographic impostors (cube maps, floors, pinhole-impostor's planar images)
-/// and leaves SPOCs and graph cameras to the library.
+/// pinhole, orthographic and SPOC impostors (cube maps, floors, SPOCs, pinhole-impostor's
+/// planar images) and leaves graph cameras to the library.
 pub struct GpuDrawer<'a>(pub &'a Gpu);
 
 impl trompe::render::ImpostorDrawer for GpuDrawer<'_> {
@@ -58,22 +60,26 @@ impl trompe::render::ImpostorDrawer for GpuDrawer<'_> {
         mesh: &Mesh,
     ) -> Option<Result<Vec<DrawnTexel>, String>> {
         match camera {
-            ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {
-                Some(draw(self.0, camera, mesh).map_err(|e| e.to_string()))
-            }
-            ImpostorCamera::Spoc(_) | ImpostorCamera::Graph(_) => None,
+            ImpostorCamera::Graph(_) => None,
+            _ => Some(draw(self.0, camera, mesh).map_err(|e| e.to_string())),
         }
     }
 }
 
-/// The visibility image of `mesh` through `camera` (pinhole or orthographic), drawn on `gpu`:
-/// per texel, row-major, the triangle its centre sees and the barycentrics of its corners 1 and
-/// 2 there.
+/// The visibility image of `mesh` through `camera` (pinhole, orthographic or SPOC), drawn on
+/// `gpu`: per texel, row-major, the triangle of `mesh` its centre sees and the barycentrics of
+/// its corners 1 and 2 there.
 pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<DrawnTexel>, GpuError> {
     let (w, h) = camera.resolution();
+    // Through a SPOC, the tessellation the library would draw, where it splits anything.
+    let mut tessellation = None;
     let uniform = match camera {
         ImpostorCamera::Pinhole(c) => GpuRasterCamera::pinhole(c),
         ImpostorCamera::Orthographic(c) => GpuRasterCamera::orthographic(c),
+        ImpostorCamera::Spoc(c) => {
+            tessellation = trompe::impostor::tessellate(c, mesh);
+            GpuRasterCamera::spoc(c)
+        }
         other => {
             return Err(GpuError::Unsupported {
                 what: format!(
@@ -84,10 +90,11 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<Drawn
         }
     };
     gpu.check_texture("the impostor's visibility image", w, h)?;
-    let corners: Vec<[Vec3; 3]> = mesh
+    let drawn = tessellation.as_ref().map_or(mesh, |t| &t.mesh);
+    let corners: Vec<[Vec3; 3]> = drawn
         .triangles
         .iter()
-        .map(|t| t.map(|i| mesh.positions[i as usize]))
+        .map(|t| t.map(|i| drawn.positions[i as usize]))
         .collect();
     let raster = raster_pipeline_of(gpu, &corners)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -99,15 +106,21 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<Drawn
         (w, h),
         "the impostor's visibility image",
     )?;
+    let source = tessellation.as_ref().map(|t| t.source.as_slice());
     Ok(texels
         .iter()
         .map(|t| {
-            (t[0] != 0).then(|| {
-                (
-                    t[0] - 1,
-                    Vec2::new(f32::from_bits(t[1]), f32::from_bits(t[2])),
-                )
-            })
+            let triangle = t[0].checked_sub(1)?;
+            let b = Vec2::new(f32::from_bits(t[1]), f32::from_bits(t[2]));
+            match source {
+                None => Some((triangle, b)),
+                // A sub-triangle's point, named in its source triangle.
+                Some(source) => {
+                    let &(s, c) = source.get(triangle as usize)?;
+                    let w = c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y;
+                    Some((s, Vec2::new(w.y, w.z)))
+                }
+            }
         })
         .collect())
 }

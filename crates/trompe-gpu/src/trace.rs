@@ -186,6 +186,7 @@ pub(crate) struct GpuRasterCamera {
     row_t: [f32; 4],
     eye: [f32; 4],
     size: [f32; 4],
+    spoc: [f32; 4],
 }
 
 impl GpuRasterCamera {
@@ -204,7 +205,25 @@ impl GpuRasterCamera {
             row_t: row(2),
             eye: v4(camera.position().as_vec3(), t_near),
             size: [w as f32, h as f32, 0.0, 0.0],
+            spoc: [0.0; 4],
         }
+    }
+
+    /// Through a SPOC: its pinhole's, each corner then pushed from the pole.
+    pub(crate) fn spoc(camera: &trompe::camera::Spoc) -> Self {
+        let pinhole = camera.pinhole();
+        let (z_near, z_far) = camera.depth_range();
+        let pole = camera.pole();
+        let mut raster = Self::pinhole(pinhole);
+        raster.size[2] = 2.0;
+        raster.size[3] = pinhole.focal() as f32;
+        raster.spoc = [
+            pole.x as f32,
+            pole.y as f32,
+            z_near as f32,
+            (camera.strength() / (z_far - z_near)) as f32,
+        ];
+        raster
     }
 
     /// Through an orthographic camera: `u = (p − corner)·a/|a|²`, `v` likewise, and
@@ -222,6 +241,7 @@ impl GpuRasterCamera {
             row_t: row(-dir / depth, 1.0),
             eye: [0.0; 4],
             size: [w as f32, h as f32, 1.0, 0.0],
+            spoc: [0.0; 4],
         }
     }
 }

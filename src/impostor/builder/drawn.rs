@@ -44,8 +44,8 @@ pub enum DrawnError {
         /// The mesh's triangles.
         count: usize,
     },
-    /// A camera whose image a rasterizer does not draw straight (a SPOC's is drawn tessellated,
-    /// a graph camera's frustum by frustum).
+    /// A graph camera: its image is drawn frustum by frustum, each frustum's triangles clipped
+    /// to it.
     #[error(
         "a {0} camera's visibility image is not drawn in one pass; build it with `ImpostorBuilder::build`"
     )]
@@ -55,16 +55,19 @@ pub enum DrawnError {
     Maps(#[from] FrameError),
 }
 
-/// An impostor of `mesh` (object id `object`) through `camera` — a pinhole or an orthographic
-/// camera — from `drawn`, the visibility image a rasterizer drew of it through that camera
-/// (row-major), each texel coloured by `color` as [`super::build`] colours it.
+/// An impostor of `mesh` (object id `object`) through `camera` — a pinhole, an orthographic
+/// camera or a SPOC — from `drawn`, the visibility image a rasterizer drew of it through that
+/// camera (row-major; through a SPOC, drawn from the mesh's [`super::tessellate`]ion, each
+/// texel named by its source triangle), each texel coloured by `color` as [`super::build`]
+/// colours it. Through a SPOC each texel's depth is then moved onto its triangle's plane, as a
+/// build's are.
 pub fn resolve_drawn<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     camera: ImpostorCamera,
     (mesh, object): (&Mesh, u32),
     color: &F,
     drawn: &[DrawnTexel],
 ) -> Result<Impostor, DrawnError> {
-    if matches!(camera, ImpostorCamera::Spoc(_) | ImpostorCamera::Graph(_)) {
+    if matches!(camera, ImpostorCamera::Graph(_)) {
         return Err(DrawnError::Camera(camera.kind()));
     }
     let (width, height) = camera.resolution();
