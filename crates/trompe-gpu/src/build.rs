@@ -83,7 +83,7 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<Drawn
         other => {
             return Err(GpuError::Unsupported {
                 what: format!(
-                    "drawing a {} impostor on the GPU (it draws pinhole and orthographic ones)",
+                    "drawing a {} impostor on the GPU (it draws pinhole, orthographic and SPOC ones)",
                     other.kind()
                 ),
             });
