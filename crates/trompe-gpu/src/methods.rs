@@ -21,7 +21,9 @@ use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::methods::{MethodError, MethodFrame, MethodKind, MethodSettings, Renderer};
 use trompe::progress::{Progress, Timings};
-use trompe::render::{Method, Primary, ReflectorImpostors, Refraction, RenderOptions, Sequence};
+use trompe::render::{
+    Method, Mirrors, Primary, ReflectorImpostors, Refraction, RenderOptions, Sequence,
+};
 use trompe::scene::RenderSettings;
 use trompe::scene::Scene;
 
@@ -148,6 +150,16 @@ impl<'a> DeviceRenderer<'a> {
                 if settings.refraction != Refraction::Exact {
                     return Err(GpuError::Unsupported {
                         what: "Wyman's refraction (the GPU traces both interfaces)".into(),
+                    }
+                    .into());
+                }
+                let impostor_method =
+                    matches!(kind, MethodKind::Impostor | MethodKind::PinholeImpostor);
+                if impostor_method && settings.mirrors != Mirrors::Exact {
+                    return Err(GpuError::Unsupported {
+                        what: "mirrors seen as impostors (--mirrors impostor); the GPU sees them \
+                               exactly"
+                            .into(),
                     }
                     .into());
                 }

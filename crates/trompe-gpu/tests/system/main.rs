@@ -89,6 +89,10 @@ fn main() {
             trace::impostors_are_kept_across_frames_on_the_gpu_as_on_the_cpu,
         ),
         on_gpu(
+            "trace::what_the_gpu_does_not_run_is_refused_before_any_work",
+            trace::what_the_gpu_does_not_run_is_refused_before_any_work,
+        ),
+        on_gpu(
             "trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu,
         ),

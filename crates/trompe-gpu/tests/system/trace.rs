@@ -218,3 +218,26 @@ material = { type = "mirror", tint = [0.9, 0.9, 0.9] }
         );
     }
 }
+
+/// What the GPU does not run yet is refused when the method is prepared, with the reason, before
+/// any frame: mirrors seen as impostors, Wyman's refraction.
+pub fn what_the_gpu_does_not_run_is_refused_before_any_work(gpu: &Gpu) {
+    let (_, scene) = shipped_scenes()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("reflections.toml"))
+        .expect("scenes/reflections.toml");
+    let mirrors = MethodSettings {
+        mirrors: trompe::render::Mirrors::Impostor,
+        ..MethodSettings::default()
+    };
+    let wyman = MethodSettings {
+        refraction: trompe::render::Refraction::Wyman,
+        ..MethodSettings::default()
+    };
+    for (settings, says) in [(mirrors, "mirrors seen as impostors"), (wyman, "Wyman")] {
+        match DeviceRenderer::new(&scene, MethodKind::Impostor, settings, Some(gpu)) {
+            Err(e) => assert!(e.to_string().contains(says), "{e}"),
+            Ok(_) => panic!("{says}: accepted on the GPU"),
+        }
+    }
+}
