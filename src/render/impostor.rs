@@ -10,6 +10,8 @@
 //!
 //! Mirrors and glass objects see one another exactly, through a BVH of them alone, and the
 //! tracer shades what they see there (beyond the paper, whose reflectors see only impostors).
+//! A device may draw the impostors' visibility images itself ([`ImpostorDrawer`]: a GPU's
+//! rasterizer, as the paper built them); they are resolved as the library resolves its own.
 //!
 //! Invariants: pixels whose primary ray meets a diffuse object are the `trace` method's, exactly;
 //! a diffuse object is seen in a mirror or through glass only as an impostor; the result does

@@ -9,6 +9,10 @@
 //! more than [`REBUILD_SHIFT`] of its bounding radius from where the impostor was built for —
 //! past that, the rays come from outside the region the impostor was made to answer.
 //!
+//! A device that traces frames itself (`trompe-gpu`) takes each frame's view, BVH and
+//! impostors from [`Sequence::impostor_answers`], and may draw the impostors the sequence
+//! builds ([`Sequence::with_drawer`]); keeping, placing and lighting stay here.
+//!
 //! Invariants: a sequence's frame at time `t` is, with nothing reused, the frame
 //! [`super::render_with`] gives at `t` (the same code builds and lights the impostors); reused
 //! impostors differ from rebuilt ones only by the motion's rounding, and by sampling when the
