@@ -21,9 +21,15 @@ use glam::{DVec3, Mat4};
 use trompe::geom::Ray;
 use trompe::impostor::{Impostor, ImpostorCamera};
 
-/// The walk's source: compiled after `shaders/bvh.wgsl` (its ray and hit bindings).
+/// The walk's source: compiled after `shaders/bvh.wgsl` (its ray and hit bindings) and
+/// `shaders/path.wgsl` (the rays' image paths).
 pub fn shader_source() -> String {
-    [crate::bvh::SHADER, include_str!("../shaders/walk.wgsl")].join("\n")
+    [
+        crate::bvh::SHADER,
+        include_str!("../shaders/path.wgsl"),
+        include_str!("../shaders/walk.wgsl"),
+    ]
+    .join("\n")
 }
 
 /// The shader's camera kinds.
