@@ -243,9 +243,11 @@ impl<'a> DeviceRenderer<'a> {
                         let prepared = sequence
                             .impostor_answers(t, camera)
                             .map_err(MethodError::from)?
-                            .expect("an impostor method prepares its frames");
+                            .ok_or_else(|| GpuError::Unsupported {
+                                what: format!("{kind}: a method that builds no impostors"),
+                            })?;
                         let report = prepared.report.to_string();
-                        let answers = Some(prepared.answers);
+                        let answers = Some((prepared.answers, prepared.bvh));
                         (prepared.view, answers, prepared.timings, Some(report))
                     }
                     None => {
@@ -257,7 +259,7 @@ impl<'a> DeviceRenderer<'a> {
                     }
                 };
                 let same_answers = match (impostors.as_ref().and_then(|i| i.1.as_ref()), &answers) {
-                    (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                    (Some(a), Some((b, _))) => Arc::ptr_eq(a, b),
                     (None, None) => true,
                     _ => false,
                 };
@@ -276,7 +278,7 @@ impl<'a> DeviceRenderer<'a> {
                             _ => scene.render,
                         };
                         let secondary = match &answers {
-                            Some(a) => Secondary::Impostors(a),
+                            Some((answers, bvh)) => Secondary::Impostors { answers, bvh },
                             None => Secondary::Exact,
                         };
                         let tracer = timings.time("build BVH, upload the scene", || {
@@ -293,7 +295,7 @@ impl<'a> DeviceRenderer<'a> {
                     }
                 };
                 if let Some((_, held)) = impostors {
-                    *held = answers;
+                    *held = answers.map(|(a, _)| a);
                 }
                 let frame = timings.time("GPU frame", || tracer.frame(&view.camera))?;
                 if !still {

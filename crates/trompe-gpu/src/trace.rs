@@ -162,8 +162,14 @@ pub enum Secondary<'s> {
     /// The exact BVH (the `trace` method).
     Exact,
     /// The impostors the library built, placed and lit for this frame, and the mirror and glass
-    /// objects seen exactly (paper 1 §6: the `impostor` and `pinhole-impostor` methods).
-    Impostors(&'s ReflectorImpostors),
+    /// objects seen exactly (paper 1 §6: the `impostor` and `pinhole-impostor` methods); with
+    /// the BVH of the view the library built beside them, uploaded rather than built again.
+    Impostors {
+        /// The answers to the rays mirrors and glass send out.
+        answers: &'s ReflectorImpostors,
+        /// The view's BVH.
+        bvh: &'s Bvh,
+    },
 }
 
 /// A corner as the rasterizer reads it.
@@ -282,16 +288,23 @@ impl<'a> GpuTracer<'a> {
                 ),
             });
         }
-        let impostors = match secondary {
-            Secondary::Exact => None,
-            Secondary::Impostors(answers) => Some(upload_impostors(gpu, view, answers)?),
+        let (impostors, built);
+        let bvh = match secondary {
+            Secondary::Exact => {
+                impostors = None;
+                built = Bvh::build(view.meshes.clone());
+                &built
+            }
+            Secondary::Impostors { answers, bvh } => {
+                impostors = Some(upload_impostors(gpu, view, answers)?);
+                bvh
+            }
         };
         let specular = |o: u32| match view.surfaces.get(o as usize) {
             Some(Surface::Diffuse(_)) | None => crate::bvh::EVERY_TRIANGLE,
             Some(_) => SPECULAR,
         };
-        let bvh = Bvh::build(view.meshes.clone());
-        let (nodes, corners) = crate::bvh::upload(gpu, &bvh, &specular)?;
+        let (nodes, corners) = crate::bvh::upload(gpu, bvh, &specular)?;
         // Materials: one a (object, mesh material), the scene's surface deciding.
         let mut texels = Texels::default();
         let environment = &lighting.environment;
@@ -380,7 +393,7 @@ impl<'a> GpuTracer<'a> {
         };
         let raster = match primary {
             Primary::Traced => None,
-            Primary::Rasterized => Some(raster_pipeline(gpu, &bvh)?),
+            Primary::Rasterized => Some(raster_pipeline(gpu, bvh)?),
         };
         let triangle_bytes: &[u8] = bytemuck::cast_slice(&triangles);
         let texel_bytes: &[u8] = bytemuck::cast_slice(&texels.data);

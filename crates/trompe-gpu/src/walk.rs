@@ -368,7 +368,11 @@ impl UploadedWalks {
         t_max: f32,
     ) -> Result<Vec<Option<WalkHit>>, GpuError> {
         let i = index as usize;
-        assert!(i < self.widths.len(), "impostor {index} is not in the set");
+        if i >= self.widths.len() {
+            return Err(GpuError::Unsupported {
+                what: format!("walking impostor {index} of a set of {}", self.widths.len()),
+            });
+        }
         let pipeline = gpu.compute_pipeline("walk.wgsl", &shader_source(), "walk_rays");
         // What a hit shows (binding 16) is not read by a bare walk.
         let walked: Vec<_> = self
