@@ -98,32 +98,6 @@ struct Sidecar {
     exr_fnv1a: Option<String>,
 }
 
-/// FNV-1a, 64 bits: a checksum that tells two files apart (not a defence against forgery).
-fn fnv1a(bytes: impl IntoIterator<Item = u8>, mut hash: u64) -> u64 {
-    for b in bytes {
-        hash ^= u64::from(b);
-        hash = hash.wrapping_mul(0x0100_0000_01b3);
-    }
-    hash
-}
-
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-
-/// Size and checksum of the file at `path`, read in blocks.
-fn size_and_checksum(path: &Path) -> std::io::Result<(u64, u64)> {
-    use std::io::Read as _;
-    let mut f = std::fs::File::open(path)?;
-    let (mut hash, mut size, mut block) = (FNV_OFFSET, 0u64, vec![0u8; 1 << 16]);
-    loop {
-        let n = f.read(&mut block)?;
-        if n == 0 {
-            return Ok((size, hash));
-        }
-        size += n as u64;
-        hash = fnv1a(block[..n].iter().copied(), hash);
-    }
-}
-
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BoundsFile {
@@ -417,6 +391,7 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
     let _lock = crate::files::PublishLock::of(json_path);
     publish(&exr_path, &bytes)?;
     pause_for_tests();
+    let exr_fnv1a = crate::files::Part::of_bytes(&exr_name, &bytes).fnv1a;
     let sidecar = Sidecar {
         format: FORMAT.into(),
         version: VERSION,
@@ -430,7 +405,7 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
         camera: CameraFile::from_camera(&impostor.camera),
         layers: (impostor.layer_count() > 1).then_some(impostor.layer_count() as u32),
         exr_bytes: Some(bytes.len() as u64),
-        exr_fnv1a: Some(format!("{:016x}", fnv1a(bytes.iter().copied(), FNV_OFFSET))),
+        exr_fnv1a: Some(exr_fnv1a),
     };
     let text = serde_json::to_string_pretty(&sidecar).map_err(|e| ImpostorFileError::Invalid {
         path: json_path.to_path_buf(),
@@ -549,7 +524,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
     // Last, once the EXR is known to be a readable impostor: that it is this sidecar's.
     if let (Some(size), Some(sum)) = (sidecar.exr_bytes, &sidecar.exr_fnv1a) {
         let (got_size, got) =
-            size_and_checksum(&exr_path).map_err(|source| ImpostorFileError::Io {
+            crate::files::checksum_file(&exr_path).map_err(|source| ImpostorFileError::Io {
                 path: exr_path.clone(),
                 source,
             })?;

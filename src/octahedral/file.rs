@@ -51,6 +51,10 @@ pub struct Sidecar {
     /// Occlusion, roughness, metalness (PNG, linear); absent in version 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub orm: Option<String>,
+    /// The maps' sizes and checksums, recorded when the sidecar is written last, so that a
+    /// sidecar is read only with the maps it was written with; absent in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parts: Option<Vec<crate::files::Part>>,
 }
 
 /// The layout version this build writes.
@@ -74,6 +78,9 @@ pub enum OctahedralFileError {
     /// The sidecar's path has no file name.
     #[error("{0}: not a file name")]
     NotAFile(PathBuf),
+    /// A map is not the one its sidecar records.
+    #[error(transparent)]
+    Part(#[from] crate::files::PartError),
 }
 
 /// Reads and checks the sidecar of an octahedral atlas (its maps are not read).
@@ -111,6 +118,16 @@ pub fn read_sidecar(path: &Path) -> Result<Sidecar, OctahedralFileError> {
         )));
     }
     Ok(sidecar)
+}
+
+/// Refuses the maps beside `path` that its sidecar does not record (another bake's, or a bake
+/// torn by a kill).
+pub fn verify_maps(path: &Path, sidecar: &Sidecar) -> Result<(), OctahedralFileError> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    for part in sidecar.parts.iter().flatten() {
+        part.verify(dir)?;
+    }
+    Ok(())
 }
 
 impl std::fmt::Display for Sidecar {
@@ -166,6 +183,9 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
         return Err(OctahedralFileError::NotAFile(json.to_path_buf()));
     }
     let [_, color, normal, depth, orm] = files(json);
+    // The maps first, then the sidecar naming them with their checksums, all under the folder's
+    // lock: a second writer waits, and a reader refuses maps that are not its sidecar's.
+    let _lock = crate::files::PublishLock::of(json);
     io::write_png(&color, &atlas.color)?;
     io::write_exr_normals(&normal, &atlas.normal)?;
     io::write_exr_depth(&depth, &atlas.depth)?;
@@ -188,6 +208,16 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
         normal: name(&normal),
         depth: name(&depth),
         orm: Some(name(&orm)),
+        parts: None,
+    };
+    let dir = json.parent().unwrap_or(Path::new(""));
+    let parts = [&color, &normal, &depth, &orm]
+        .into_iter()
+        .map(|p| crate::files::Part::of(dir, &name(p)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let sidecar = Sidecar {
+        parts: Some(parts),
+        ..sidecar
     };
     let text = serde_json::to_string_pretty(&sidecar).map_err(|e| OctahedralFileError::Io {
         path: json.to_path_buf(),

@@ -54,7 +54,12 @@ pub fn glb(
         bin.extend_from_slice(orm);
     }
     let length = bin.len();
-    let layout = serde_json::to_value(sidecar).unwrap_or(serde_json::Value::Null);
+    // The layout a shader needs; the maps' checksums name files the .glb does not hold.
+    let layout = Sidecar {
+        parts: None,
+        ..sidecar.clone()
+    };
+    let layout = serde_json::to_value(layout).unwrap_or(serde_json::Value::Null);
     let doc = serde_json::json!({
         "asset": { "version": "2.0", "generator": "trompe impostor bake --octahedral" },
         "scene": 0,
@@ -126,6 +131,7 @@ pub fn export(sidecar_path: &Path, out: &Path) -> Result<(), super::file::Octahe
         move |source| E::Io { path, source }
     };
     let sidecar = super::file::read_sidecar(sidecar_path)?;
+    super::file::verify_maps(sidecar_path, &sidecar)?;
     let dir = sidecar_path.parent().unwrap_or(Path::new(""));
     let color = dir.join(&sidecar.color);
     let png = std::fs::read(&color).map_err(io(&color))?;
@@ -162,10 +168,10 @@ mod tests {
         };
         let atlas = bake(&mesh, &crate::scene::Surface::Diffuse(None), settings).unwrap();
         let dir = crate::test_scratch::scratch("octahedral_glb");
-        let json = dir.join("ball.json");
-        let sidecar = crate::octahedral::file::save(&atlas, &json).unwrap();
+        let sidecar_path = dir.join("ball.json");
+        let sidecar = crate::octahedral::file::save(&atlas, &sidecar_path).unwrap();
         let glb_path = dir.join("ball.glb");
-        export(&json, &glb_path).unwrap();
+        export(&sidecar_path, &glb_path).unwrap();
         let (doc, buffers, images) = ::gltf::import(&glb_path).unwrap();
         // The colour atlas, then the ORM atlas (occlusion and metallic-roughness).
         assert_eq!(images.len(), 2);
@@ -183,10 +189,33 @@ mod tests {
         let json: serde_json::Value = serde_json::from_slice(&chunk).unwrap();
         let layout = json["materials"][0]["extras"]["trompe_octahedral"].clone();
         let back: Sidecar = serde_json::from_value(layout).unwrap();
-        assert_eq!(back, sidecar);
+        assert_eq!(
+            back,
+            Sidecar {
+                parts: None,
+                ..sidecar
+            }
+        );
         let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
         let reader = prim.reader(|b| Some(&buffers[b.index()]));
         assert_eq!(reader.read_positions().unwrap().count(), 4);
         assert_eq!(reader.read_indices().unwrap().into_u32().count(), 6);
+        // Another bake's atlas beside this sidecar (a torn or raced bake) is refused by name.
+        let other = bake(
+            &mesh,
+            &crate::scene::Surface::Diffuse(None),
+            BakeSettings {
+                frame_size: 8,
+                ..settings
+            },
+        )
+        .unwrap();
+        crate::octahedral::file::save(&other, &dir.join("small.json")).unwrap();
+        std::fs::copy(dir.join("small.png"), dir.join("ball.png")).unwrap();
+        let err = export(&sidecar_path, &glb_path).unwrap_err().to_string();
+        assert!(
+            err.contains("ball.png") && err.contains("not the file its index was written with"),
+            "{err}"
+        );
     }
 }

@@ -1,68 +1,13 @@
-//! Never lose a user's file: atomic replacement of outputs, and the plan a command checks before
-//! any work — every path it reads, every path it writes — so that an output is never an input,
-//! two outputs are never one file, and an output has a known extension and an existing folder.
-//! The lowest layer: every writer in the crate goes through [`write_atomically`].
+//! The plan a command checks before any work: every path it reads, every path and folder it
+//! writes, so that an output is never an input, two outputs are never one file, an output has a
+//! known extension and an existing folder, and a folder another command made is never filled
+//! by a command of another kind.
 //!
-//! Invariant: an output is either left as it was or replaced whole; a failed or killed write
-//! leaves only a hidden temporary file in the output's folder, never a truncated output.
+//! Invariant: [`OutputPlan::check`] reads the file system and writes nothing.
 
-use std::io::Write as _;
+use super::folder::{FolderKind, FolderState};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
-
-/// Holds the folder of a multi-file artefact (an impostor's EXR and the sidecar that names it)
-/// while one writer publishes it: a second writer to the same folder waits, so concurrent
-/// writers leave one complete result, never one's sidecar beside another's maps. The lock is
-/// the operating system's advisory lock on the folder, released when the guard drops or the
-/// process dies (a killed writer never leaves it held). Where a folder cannot be locked (a
-/// platform that does not open folders as files), writers proceed unserialised.
-pub struct PublishLock {
-    _folder: Option<std::fs::File>,
-}
-
-impl PublishLock {
-    /// Waits for, then takes, the publishing lock of `path`'s folder.
-    pub fn of(path: &Path) -> PublishLock {
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let folder = std::fs::File::open(dir).ok().filter(|f| f.lock().is_ok());
-        PublishLock { _folder: folder }
-    }
-}
-
-/// Writes `bytes` to `path` as a whole: into a temporary file in the same folder, flushed to
-/// disk, then renamed over `path` (a rename within one file system is atomic). On any error the
-/// temporary file is removed and `path` is as it was.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    static NEXT: AtomicU64 = AtomicU64::new(0);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| std::io::Error::other("the path names no file"))?;
-    let tmp = dir.join(format!(
-        ".{}.{}-{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        NEXT.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut f = std::fs::File::create_new(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_data()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
 
 /// Why a command's outputs were refused, before any work.
 #[derive(Debug, Error, PartialEq, Eq)]
@@ -92,6 +37,10 @@ pub enum OutputError {
         /// What it may end in.
         expected: String,
     },
+    /// An output folder cannot take the command's result (a file, a user's folder, another
+    /// command's result).
+    #[error("{0}")]
+    Folder(String),
     /// An output's folder does not exist.
     #[error("{path}: the folder {folder} does not exist")]
     NoFolder {
@@ -107,6 +56,7 @@ pub enum OutputError {
 pub struct OutputPlan {
     inputs: Vec<PathBuf>,
     outputs: Vec<(PathBuf, &'static [&'static str])>,
+    folders: Vec<(PathBuf, FolderKind)>,
     creates_folders: bool,
 }
 
@@ -129,6 +79,14 @@ impl OutputPlan {
         extensions: &'static [&'static str],
     ) -> &mut Self {
         self.outputs.push((path.into(), extensions));
+        self
+    }
+
+    /// A folder the command fills with a result of `kind` (published whole through
+    /// [`super::StagedFolder`], or claimed with [`super::claim_folder`]): it must be new, empty
+    /// or a result of that kind, and no file the command reads may be one of the result's files.
+    pub fn writes_folder(&mut self, dir: impl Into<PathBuf>, kind: FolderKind) -> &mut Self {
+        self.folders.push((dir.into(), kind));
         self
     }
 
@@ -165,6 +123,24 @@ impl OutputPlan {
             .iter()
             .filter_map(|p| Identity::of(p).map(|id| (id, p)))
             .collect();
+        for (dir, kind) in &self.folders {
+            let earlier = match FolderState::of(dir, *kind) {
+                Ok(FolderState::New) => continue,
+                Ok(FolderState::Made(files)) => files,
+                Err(e) => return Err(OutputError::Folder(e.to_string())),
+            };
+            for file in earlier {
+                let Some(id) = Identity::of(&dir.join(&file)) else {
+                    continue;
+                };
+                if let Some((_, input)) = inputs.iter().find(|(i, _)| i.same(&id)) {
+                    return Err(OutputError::IsInput {
+                        output: dir.join(&file),
+                        input: (*input).clone(),
+                    });
+                }
+            }
+        }
         let mut seen: Vec<(Identity, &PathBuf)> = Vec::new();
         for (path, _) in &self.outputs {
             // What it would destroy first, then whether it can be written.
@@ -302,25 +278,5 @@ mod tests {
         p.writes(d.join("nowhere/a.png"), &["png"]);
         assert!(matches!(p.check(), Err(OutputError::NoFolder { .. })));
         assert_eq!(std::fs::read_to_string(&mesh).unwrap(), "v 0 0 0\n");
-    }
-
-    #[test]
-    fn an_atomic_write_replaces_whole_or_leaves_the_old_file() {
-        let d = crate::test_scratch::scratch("files_atomic");
-        let f = d.join("x.png");
-        write_atomically(&f, b"old").unwrap();
-        write_atomically(&f, b"new contents").unwrap();
-        assert_eq!(std::fs::read(&f).unwrap(), b"new contents");
-        // A write that cannot land (its target is a folder) leaves no temporary behind.
-        let folder = d.join("sub");
-        std::fs::create_dir_all(&folder).unwrap();
-        assert!(write_atomically(&folder, b"x").is_err());
-        let left: Vec<_> = std::fs::read_dir(&d)
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
-            .collect();
-        assert!(left.is_empty(), "{left:?}");
-        assert_eq!(std::fs::read(&f).unwrap(), b"new contents");
     }
 }

@@ -1,0 +1,99 @@
+//! Never lose a user's file: atomic replacement of outputs ([`write_atomically`]), results of
+//! several files published whole (a folder staged then swapped in, [`StagedFolder`]; files
+//! beside each other named by an index written last with their checksums, [`Parts`]), and the
+//! plan a command checks before any work ([`OutputPlan`]). The lowest layer: every writer in the
+//! crate goes through here.
+//!
+//! Invariant: an output is either left as it was or replaced whole; a failed or killed write
+//! leaves only hidden temporary names (a later writer of the same output clears them), never a
+//! truncated or mixed result.
+
+mod folder;
+mod parts;
+mod plan;
+
+pub use folder::{FolderError, FolderKind, MARKER, StagedFolder, claim_folder};
+pub use parts::{Part, PartError, checksum_file};
+pub use plan::{OutputError, OutputPlan};
+
+use std::io::Write as _;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Holds the folder of a multi-file artefact (an impostor's EXR and the sidecar that names it)
+/// while one writer publishes it: a second writer to the same folder waits, so concurrent
+/// writers leave one complete result, never one's sidecar beside another's maps. The lock is
+/// the operating system's advisory lock on the folder, released when the guard drops or the
+/// process dies (a killed writer never leaves it held). Where a folder cannot be locked (a
+/// platform that does not open folders as files), writers proceed unserialised.
+pub struct PublishLock {
+    _folder: Option<std::fs::File>,
+}
+
+impl PublishLock {
+    /// Waits for, then takes, the publishing lock of `path`'s folder.
+    pub fn of(path: &Path) -> PublishLock {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let folder = std::fs::File::open(dir).ok().filter(|f| f.lock().is_ok());
+        PublishLock { _folder: folder }
+    }
+}
+
+/// Writes `bytes` to `path` as a whole: into a temporary file in the same folder, flushed to
+/// disk, then renamed over `path` (a rename within one file system is atomic). On any error the
+/// temporary file is removed and `path` is as it was.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::other("the path names no file"))?;
+    let tmp = dir.join(format!(
+        ".{}.{}-{}.tmp",
+        name.to_string_lossy(),
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut f = std::fs::File::create_new(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_data()?;
+        drop(f);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_atomic_write_replaces_whole_or_leaves_the_old_file() {
+        let d = crate::test_scratch::scratch("files_atomic");
+        let f = d.join("x.png");
+        write_atomically(&f, b"old").unwrap();
+        write_atomically(&f, b"new contents").unwrap();
+        assert_eq!(std::fs::read(&f).unwrap(), b"new contents");
+        // A write that cannot land (its target is a folder) leaves no temporary behind.
+        let folder = d.join("sub");
+        std::fs::create_dir_all(&folder).unwrap();
+        assert!(write_atomically(&folder, b"x").is_err());
+        let left: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+        assert_eq!(std::fs::read(&f).unwrap(), b"new contents");
+    }
+}
