@@ -458,7 +458,11 @@ mod tests {
         publish(
             &out,
             FolderKind::Capture,
-            &[("cameras.txt", "1"), ("images/a.png", "a"), ("images/b.png", "b")],
+            &[
+                ("cameras.txt", "1"),
+                ("images/a.png", "a"),
+                ("images/b.png", "b"),
+            ],
         )
         .unwrap();
         std::fs::write(out.join("notes.txt"), "mine").unwrap();
@@ -475,12 +479,21 @@ mod tests {
             [MARKER, "cameras.txt", "images/a.png", "notes.txt"],
             "the old result's b.png is gone, the user's notes kept"
         );
-        assert_eq!(std::fs::read_to_string(out.join("cameras.txt")).unwrap(), "2");
-        assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
+        assert_eq!(
+            std::fs::read_to_string(out.join("cameras.txt")).unwrap(),
+            "2"
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+            "mine"
+        );
         // The user's file named like a result file: refused, nothing changes.
         let err = publish(&out, FolderKind::Capture, &[("notes.txt", "x")]).unwrap_err();
         assert!(matches!(err, FolderError::Collision { .. }), "{err}");
-        assert_eq!(std::fs::read_to_string(out.join("cameras.txt")).unwrap(), "2");
+        assert_eq!(
+            std::fs::read_to_string(out.join("cameras.txt")).unwrap(),
+            "2"
+        );
         // No staged folder is left beside it.
         let litter: Vec<_> = std::fs::read_dir(&d)
             .unwrap()
@@ -495,9 +508,12 @@ mod tests {
         let d = crate::test_scratch::scratch("files_folder_kind");
         let out = d.join("layers");
         publish(&out, FolderKind::LayerSet, &[("layers.json", "{}")]).unwrap();
-        let err = StagedFolder::begin(&out, FolderKind::Capture).err().unwrap();
+        let err = StagedFolder::begin(&out, FolderKind::Capture)
+            .err()
+            .unwrap();
         assert!(
-            err.to_string().contains("is a layer set (trompe layers build)"),
+            err.to_string()
+                .contains("is a layer set (trompe layers build)"),
             "{err}"
         );
         let mine = d.join("mine");

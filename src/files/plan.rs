@@ -115,6 +115,25 @@ impl OutputPlan {
         self.check_writable()
     }
 
+    /// Refuses one more output, decided while the command runs (a screenshot, a frame), if it
+    /// is a file the command reads.
+    pub fn check_output(&self, output: &Path) -> Result<(), OutputError> {
+        let Some(id) = Identity::of(output) else {
+            return Ok(());
+        };
+        match self
+            .inputs
+            .iter()
+            .find(|i| Identity::of(i).is_some_and(|i| i.same(&id)))
+        {
+            Some(input) => Err(OutputError::IsInput {
+                output: output.to_path_buf(),
+                input: input.clone(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// Only the first half of [`OutputPlan::check`]: no output is an input or another output
     /// (what a command can say before it has read everything it will read).
     pub fn check_overwrites(&self) -> Result<(), OutputError> {

@@ -76,12 +76,15 @@ pub fn ora_name(view: &str) -> String {
     format!("{safe}.ora")
 }
 
-/// Writes `set` into folder `dir` (created if needed).
+/// Writes `set` into folder `dir` (created if needed), published whole: `dir` holds the earlier
+/// layer set until the new one replaces it in one step.
 pub fn save(dir: &Path, set: &LayerSet) -> Result<(), LayersError> {
-    std::fs::create_dir_all(dir).map_err(|source| LayersError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    let staged = crate::files::StagedFolder::begin(dir, crate::files::FolderKind::LayerSet)?;
+    save_into(staged.path(), set)?;
+    Ok(staged.publish()?)
+}
+
+fn save_into(dir: &Path, set: &LayerSet) -> Result<(), LayersError> {
     let mut views = Vec::new();
     for ((v, vl), report) in set.views.iter().zip(&set.layers).zip(&set.reports) {
         let file = ora_name(&v.name);

@@ -43,6 +43,9 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum LayersError {
+    /// The output folder cannot take the result, or publishing it failed.
+    #[error(transparent)]
+    Folder(#[from] crate::files::FolderError),
     /// An image could not be made (its size refused).
     #[error(transparent)]
     Frame(#[from] FrameError),

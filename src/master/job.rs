@@ -6,6 +6,7 @@ use super::edit::{Apply, delta, propagate};
 use super::file::{Manifest, load, load_manifest, load_master, master_name, save_manifest};
 use super::{Atlas, DEFAULT_SCALE, MasterError, encode, encode_stream};
 use crate::camera::Pinhole;
+use crate::files::{FolderKind, StagedFolder};
 use crate::frame::{Image, Rgba, io};
 use crate::geom::Mesh;
 use crate::progress::Progress;
@@ -98,6 +99,8 @@ pub fn encode_folder(
     progress: &dyn Progress,
 ) -> Result<EncodeSummary, MasterError> {
     let set = crate::views::ViewSet::load(model, images)?;
+    let staged = StagedFolder::begin(out, FolderKind::MasterEncoding)?;
+    let staging = staged.path();
     let sizes: Vec<(u32, u32)> = set.views.iter().map(|v| v.intrinsics.size()).collect();
     let cameras: Vec<(String, Pinhole)> = set
         .views
@@ -116,14 +119,15 @@ pub fn encode_folder(
             crate::views::blend::undistorted_image(&view).ok_or(MasterError::NothingSeen)
         },
         &mut |v, master| {
-            let path = out.join(master_name(v));
+            let path = staging.join(master_name(v));
             io::write_png(&path, &master)?;
             files.push(path);
             Ok(())
         },
         progress,
     )?;
-    files.extend(finish_folder(out, &atlas, &cameras, mesh, &baked)?);
+    files.extend(finish_folder(staging, &atlas, &cameras, mesh, &baked)?);
+    let files = published(staged, files)?;
     let (exemplar_bytes, master_bytes) = storage(&atlas, &sizes);
     Ok(EncodeSummary {
         views: cameras.len(),
@@ -269,17 +273,25 @@ pub fn edit_folder(
         .map(|v| (v.name.clone(), v.pinhole()))
         .collect();
     let mut baker = super::bake::Baker::new(&atlas)?;
+    let staged = StagedFolder::begin(out, FolderKind::MasterEncoding)?;
     let (mut changed, mut files) = (0, Vec::new());
     for (i, (_, cam)) in cameras.iter().enumerate() {
         let mut m = [load_master(dir, &manifest, i)?];
         changed += propagate(&mut m, &d, &after, apply)?;
         baker.add(&atlas, mesh, i, cam, &m[0]);
-        let path = out.join(master_name(i));
+        let path = staged.path().join(master_name(i));
         io::write_png(&path, &m[0])?;
         files.push(path);
     }
     let (baked, _) = baker.finish(&atlas);
-    files.extend(finish_folder(out, &atlas, &cameras, mesh, &baked)?);
+    files.extend(finish_folder(
+        staged.path(),
+        &atlas,
+        &cameras,
+        mesh,
+        &baked,
+    )?);
+    let files = published(staged, files)?;
     Ok(EditSummary {
         edited: edited_texels,
         changed,
@@ -288,8 +300,29 @@ pub fn edit_folder(
     })
 }
 
+/// Publishes a staged encoding whose `files` were written into it; returns where they are now.
+fn published(staged: StagedFolder, files: Vec<PathBuf>) -> Result<Vec<PathBuf>, MasterError> {
+    let files = files
+        .iter()
+        .filter_map(|f| f.strip_prefix(staged.path()).ok())
+        .map(|f| staged.target().join(f))
+        .collect();
+    staged.publish()?;
+    Ok(files)
+}
+
 /// Smallest per-channel change an edit carries (linear): below it, resampling noise.
 pub const EDIT_THRESHOLD: f32 = 0.02;
+
+/// The files of the encoding in `dir` a render reads (for an output plan): its manifest and
+/// master textures, as far as the manifest can be read.
+pub fn files_of(dir: &Path) -> Vec<PathBuf> {
+    let mut files = vec![dir.join("masters.json")];
+    if let Ok(m) = load_manifest(dir) {
+        files.extend(m.views.iter().map(|v| dir.join(&v.master)));
+    }
+    files
+}
 
 /// Reads `masters.json` of `dir` only.
 pub fn manifest(dir: &Path) -> Result<Manifest, MasterError> {

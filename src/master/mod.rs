@@ -36,6 +36,9 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum MasterError {
+    /// The output folder cannot take the result, or publishing it failed.
+    #[error(transparent)]
+    Folder(#[from] crate::files::FolderError),
     /// No view sees any face.
     #[error("no view sees the mesh: there is nothing to encode")]
     NothingSeen,

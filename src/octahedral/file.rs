@@ -78,6 +78,17 @@ pub enum OctahedralFileError {
     /// The sidecar's path has no file name.
     #[error("{0}: not a file name")]
     NotAFile(PathBuf),
+    /// A file an atlas would be written over is not part of an earlier atlas.
+    #[error(
+        "{path}: a file of the user's is where the atlas {sidecar} would write (no octahedral \
+         sidecar of that name records it); move it or choose another output name"
+    )]
+    NotAnAtlas {
+        /// The file.
+        path: PathBuf,
+        /// The sidecar the atlas would have.
+        sidecar: PathBuf,
+    },
     /// A map is not the one its sidecar records.
     #[error(transparent)]
     Part(#[from] crate::files::PartError),
@@ -175,6 +186,39 @@ pub fn files(json: &Path) -> [PathBuf; 5] {
         dir.join(format!("{stem}-depth.exr")),
         dir.join(format!("{stem}-orm.png")),
     ]
+}
+
+/// Refuses to write an atlas as `json` where one of its five files exists but is not part of
+/// an earlier atlas of that name (a texture of a user's named like a map): checked before work.
+pub fn check_replaceable(json: &Path) -> Result<(), OctahedralFileError> {
+    let files = files(json);
+    let existing: Vec<&PathBuf> = files.iter().filter(|f| f.exists()).collect();
+    if existing.is_empty() {
+        return Ok(());
+    }
+    let earlier = read_sidecar(json).ok();
+    for f in existing {
+        let name = f.file_name().map(|n| n.to_string_lossy().into_owned());
+        let recorded = earlier.as_ref().is_some_and(|s| {
+            f.as_path() == json
+                || [
+                    Some(&s.color),
+                    Some(&s.normal),
+                    Some(&s.depth),
+                    s.orm.as_ref(),
+                ]
+                .into_iter()
+                .flatten()
+                .any(|m| Some(m) == name.as_ref())
+        });
+        if !recorded {
+            return Err(OctahedralFileError::NotAnAtlas {
+                path: f.clone(),
+                sidecar: json.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Writes `atlas` as `json` and its four maps beside it.

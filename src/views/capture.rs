@@ -256,8 +256,15 @@ fn check(settings: &CaptureSettings) -> Result<(), CaptureError> {
     Ok(())
 }
 
-/// Writes a capture as a COLMAP text model and PNG images into `dir` (images under `images/`).
+/// Writes a capture as a COLMAP text model and PNG images into `dir` (images under `images/`),
+/// published whole: `dir` holds the earlier capture until the new one replaces it in one step.
 pub fn write_capture(dir: &Path, set: &ViewSet) -> Result<(), super::ViewsError> {
+    let staged = crate::files::StagedFolder::begin(dir, crate::files::FolderKind::Capture)?;
+    write_capture_into(staged.path(), set)?;
+    Ok(staged.publish()?)
+}
+
+fn write_capture_into(dir: &Path, set: &ViewSet) -> Result<(), super::ViewsError> {
     let images = dir.join("images");
     std::fs::create_dir_all(&images).map_err(|source| super::ViewsError::Io {
         path: images.clone(),

@@ -14,6 +14,20 @@ const MAX_FILE_BYTES: u64 = 1 << 30;
 /// A quaternion further than this from unit length is refused rather than normalised.
 const UNIT_TOLERANCE: f64 = 1e-3;
 
+/// The files of a COLMAP model in `dir` that [`read_model`] may read (for an output plan).
+pub fn model_files(dir: &Path) -> Vec<std::path::PathBuf> {
+    [
+        "cameras.txt",
+        "images.txt",
+        "points3D.txt",
+        "cameras.bin",
+        "images.bin",
+    ]
+    .into_iter()
+    .map(|f| dir.join(f))
+    .collect()
+}
+
 /// Reads the model in `dir`: text when `cameras.txt` is there, else binary. Returns the views in
 /// image-id order and warnings for what was skipped.
 pub fn read_model(dir: &Path) -> Result<(Vec<CalibratedView>, Vec<String>), ViewsError> {

@@ -31,6 +31,9 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum ViewsError {
+    /// The output folder cannot take the result, or publishing it failed.
+    #[error(transparent)]
+    Folder(#[from] crate::files::FolderError),
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {

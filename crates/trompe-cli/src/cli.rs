@@ -412,31 +412,19 @@ fn with_spinner<T>(label: &str, work: impl FnOnce() -> T) -> T {
 /// Loads a mesh under a spinner (a large scan takes seconds to parse) and prints what the loader
 /// survived (dropped degenerate triangles, skipped elements) as warnings.
 fn load_mesh(path: &Path) -> Result<trompe::Mesh> {
+    load_mesh_read_by(path, &mut OutputPlan::new())
+}
+
+/// [`load_mesh`], adding every file the mesh names (material libraries, textures, buffers) to
+/// what `plan` reads.
+fn load_mesh_read_by(path: &Path, plan: &mut OutputPlan) -> Result<trompe::Mesh> {
     let label = format!("loading {}", path.display());
     let loaded = with_spinner(&label, || trompe::geom::io::load(path))?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
+    plan.reads([path]).reads(loaded.files);
     Ok(loaded.mesh)
-}
-
-/// Refuses an output folder that holds files but not `marker` (the file a `what` always
-/// writes): nothing of a user's is overwritten by a command that fills a folder.
-fn refuse_foreign_folder(out: &Path, marker: &str, what: &str) -> Result<()> {
-    if out.exists() {
-        let foreign = std::fs::read_dir(out)
-            .with_context(|| format!("reading {}", out.display()))?
-            .next()
-            .is_some()
-            && !out.join(marker).is_file();
-        if foreign {
-            bail!(
-                "{}: the folder holds files that are not {what}; give an empty or new folder",
-                out.display()
-            );
-        }
-    }
-    Ok(())
 }
 
 /// Checks a command's outputs against what it reads, before any work ([`OutputPlan::check`]).

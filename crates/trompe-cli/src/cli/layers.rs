@@ -2,11 +2,11 @@
 //! command line — parse, call `trompe::layers`, print its report.
 
 use super::views::{BlendArgs, RigArg, parse_size};
-use super::{bar, check_plan, refuse_foreign_folder};
+use super::{bar, check_plan};
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
 use std::path::PathBuf;
-use trompe::files::OutputPlan;
+use trompe::files::{FolderKind, OutputPlan};
 use trompe::frame::io;
 use trompe::layers::{self, BuildSettings, OrderSettings, Ordering};
 use trompe::scene::Scene;
@@ -85,19 +85,24 @@ pub struct BuildArgs {
 impl BuildArgs {
     fn build(&self) -> Result<()> {
         let out = &self.output;
-        refuse_foreign_folder(out, layers::file::PROJECT, "layers")?;
         let scene = Scene::load(&self.scene)?;
         let mut plan = OutputPlan::new();
         plan.reads(scene.files.iter().cloned())
+            .writes_folder(out, FolderKind::LayerSet)
             .writes(out.join(layers::file::PROJECT), &["json"])
             .creating_folders();
-        if let Some(m) = &self.model {
-            plan.reads([m.join("cameras.txt"), m.join("images.txt")]);
-        }
+        let model = match &self.model {
+            Some(m) => {
+                let set = trompe::views::ViewSet::load(m, self.images.as_deref())?;
+                plan.reads(trompe::views::colmap::model_files(m))
+                    .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)));
+                Some(set)
+            }
+            None => None,
+        };
         check_plan(&plan)?;
-        let views = match &self.model {
-            Some(model) => {
-                let mut set = trompe::views::ViewSet::load(model, self.images.as_deref())?;
+        let views = match model {
+            Some(mut set) => {
                 for w in &set.warnings {
                     eprintln!("warning: {w}");
                 }
@@ -137,8 +142,6 @@ impl BuildArgs {
         let progress = bar("layering", views.len() as u64);
         let set = layers::build(meshes, names, &views, &settings, progress.as_ref())?;
         drop(progress);
-        plan.make_folders()
-            .with_context(|| format!("making {}", out.display()))?;
         layers::file::save(out, &set)?;
         println!("{}", layers::REPORT_HEADER);
         for r in &set.reports {

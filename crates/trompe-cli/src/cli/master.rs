@@ -2,11 +2,11 @@
 //! parse, call one `trompe::master::job` function, print its summary.
 
 use super::views::BlendArgs;
-use super::{bar, check_plan, load_mesh, refuse_foreign_folder};
+use super::{bar, check_plan, load_mesh_read_by};
 use anyhow::{Context, Result, bail};
 use clap::Subcommand;
 use std::path::PathBuf;
-use trompe::files::OutputPlan;
+use trompe::files::{FolderKind, OutputPlan};
 use trompe::frame::io;
 use trompe::scene::Scene;
 
@@ -105,19 +105,16 @@ impl MasterEncodeArgs {
         if !(self.scale.is_finite() && (0.25..=16.0).contains(&self.scale)) {
             bail!("--scale {}: must be between 0.25 and 16", self.scale);
         }
+        let set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
         let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.model])
-            .reads(self.images.iter())
+        let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
+        plan.reads(trompe::views::colmap::model_files(&self.model))
+            .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)))
+            .writes_folder(&self.output, FolderKind::MasterEncoding)
             .writes(self.output.join("masters.json"), &["json"])
             .creating_folders();
         check_plan(&plan)?;
-        refuse_foreign_folder(&self.output, "masters.json", "a master encoding")?;
-        std::fs::create_dir_all(&self.output)
-            .with_context(|| format!("making {}", self.output.display()))?;
-        let mesh = load_mesh(&self.mesh)?;
-        let count = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?
-            .views
-            .len();
+        let count = set.views.len();
         let progress = bar("encoding views", count as u64);
         let summary = trompe::master::job::encode_folder(
             &self.model,
@@ -140,10 +137,11 @@ impl MasterEncodeArgs {
 impl MasterRenderArgs {
     fn render(&self) -> Result<()> {
         let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.scene, &self.encoding])
+        let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
+        plan.reads([&self.scene, &self.encoding])
+            .reads(trompe::master::job::files_of(&self.encoding))
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
-        let mesh = load_mesh(&self.mesh)?;
         let scene = Scene::load(&self.scene).context("loading the scene")?;
         let camera = scene.view(scene.render.time)?.camera;
         let settings = self.blend.settings();
@@ -171,15 +169,13 @@ impl MasterEditArgs {
             );
         }
         let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.edited, &self.encoding])
+        let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
+        plan.reads([&self.edited, &self.encoding])
             .reads(self.scene.iter().chain(self.without.iter()))
+            .writes_folder(&self.output, FolderKind::MasterEncoding)
             .writes(self.output.join("masters.json"), &["json"])
             .creating_folders();
         check_plan(&plan)?;
-        refuse_foreign_folder(&self.output, "masters.json", "a master encoding")?;
-        std::fs::create_dir_all(&self.output)
-            .with_context(|| format!("making {}", self.output.display()))?;
-        let mesh = load_mesh(&self.mesh)?;
         let edited = io::read_png(&self.edited)
             .with_context(|| format!("reading {}", self.edited.display()))?;
         let apply = if self.replace {

@@ -139,6 +139,12 @@ impl BakeArgs {
         }
         plan.writes(&manifest_path, &["json"]);
         plan.check_overwrites()?;
+        for input in &mine {
+            trompe::octahedral::file::check_replaceable(&trompe::octahedral::batch::output_for(
+                input,
+                &self.output,
+            ))?;
+        }
         std::fs::create_dir_all(&self.output)
             .with_context(|| format!("creating {}", self.output.display()))?;
         let pb = ProgressBar::new(mine.len() as u64);
@@ -213,6 +219,7 @@ impl BakeArgs {
             plan.writes(&glb, &["glb"]);
         }
         plan.check_overwrites()?;
+        file::check_replaceable(&self.output)?;
         let loaded = trompe::geom::io::load(input)
             .with_context(|| format!("loading {}", input.display()))?;
         check_plan(plan.reads(loaded.files.iter().cloned()))?;

@@ -1,10 +1,10 @@
 //! `trompe relief SCENE`: a walk through relief impostors (paper 3) on the command line —
 //! parse, call `trompe::relief::walk`, write its frames and CSV, print its report.
 
-use super::{bar, check_plan, refuse_foreign_folder};
+use super::{bar, check_plan};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use trompe::files::OutputPlan;
+use trompe::files::{FolderKind, OutputPlan, StagedFolder};
 use trompe::frame::io;
 use trompe::scene::Scene;
 
@@ -71,7 +71,6 @@ impl ReliefArgs {
         };
         settings.pipeline.validate()?;
         let out = &self.output;
-        refuse_foreign_folder(out, "walk.csv", "a relief walk")?;
         let scene = Scene::load(&self.scene).context("loading the scene")?;
         for w in &scene.warnings {
             eprintln!("warning: {w}");
@@ -81,27 +80,30 @@ impl ReliefArgs {
         }
         let mut plan = OutputPlan::new();
         plan.reads(scene.files.iter().cloned())
+            .writes_folder(out, FolderKind::ReliefWalk)
             .writes(out.join("walk.csv"), &["csv"])
             .creating_folders();
         check_plan(&plan)?;
-        plan.make_folders()
-            .with_context(|| format!("making {}", out.display()))?;
+        // The frames and the table are one result: written aside, published whole at the end.
+        let staged = StagedFolder::begin(out, FolderKind::ReliefWalk)?;
+        let dir = staged.path();
         let progress = bar("walking", self.frames as u64);
         let write = |path: PathBuf, image: &trompe::Image<trompe::Rgba>| {
             io::write_png(&path, image).map_err(trompe::relief::ReliefError::Frame)
         };
         let mut sink = |i: usize, frame: &trompe::Frame, truth: Option<&trompe::Frame>| {
-            write(out.join(format!("frame_{i:04}.png")), &frame.color)?;
+            write(dir.join(format!("frame_{i:04}.png")), &frame.color)?;
             if let (true, Some(t)) = (self.truth, truth) {
-                write(out.join(format!("truth_{i:04}.png")), &t.color)?;
+                write(dir.join(format!("truth_{i:04}.png")), &t.color)?;
             }
             Ok(())
         };
         let report = walk(&scene, &settings, progress.as_ref(), &mut sink)
             .with_context(|| format!("walking {}", self.scene.display()))?;
-        let csv = out.join("walk.csv");
+        let csv = dir.join("walk.csv");
         trompe::files::write_atomically(&csv, report.csv().as_bytes())
             .with_context(|| format!("writing {}", csv.display()))?;
+        staged.publish()?;
         println!("{report}");
         println!(
             "wrote {} frames and walk.csv to {}",

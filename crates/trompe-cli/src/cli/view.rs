@@ -2,8 +2,8 @@
 //! softbuffer to show a CPU frame — no GPU) over `crate::viewer::Viewer`; or, with `--frames`,
 //! headless: a script's inputs replayed at fixed time steps and every frame written.
 
+use super::check_plan;
 use super::render::DeviceArg;
-use super::{check_plan, refuse_foreign_folder};
 use crate::viewer::script::{self, Script};
 use crate::viewer::{Input, Request, Viewer, hud};
 use anyhow::{Context, Result, bail};
@@ -11,7 +11,7 @@ use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::Instant;
-use trompe::files::OutputPlan;
+use trompe::files::{FolderKind, OutputPlan};
 use trompe::frame::io;
 use trompe::scene::Scene;
 use winit::application::ApplicationHandler;
@@ -19,9 +19,6 @@ use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
-
-/// The file that marks a folder as a viewer's output (so a later run may write into it).
-const MARKER: &str = "trompe-view.txt";
 
 /// `trompe view`.
 #[derive(clap::Args, Debug)]
@@ -81,13 +78,13 @@ impl ViewArgs {
         plan.creating_folders().reads([&self.scene]);
         plan.reads(scene.files.iter().cloned());
         plan.reads(self.script.iter().cloned());
+        plan.writes_folder(&self.output, FolderKind::ViewerFrames);
         check_plan(&plan)?;
-        refuse_foreign_folder(&self.output, MARKER, "a viewer's frames and screenshots")?;
-        std::fs::create_dir_all(&self.output)
-            .with_context(|| format!("creating {}", self.output.display()))?;
-        let marker = self.output.join(MARKER);
-        std::fs::write(&marker, format!("trompe view {}\n", self.scene.display()))
-            .with_context(|| format!("writing {}", marker.display()))?;
+        trompe::files::claim_folder(&self.output, FolderKind::ViewerFrames)?;
+        let out = Output {
+            dir: self.output.clone(),
+            plan,
+        };
         // The GPU the methods with a GPU path run on (the trace method's choice stands for them).
         let gpu = trompe_gpu::open_for(self.device.into(), trompe::methods::MethodKind::Trace)
             .context("opening the GPU")?;
@@ -96,9 +93,25 @@ impl ViewArgs {
         }
         let viewer = Viewer::new(&scene, self.impostor_resolution, gpu.as_ref())?;
         match self.frames {
-            Some(frames) => headless(viewer, &script, frames, self.fps, size, &self.output),
-            None => window(viewer.live(), script, size, &self.output, self.quit_after),
+            Some(frames) => headless(viewer, &script, frames, self.fps, size, &out),
+            None => window(viewer.live(), script, size, out, self.quit_after),
         }
+    }
+}
+
+/// Where the viewer writes: its folder, every file checked against what it reads.
+struct Output {
+    dir: PathBuf,
+    plan: OutputPlan,
+}
+
+impl Output {
+    /// Writes the file `name` in the folder with `write`, unless it is a file the viewer reads.
+    fn write(&self, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<PathBuf> {
+        let path = self.dir.join(name);
+        self.plan.check_output(&path)?;
+        write(&path).with_context(|| format!("writing {}", path.display()))?;
+        Ok(path)
     }
 }
 
@@ -109,7 +122,7 @@ fn headless(
     frames: u32,
     fps: f32,
     size: (u32, u32),
-    out: &Path,
+    out: &Output,
 ) -> Result<()> {
     let dt = 1.0 / fps;
     let mut last = None;
@@ -121,9 +134,9 @@ fn headless(
             }
         }
         let frame = viewer.frame(size, 1.0)?;
-        let path = out.join(format!("frame_{i:04}.png"));
-        io::write_png(&path, &frame.image)
-            .with_context(|| format!("writing {}", path.display()))?;
+        out.write(&format!("frame_{i:04}.png"), |p| {
+            Ok(io::write_png(p, &frame.image)?)
+        })?;
         println!("frame {i:>5}  {:>7.1} ms  {}", frame.ms, frame.hud[0]);
         last = Some(frame.image);
         viewer.step(dt);
@@ -137,21 +150,23 @@ fn handle(
     viewer: &Viewer<'_>,
     last: Option<&trompe::Image<trompe::Rgba>>,
     size: (u32, u32),
-    out: &Path,
+    out: &Output,
     n: u32,
 ) -> Result<()> {
     match request {
         Request::Screenshot => {
             if let Some(image) = last {
-                let path = out.join(format!("screenshot_{n:04}.png"));
-                io::write_png(&path, image)?;
+                let path = out.write(&format!("screenshot_{n:04}.png"), |p| {
+                    Ok(io::write_png(p, image)?)
+                })?;
                 eprintln!("wrote {}", path.display());
             }
         }
         Request::SaveCamera => {
-            let path = out.join(format!("camera_{n:04}.toml"));
-            std::fs::write(&path, viewer.camera_block(size))
-                .with_context(|| format!("writing {}", path.display()))?;
+            let block = viewer.camera_block(size);
+            let path = out.write(&format!("camera_{n:04}.toml"), |p| {
+                Ok(trompe::files::write_atomically(p, block.as_bytes())?)
+            })?;
             eprintln!("wrote {}", path.display());
         }
     }
@@ -197,7 +212,7 @@ struct App<'a> {
     viewer: Viewer<'a>,
     script: Script,
     size: (u32, u32),
-    out: PathBuf,
+    out: Output,
     quit_after: Option<f32>,
     window: Option<(Rc<Window>, Surface)>,
     start: Instant,
@@ -387,7 +402,7 @@ fn window(
     viewer: Viewer<'_>,
     script: Script,
     size: (u32, u32),
-    out: &Path,
+    out: Output,
     quit_after: Option<f32>,
 ) -> Result<()> {
     let event_loop = EventLoop::new()
@@ -397,7 +412,7 @@ fn window(
         viewer,
         script,
         size,
-        out: out.to_path_buf(),
+        out,
         quit_after,
         window: None,
         start: now,

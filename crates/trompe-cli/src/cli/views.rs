@@ -1,11 +1,11 @@
 //! `trompe views capture | score | render`: calibrated views on the command line — parse, call
 //! `trompe::views`, print its report.
 
-use super::{bar, check_plan, load_mesh, parse_strength, refuse_foreign_folder};
+use super::{bar, check_plan, load_mesh, load_mesh_read_by, parse_strength};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use std::path::PathBuf;
-use trompe::files::OutputPlan;
+use trompe::files::{FolderKind, OutputPlan};
 use trompe::frame::io;
 use trompe::scene::Scene;
 
@@ -150,14 +150,12 @@ impl CaptureArgs {
     pub(super) fn capture(&self) -> Result<()> {
         use trompe::views::capture::{CaptureSettings, Rig, capture, write_capture};
         let out = &self.output;
-        refuse_foreign_folder(out, "cameras.txt", "a capture")?;
         let mut plan = OutputPlan::new();
         plan.reads([&self.mesh])
+            .writes_folder(out, FolderKind::Capture)
             .writes(out.join("cameras.txt"), &["txt"])
             .creating_folders();
         check_plan(&plan)?;
-        plan.make_folders()
-            .with_context(|| format!("making {}", out.display()))?;
         let settings = CaptureSettings {
             rig: match self.rig {
                 RigArg::Sphere => Rig::Sphere,
@@ -236,12 +234,14 @@ impl ScoreArgs {
 impl ViewsRenderArgs {
     pub(super) fn render(&self) -> Result<()> {
         let mut plan = OutputPlan::new();
-        plan.reads([&self.mesh, &self.scene, &self.model])
+        let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
+        let mut set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
+        plan.reads([&self.scene])
+            .reads(trompe::views::colmap::model_files(&self.model))
+            .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)))
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
-        let mut set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
         set.load_images()?;
-        let mesh = load_mesh(&self.mesh)?;
         let scene = Scene::load(&self.scene).context("loading the scene")?;
         let camera = scene.view(scene.render.time)?.camera;
         let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;

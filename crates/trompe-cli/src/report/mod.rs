@@ -74,16 +74,9 @@ pub enum ReportError {
     /// A timed workload failed.
     #[error(transparent)]
     Bench(Box<crate::bench::BenchError>),
-    /// The output directory holds files `trompe demo` did not write.
-    #[error(
-        "{dir}: not empty and not a demo report's directory (it holds {files}); give an empty or new directory"
-    )]
-    NotEmpty {
-        /// The directory.
-        dir: PathBuf,
-        /// Some of what it holds.
-        files: String,
-    },
+    /// The output directory is a user's, or another command's result.
+    #[error(transparent)]
+    Folder(#[from] trompe::files::FolderError),
     /// The output directory could not be written.
     #[error("{path}: {source}")]
     Io {
@@ -191,30 +184,13 @@ pub fn demo(
     Ok(summary)
 }
 
-/// The file that marks a directory as one `trompe demo` wrote.
-pub const MARKER: &str = ".trompe-demo";
-
-/// Makes `out` the report's directory: created if missing; else it must be empty or hold the
-/// marker of an earlier report, so that no file of a user's is overwritten.
+/// Makes `out` the report's directory: created if missing; else it must be empty or an
+/// earlier report, so that no file of a user's is overwritten (`trompe::files::claim_folder`).
 fn claim_directory(out: &Path) -> Result<(), ReportError> {
-    if out.exists() && !out.join(MARKER).is_file() {
-        let entries = std::fs::read_dir(out).map_err(io_err(out))?;
-        let mut names: Vec<String> = entries
-            .filter_map(Result::ok)
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .collect();
-        if !names.is_empty() {
-            names.sort();
-            names.truncate(5);
-            return Err(ReportError::NotEmpty {
-                dir: out.to_path_buf(),
-                files: names.join(", "),
-            });
-        }
-    }
-    std::fs::create_dir_all(out).map_err(io_err(out))?;
-    let marker = out.join(MARKER);
-    trompe::files::write_atomically(&marker, b"written by trompe demo\n").map_err(io_err(&marker))
+    Ok(trompe::files::claim_folder(
+        out,
+        trompe::files::FolderKind::DemoReport,
+    )?)
 }
 
 /// `image` over a uniform `background` (alpha 0 shows it): how a blend with holes or a master

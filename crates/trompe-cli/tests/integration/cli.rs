@@ -609,7 +609,10 @@ fn no_command_overwrites_what_it_reads() {
     );
     assert_eq!(sum(&jpg), b"a photo");
     // demo refuses a directory of the user's, and names what is in it.
-    fails_cleanly(&trompe(&["demo", "-o", &s(&d)]), "not empty");
+    fails_cleanly(
+        &trompe(&["demo", "-o", &s(&d)]),
+        "holds files trompe did not write",
+    );
     assert_eq!(sum(&scene), before[0]);
 }
 
@@ -730,7 +733,10 @@ fn views_capture_score_and_render() {
         "-o",
         foreign.to_str().unwrap(),
     ]);
-    fails_cleanly(&o, "holds files that are not a capture");
+    fails_cleanly(
+        &o,
+        "holds files trompe did not write (notes.txt among them)",
+    );
     assert_eq!(std::fs::read_dir(&foreign).unwrap().count(), 1);
     let o = trompe(&["views", "score", d.to_str().unwrap(), "--mesh", t]);
     fails_cleanly(&o, "no COLMAP model here");

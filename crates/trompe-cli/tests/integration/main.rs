@@ -8,5 +8,6 @@ mod layers;
 mod master;
 mod octahedral;
 mod peeling;
+mod publish;
 mod relief;
 mod viewer;

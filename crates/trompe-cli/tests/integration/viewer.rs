@@ -148,7 +148,11 @@ fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
     std::fs::write(&keys, "0 down W\n").unwrap();
     let o = run(&foreign);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("not a viewer's"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("trompe did not write (mine.png"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(std::fs::read(foreign.join("mine.png")).unwrap(), b"x");
 }
 

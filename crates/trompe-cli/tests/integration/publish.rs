@@ -1,0 +1,311 @@
+//! Nothing lost: every command that fills a folder refuses a user's folder and another command's
+//! result, changing nothing; a result of several files killed while it is written, or raced by
+//! a second writer, leaves the old result or the new one, whole and loadable.
+
+use crate::common;
+use common::{scratch, stderr, trompe};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command};
+use std::time::{Duration, Instant};
+
+/// Every file under `dir` with its bytes, sorted.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let bytes = std::fs::read(&p).unwrap();
+                out.push((p, bytes));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn s(p: &Path) -> String {
+    p.to_str().unwrap().to_string()
+}
+
+fn capture(count: u32, out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_trompe"));
+    c.args(["views", "capture", &s(&common::asset("meshes/teapot.obj"))])
+        .args(["--count", &count.to_string(), "--size", "48x36", "-o"])
+        .arg(out)
+        .current_dir(common::root())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    c
+}
+
+fn encode(model: &Path, out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_trompe"));
+    c.args(["master", "encode", &s(model), "--mesh"])
+        .arg(common::asset("meshes/teapot.obj"))
+        .args(["--scale", "0.5", "-o"])
+        .arg(out)
+        .current_dir(common::root())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    c
+}
+
+fn run(mut c: Command) {
+    let o = c.output().expect("runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Hidden names beside `target` (staged results a killed writer left).
+fn litter(target: &Path) -> Vec<String> {
+    let name = target.file_name().unwrap().to_string_lossy().into_owned();
+    std::fs::read_dir(target.parent().unwrap())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(&format!(".{name}.")))
+        .collect()
+}
+
+#[test]
+fn folder_writers_refuse_a_users_folder_and_another_commands_result_changing_nothing() {
+    let d = scratch("publish_refusals");
+    let cap = d.join("capture");
+    run(capture(2, &cap));
+    let mine = d.join("mine");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "mine").unwrap();
+    let teapot = s(&common::asset("meshes/teapot.obj"));
+    let scene = "scenes/relief-walk.toml";
+    let mut attempts = 0;
+    for (target, found) in [
+        (&cap, "is a capture (trompe views capture)"),
+        (&mine, "trompe did not write (notes.txt among them)"),
+    ] {
+        let before = snapshot(target);
+        let t = s(target);
+        for args in [
+            vec!["master", "encode", &s(&cap), "--mesh", &teapot, "-o", &t],
+            vec![
+                "layers",
+                "build",
+                "scenes/diffuse.toml",
+                "--views",
+                "2",
+                "-o",
+                &t,
+            ],
+            vec!["relief", scene, "--frames", "2", "-o", &t],
+            vec!["view", scene, "--frames", "1", "-o", &t],
+            vec!["demo", "-o", &t],
+        ] {
+            let o = trompe(&args);
+            let e = stderr(&o);
+            assert!(!o.status.success(), "{args:?} wrote into {t}");
+            assert!(
+                e.contains(found) && !e.contains("panicked"),
+                "{args:?}: {e}"
+            );
+            attempts += 1;
+        }
+        if target == &mine {
+            let o = trompe(&["views", "capture", &teapot, "--count", "2", "-o", &t]);
+            assert!(stderr(&o).contains(found), "{}", stderr(&o));
+            attempts += 1;
+        }
+        assert_eq!(snapshot(target), before, "{t} changed");
+    }
+    // A render over a file the encoding or the capture is made of.
+    let first_image = std::fs::read_dir(cap.join("images"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .min()
+        .unwrap();
+    let encoding = d.join("encoding");
+    run(encode(&cap, &encoding));
+    for args in [
+        vec![
+            "master",
+            "render",
+            &s(&encoding),
+            "--mesh",
+            &teapot,
+            "--scene",
+            "scenes/diffuse.toml",
+            "-o",
+            &s(&encoding.join("master_0000.png")),
+        ],
+        vec![
+            "views",
+            "render",
+            &s(&cap),
+            "--mesh",
+            &teapot,
+            "--scene",
+            "scenes/diffuse.toml",
+            "-o",
+            &s(&first_image),
+        ],
+    ] {
+        let before = snapshot(&d);
+        let o = trompe(&args);
+        assert!(
+            !o.status.success() && stderr(&o).contains("refusing to overwrite"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+        assert_eq!(snapshot(&d), before);
+        attempts += 1;
+    }
+    // An octahedral batch whose sibling's atlas would land on a mesh's texture.
+    let batch = d.join("batch");
+    std::fs::create_dir_all(&batch).unwrap();
+    let src = common::shared("meshes/bunny10k_textured");
+    let mut texture = None;
+    for e in std::fs::read_dir(&src).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), batch.join(e.file_name())).unwrap();
+        if e.path().extension().is_some_and(|x| x == "png") {
+            texture = Some(e.file_name());
+        }
+    }
+    let texture = PathBuf::from(texture.expect("the textured bunny has a PNG texture"));
+    let obj = std::fs::read_dir(&batch)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "obj"))
+        .unwrap();
+    let sibling = batch.join(texture.with_extension("obj"));
+    std::fs::copy(common::asset("meshes/teapot.obj"), &sibling).unwrap();
+    let before = snapshot(&batch);
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        &s(&obj),
+        &s(&sibling),
+        "--octahedral",
+        "4",
+        "--resolution",
+        "64",
+        "-o",
+        &s(&batch),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("a file of the user's is where the atlas"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(snapshot(&batch), before);
+    attempts += 1;
+    eprintln!("{attempts} overwrite attempts, {attempts} refused");
+}
+
+/// Kills a writer of the result `new_n` (`spawn`) at `k` moments spread over its run, with the
+/// publish window held open by the test hook, over the result `old_n` (`reset` writes it):
+/// after each kill `whole(target)` must load one of the two. Returns (old, new) counts.
+fn kill_during_publish(
+    target: &Path,
+    k: u32,
+    (spawn, reset): (impl Fn() -> Child, impl Fn()),
+    whole: impl Fn(&Path) -> Result<usize, String>,
+    (old_n, new_n): (usize, usize),
+) -> (u32, u32) {
+    let t = Instant::now();
+    assert!(spawn().wait().unwrap().success());
+    let span = t.elapsed().as_millis() as u64;
+    assert_eq!(whole(target), Ok(new_n));
+    reset();
+    let (mut old, mut new) = (0, 0);
+    for i in 0..k {
+        let at = span * u64::from(i) / u64::from(k - 1);
+        let mut child = spawn();
+        std::thread::sleep(Duration::from_millis(at));
+        let _ = child.kill();
+        let _ = child.wait();
+        match whole(target) {
+            Ok(n) if n == old_n => old += 1,
+            Ok(n) if n == new_n => {
+                new += 1;
+                reset();
+            }
+            Ok(n) => panic!("kill {i} at {at} ms: {n} views, neither result"),
+            Err(e) => panic!("kill {i} at {at} ms: {e}"),
+        }
+    }
+    assert!(litter(target).len() <= 1, "{:?}", litter(target));
+    (old, new)
+}
+
+#[test]
+fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
+    let d = scratch("publish_kills");
+    let cap = d.join("capture");
+    run(capture(2, &cap));
+    let views = |dir: &Path| -> Result<usize, String> {
+        let mut set = trompe::views::ViewSet::load(dir, None).map_err(|e| e.to_string())?;
+        set.load_images().map_err(|e| e.to_string())?;
+        Ok(set.views.len())
+    };
+    assert_eq!(views(&cap), Ok(2));
+    let (old, new) = kill_during_publish(
+        &cap,
+        8,
+        (
+            || {
+                let mut c = capture(3, &cap);
+                c.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "300");
+                c.spawn().unwrap()
+            },
+            || run(capture(2, &cap)),
+        ),
+        views,
+        (2, 3),
+    );
+    eprintln!("capture: 8 kills, {old} left the old result, {new} the new");
+    // Two writers at once: one waits for the other; the folder holds one of them, whole.
+    for trial in 0..3 {
+        let mut a = capture(2, &cap);
+        a.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "200");
+        let a = a.spawn().unwrap();
+        let b = capture(3, &cap).spawn().unwrap();
+        for c in [a, b] {
+            let o = c.wait_with_output().unwrap();
+            assert!(o.status.success(), "trial {trial}: {}", stderr(&o));
+        }
+        let n = views(&cap).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
+        assert!(n == 2 || n == 3);
+        let images = std::fs::read_dir(cap.join("images")).unwrap().count();
+        assert_eq!(images, n, "trial {trial}: one capture's images, not a mix");
+    }
+    // An encoding, killed while it encodes and while it publishes.
+    let small = d.join("small");
+    run(capture(2, &small));
+    let enc = d.join("encoding");
+    run(encode(&small, &enc));
+    let masters = |dir: &Path| -> Result<usize, String> {
+        let (manifest, images) = trompe::master::file::load(dir).map_err(|e| e.to_string())?;
+        Ok(manifest.views.len().min(images.len()))
+    };
+    assert_eq!(masters(&enc), Ok(2));
+    run(capture(3, &cap));
+    let (old, new) = kill_during_publish(
+        &enc,
+        8,
+        (
+            || {
+                let mut c = encode(&cap, &enc);
+                c.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "300");
+                c.spawn().unwrap()
+            },
+            || run(encode(&small, &enc)),
+        ),
+        masters,
+        (2, 3),
+    );
+    eprintln!("master encode: 8 kills, {old} left the old result, {new} the new");
+    run(capture(2, &cap));
+    assert!(litter(&cap).is_empty(), "{:?}", litter(&cap));
+}
