@@ -75,6 +75,21 @@ pub fn check_against(
     Ok(())
 }
 
+/// Refuses `needed` more bytes for `what` when `held` bytes of the same job are already in
+/// memory and the sum passes the limit in force: the error names the sum, not only the part.
+pub fn check_total(what: impl FnOnce() -> String, held: u64, needed: u64) -> Result<(), OverBudget> {
+    check(
+        || {
+            if held == 0 {
+                what()
+            } else {
+                format!("{} (on top of {} already held)", what(), Bytes(held))
+            }
+        },
+        held.saturating_add(needed),
+    )
+}
+
 /// `count × each` bytes, saturating (a saturated product is always over any budget).
 pub fn times(count: u64, each: u64) -> u64 {
     count.saturating_mul(each)
@@ -179,6 +194,12 @@ mod tests {
         let text = e.to_string();
         assert!(text.contains("a 8192 × 8192 render") && text.contains("--memory-limit"));
         assert_eq!(times(u64::MAX, 2), u64::MAX);
+        // A sum: each part fits, the two do not.
+        let limit = limit();
+        assert!(check_total(|| "b".into(), limit / 2, limit / 2).is_ok());
+        let e = check_total(|| "texture 2".into(), limit / 2 + 1, limit / 2).unwrap_err();
+        assert!(e.to_string().contains("on top of"), "{e}");
+        assert_eq!(e.needed, limit + 1);
     }
 
     #[test]

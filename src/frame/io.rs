@@ -358,6 +358,44 @@ pub fn read_hdr(path: &Path) -> Result<Image<Rgba>, FrameError> {
     Image::from_vec(w, h, data)
 }
 
+/// The width and height of the image at `path`, read from its header only (any format
+/// [`read_color`] reads): what a command sums against the memory budget before decoding.
+pub fn image_size(path: &Path) -> Result<(u32, u32), FrameError> {
+    if extension(path) == "exr" {
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| codec(path, e))?;
+        let size = meta
+            .headers
+            .first()
+            .ok_or_else(|| codec(path, "no layer in file"))?
+            .layer_size;
+        return check_size(size.0 as u64, size.1 as u64);
+    }
+    let reader = image::ImageReader::open(path)
+        .map_err(|source| FrameError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .with_guessed_format()
+        .map_err(|source| FrameError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let (w, h) = reader.into_dimensions().map_err(|e| codec(path, e))?;
+    check_size(w as u64, h as u64)
+}
+
+/// [`image_size`] of an encoded image held in memory (`path` only names it in errors).
+pub fn image_size_of(bytes: &[u8], path: &Path) -> Result<(u32, u32), FrameError> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|source| FrameError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let (w, h) = reader.into_dimensions().map_err(|e| codec(path, e))?;
+    check_size(w as u64, h as u64)
+}
+
 /// Reads a float colour image by extension: `.exr` or `.hdr`; anything else as sRGB.
 pub fn read_color(path: &Path) -> Result<Image<Rgba>, FrameError> {
     match extension(path).as_str() {

@@ -588,6 +588,9 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 plan.writes(h, &["png"]);
             }
             check_plan(&plan)?;
+            let mut images = vec![reference.as_path(), test.as_path()];
+            images.extend(mask.as_deref());
+            metrics::budget_compare(&images)?;
             let read =
                 |p: &Path| io::read_color(p).with_context(|| format!("reading {}", p.display()));
             let (a, b) = (read(&reference)?, read(&test)?);

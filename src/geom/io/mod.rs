@@ -86,6 +86,30 @@ fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>)
 struct Reads {
     files: Vec<PathBuf>,
     textures: std::collections::HashMap<PathBuf, super::Texture>,
+    /// Bytes of the textures decoded so far: each next decode is checked on top of them.
+    texture_bytes: u64,
+}
+
+/// Bytes one texture pixel costs while it is decoded (the file's pixels, an RGBA8 copy and the
+/// linear result, as `frame::io` decodes) and once it is held (linear RGBA `f32`).
+const TEXTURE_DECODE_BYTES: u64 = 28;
+const TEXTURE_HELD_BYTES: u64 = 16;
+
+/// Refuses decoding a `w × h` texture `what` when the mesh's textures decoded so far (`held`
+/// bytes) and it pass the memory budget together; then counts it in `held`.
+fn budget_texture(
+    held: &mut u64,
+    what: impl Fn() -> String,
+    (w, h): (u32, u32),
+) -> Result<(), crate::memory::OverBudget> {
+    let pixels = u64::from(w) * u64::from(h);
+    crate::memory::check_total(
+        || format!("{}, a {w} × {h} texture of this mesh,", what()),
+        *held,
+        crate::memory::times(pixels, TEXTURE_DECODE_BYTES),
+    )?;
+    *held = held.saturating_add(crate::memory::times(pixels, TEXTURE_HELD_BYTES));
+    Ok(())
 }
 
 fn load_texture(
@@ -99,12 +123,15 @@ fn load_texture(
         return Ok(t.clone());
     }
     reads.files.push(at.clone());
-    let image =
-        crate::frame::io::read_png(&dir.join(name)).map_err(|source| MeshError::Texture {
-            path: mesh_path.to_path_buf(),
-            texture: name.to_string(),
-            source,
-        })?;
+    let texture_error = |source| MeshError::Texture {
+        path: mesh_path.to_path_buf(),
+        texture: name.to_string(),
+        source,
+    };
+    let size = crate::frame::io::image_size(&at).map_err(texture_error)?;
+    budget_texture(&mut reads.texture_bytes, || at.display().to_string(), size)
+        .map_err(|e| texture_error(e.into()))?;
+    let image = crate::frame::io::read_png(&at).map_err(texture_error)?;
     let texture = std::sync::Arc::new(image);
     reads.textures.insert(at, texture.clone());
     Ok(texture)
