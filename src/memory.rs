@@ -77,7 +77,11 @@ pub fn check_against(
 
 /// Refuses `needed` more bytes for `what` when `held` bytes of the same job are already in
 /// memory and the sum passes the limit in force: the error names the sum, not only the part.
-pub fn check_total(what: impl FnOnce() -> String, held: u64, needed: u64) -> Result<(), OverBudget> {
+pub fn check_total(
+    what: impl FnOnce() -> String,
+    held: u64,
+    needed: u64,
+) -> Result<(), OverBudget> {
     check(
         || {
             if held == 0 {

@@ -59,6 +59,21 @@ fn input_sized_allocations_are_refused_past_the_budget_before_they_are_made() {
         "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n",
     )
     .unwrap();
+    // Sixteen 1024² textures of one OBJ (28 MiB each while decoded, 16 MiB held): each fits
+    // the budget below, their sum does not.
+    let mut mtl = String::new();
+    let mut faces =
+        String::from("mtllib many.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n");
+    for i in 0..16 {
+        image::GrayImage::new(1024, 1024)
+            .save(d.join(format!("t{i}.png")))
+            .unwrap();
+        mtl += &format!("newmtl m{i}\nmap_Kd t{i}.png\n");
+        faces += &format!("usemtl m{i}\nf 1/1 2/2 3/3\n");
+    }
+    std::fs::write(d.join("many.mtl"), mtl).unwrap();
+    let many = d.join("many.obj");
+    std::fs::write(&many, faces).unwrap();
     let mesh = trompe::geom::icosphere(2);
     let mut scene = trompe::Scene::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -86,6 +101,19 @@ fn input_sized_allocations_are_refused_past_the_budget_before_they_are_made() {
 
     let e = trompe::geom::io::load(&obj).unwrap_err();
     assert!(over(&e).contains("4096 × 4096"));
+
+    let e = trompe::geom::io::load(&many).unwrap_err();
+    let text = over(&e);
+    assert!(
+        text.contains("t3.png") && text.contains("on top of 48.0 MiB already held"),
+        "{text}"
+    );
+    // Two images compared: each alone fits (64 MiB), the two together do not.
+    let (a, b) = (d.join("t0.png"), d.join("t1.png"));
+    let e = trompe::frame::metrics::budget_compare(&[&a]);
+    assert!(e.is_ok(), "{e:?}");
+    let e = trompe::frame::metrics::budget_compare(&[&a, &b]).unwrap_err();
+    assert!(over(&e).contains("comparing") && over(&e).contains("t1.png (1024 × 1024)"));
 
     let e = trompe::Impostor::spoc(&mesh)
         .resolution(4096)
