@@ -27,6 +27,9 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let mut materials: Vec<Material> = Vec::new();
     let mut material_index: HashMap<String, u32> = HashMap::new();
     let mut current_material = 0u32;
+    // `usemtl` of a name no library had defined yet (line, name), and the names libraries define.
+    let mut undefined: Vec<(usize, String)> = Vec::new();
+    let mut defined: std::collections::HashSet<String> = std::collections::HashSet::new();
 
     // Unified vertices: (v, vt, vn) → index.
     let mut unify: HashMap<(u32, u32, u32), u32> = HashMap::new();
@@ -104,6 +107,7 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                     Some(&i) => i,
                     None => {
                         // Used before (or without) its definition: a grey stand-in, named.
+                        undefined.push((line_no + 1, name.clone()));
                         materials.push(Material {
                             name: name.clone(),
                             ..Material::default()
@@ -123,9 +127,9 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
                         load_mtl(
                             &mtl_path,
                             &bytes,
-                            &mut materials,
-                            &mut material_index,
+                            (&mut materials, &mut material_index, &mut defined),
                             &mut reads,
+                            &mut warnings,
                         )?
                     }
                     Err(e) => warnings.push(Warning::Skipped {
@@ -136,6 +140,12 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
             }
             _ => {} // o, g, s, l, p and others do not affect triangles.
         }
+    }
+    for (line, name) in undefined.iter().filter(|(_, n)| !defined.contains(n)) {
+        warnings.push(Warning::Skipped {
+            path: path.to_path_buf(),
+            what: format!("line {line}: usemtl {name:?} names no material a library defines; grey"),
+        });
     }
 
     let positions = corners.iter().map(|c| v[c.0 as usize]).collect();
@@ -238,15 +248,54 @@ fn resolve(
     Ok(Some(resolved as u32))
 }
 
+/// MTL statements trompe reads past: understood, but not part of its materials.
+const MTL_UNUSED: [&str; 27] = [
+    "ka",
+    "ks",
+    "ke",
+    "ns",
+    "ni",
+    "d",
+    "tr",
+    "tf",
+    "illum",
+    "sharpness",
+    "map_ka",
+    "map_ks",
+    "map_ke",
+    "map_ns",
+    "map_d",
+    "map_bump",
+    "bump",
+    "disp",
+    "decal",
+    "refl",
+    "norm",
+    "pc",
+    "pcr",
+    "ps",
+    "aniso",
+    "anisor",
+    "map_pr",
+];
+
+/// The most statements an MTL file warns of one by one; the rest are counted.
+const MTL_WARNINGS: usize = 10;
+
 fn load_mtl(
     path: &Path,
     bytes: &[u8],
-    materials: &mut Vec<Material>,
-    index: &mut HashMap<String, u32>,
+    (materials, index, defined): (
+        &mut Vec<Material>,
+        &mut HashMap<String, u32>,
+        &mut std::collections::HashSet<String>,
+    ),
     reads: &mut Reads,
+    warnings: &mut Vec<Warning>,
 ) -> Result<(), MeshError> {
     let text = String::from_utf8_lossy(bytes);
     let mut current: Option<usize> = None;
+    let mut not_understood: Vec<(usize, String)> = Vec::new();
     for (line_no, line) in text.lines().enumerate() {
         let at = Line {
             path,
@@ -257,9 +306,28 @@ fn load_mtl(
         let Some(keyword) = tokens.next() else {
             continue;
         };
+        // Keywords as written by any exporter's capitalisation (`map_kd`, `KD`).
+        let lower = keyword.to_ascii_lowercase();
+        if current.is_none() && lower != "newmtl" && !MTL_UNUSED.contains(&lower.as_str()) {
+            not_understood.push((line_no + 1, format!("{line} (before any newmtl)")));
+            continue;
+        }
+        let keyword = match lower.as_str() {
+            "kd" => "Kd",
+            "pr" => "Pr",
+            "pm" => "Pm",
+            "map_kd" => "map_Kd",
+            "newmtl" => "newmtl",
+            k if MTL_UNUSED.contains(&k) => continue,
+            _ => {
+                not_understood.push((line_no + 1, line.to_string()));
+                continue;
+            }
+        };
         match keyword {
             "newmtl" => {
                 let name = tokens.collect::<Vec<_>>().join(" ");
+                defined.insert(name.clone());
                 let i = match index.get(&name) {
                     Some(&i) => i as usize,
                     None => {
@@ -306,6 +374,21 @@ fn load_mtl(
             _ => {}
         }
     }
+    for (line, statement) in not_understood.iter().take(MTL_WARNINGS) {
+        warnings.push(Warning::Skipped {
+            path: path.to_path_buf(),
+            what: format!("line {line}: {statement:?} is not an MTL statement trompe knows"),
+        });
+    }
+    if not_understood.len() > MTL_WARNINGS {
+        warnings.push(Warning::Skipped {
+            path: path.to_path_buf(),
+            what: format!(
+                "{} more statements trompe does not know",
+                not_understood.len() - MTL_WARNINGS
+            ),
+        });
+    }
     // MTL renderers disagree on whether Kd tints map_Kd; most (Blender, Mitsuba) show the
     // texture as is, so a textured material's colour comes from the texture alone.
     for m in materials.iter_mut().filter(|m| m.texture.is_some()) {
@@ -317,6 +400,44 @@ fn load_mtl(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Statements an MTL reader does not know, a texture before any `newmtl` and an undefined
+    /// material are warnings naming the line; capitalisation does not lose a texture.
+    #[test]
+    fn mtl_statements_not_understood_are_warnings_naming_the_line() {
+        let dir = crate::test_scratch::scratch("obj-mtl-warnings");
+        image::RgbImage::new(2, 2).save(dir.join("t.png")).unwrap();
+        std::fs::write(
+            dir.join("m.mtl"),
+            "map_Kd t.png\nnewmtl a\nKs 1 1 1\nMAP_KD t.png\nmap_Kdd t.png\n",
+        )
+        .unwrap();
+        let path = dir.join("m.obj");
+        std::fs::write(
+            &path,
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n",
+        )
+        .unwrap();
+        let loaded = load(&path).unwrap();
+        let text: Vec<String> = loaded.warnings.iter().map(|w| w.to_string()).collect();
+        assert_eq!(text.len(), 3, "{text:?}");
+        assert!(
+            text[0].contains("line 1") && text[0].contains("before any newmtl"),
+            "{text:?}"
+        );
+        assert!(
+            text[1].contains("line 5") && text[1].contains("map_Kdd"),
+            "{text:?}"
+        );
+        assert!(
+            text[2].contains("line 7") && text[2].contains("usemtl \"b\""),
+            "{text:?}"
+        );
+        assert!(
+            loaded.mesh.materials[0].texture.is_some(),
+            "MAP_KD is map_Kd"
+        );
+    }
 
     fn load_text(name: &str, text: &str) -> Result<LoadedMesh, MeshError> {
         let dir = crate::test_scratch::scratch(&format!("obj-{name}"));
