@@ -6,6 +6,11 @@
 //! memory, the control group's `memory.max` and the process's address-space limit (Linux; 8 GiB
 //! where none can be read). [`set_limit`] changes it (`trompe --memory-limit`).
 //!
+//! One account, process-wide, holds what is alive: every image ([`crate::frame::Image`]) draws
+//! its bytes from it when made and returns them when dropped ([`Held`]). A check refuses a new
+//! request when it and what is held together pass the limit, so six atlases, sixteen textures or
+//! two compared images are refused by their sum, each part fitting alone.
+//!
 //! Invariant: a check is made before the allocation it guards, so a refusal costs nothing.
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -54,9 +59,59 @@ pub fn set_limit(bytes: u64) {
     LIMIT.store(bytes.max(1), Ordering::Relaxed);
 }
 
-/// Refuses `needed` bytes for `what` past the limit in force.
+/// Bytes the account holds now.
+static HELD: AtomicU64 = AtomicU64::new(0);
+
+/// Bytes of input-sized memory alive in the process now (every image).
+pub fn held() -> u64 {
+    HELD.load(Ordering::Relaxed)
+}
+
+/// A share of the account: its bytes count as held until it is dropped. A clone holds its
+/// bytes again (a cloned image is a second allocation).
+#[derive(Debug)]
+pub struct Held(u64);
+
+impl Held {
+    /// Counts `bytes` as held (the allocation is made or checked already).
+    pub fn new(bytes: u64) -> Held {
+        HELD.fetch_add(bytes, Ordering::Relaxed);
+        Held(bytes)
+    }
+
+    /// The bytes it holds.
+    pub fn bytes(&self) -> u64 {
+        self.0
+    }
+}
+
+impl Clone for Held {
+    fn clone(&self) -> Held {
+        Held::new(self.0)
+    }
+}
+
+impl Drop for Held {
+    fn drop(&mut self) {
+        HELD.fetch_sub(self.0, Ordering::Relaxed);
+    }
+}
+
+/// Refuses `needed` bytes for `what` when they and what the process holds pass the limit in
+/// force; the error names what is held.
 pub fn check(what: impl FnOnce() -> String, needed: u64) -> Result<(), OverBudget> {
-    check_against(limit(), what, needed)
+    let held = held();
+    check_against(
+        limit(),
+        || {
+            if held == 0 {
+                what()
+            } else {
+                format!("{} (on top of {} already held)", what(), Bytes(held))
+            }
+        },
+        held.saturating_add(needed),
+    )
 }
 
 /// Refuses `needed` bytes for `what` past `limit`.
@@ -73,25 +128,6 @@ pub fn check_against(
         });
     }
     Ok(())
-}
-
-/// Refuses `needed` more bytes for `what` when `held` bytes of the same job are already in
-/// memory and the sum passes the limit in force: the error names the sum, not only the part.
-pub fn check_total(
-    what: impl FnOnce() -> String,
-    held: u64,
-    needed: u64,
-) -> Result<(), OverBudget> {
-    check(
-        || {
-            if held == 0 {
-                what()
-            } else {
-                format!("{} (on top of {} already held)", what(), Bytes(held))
-            }
-        },
-        held.saturating_add(needed),
-    )
 }
 
 /// `count × each` bytes, saturating (a saturated product is always over any budget).
@@ -198,12 +234,13 @@ mod tests {
         let text = e.to_string();
         assert!(text.contains("a 8192 × 8192 render") && text.contains("--memory-limit"));
         assert_eq!(times(u64::MAX, 2), u64::MAX);
-        // A sum: each part fits, the two do not.
-        let limit = limit();
-        assert!(check_total(|| "b".into(), limit / 2, limit / 2).is_ok());
-        let e = check_total(|| "texture 2".into(), limit / 2 + 1, limit / 2).unwrap_err();
-        assert!(e.to_string().contains("on top of"), "{e}");
-        assert_eq!(e.needed, limit + 1);
+        // What is held counts: a request that fits alone is refused on top of it.
+        let before = held();
+        let a = Held::new(1 << 20);
+        assert_eq!(held() - before, 1 << 20);
+        let b = a.clone();
+        assert_eq!(held() - before, 2 << 20);
+        drop((a, b));
     }
 
     #[test]

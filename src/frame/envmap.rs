@@ -52,7 +52,7 @@ impl EnvMap {
 
     /// A uniform environment of one radiance.
     pub fn constant(radiance: Vec3) -> Self {
-        let one = Image::new(4, 2, radiance).expect("4 × 2 is a valid size");
+        let one = Image::derived(4, 2, radiance);
         Self::from_image(one, 0.0, 1.0)
     }
 
@@ -150,7 +150,7 @@ impl Image<Vec3> {
 fn downsample(src: &Image<Vec3>, size: (u32, u32)) -> Image<Vec3> {
     let (w, h) = size;
     if src.width() < w || src.height() < h {
-        let mut out = Image::new(w, h, Vec3::ZERO).expect("constant size");
+        let mut out = Image::derived(w, h, Vec3::ZERO);
         for y in 0..h {
             for x in 0..w {
                 let st = (super::pixel_centre(f64::from(x), f64::from(y)).as_vec2())
@@ -160,7 +160,7 @@ fn downsample(src: &Image<Vec3>, size: (u32, u32)) -> Image<Vec3> {
         }
         return out;
     }
-    let mut out = Image::new(w, h, Vec3::ZERO).expect("target no larger than source");
+    let mut out = Image::derived(w, h, Vec3::ZERO);
     for y in 0..h {
         let (y0, y1) = (
             y * src.height() / h,
@@ -198,7 +198,7 @@ fn convolve_cosine(radiance: &Image<Vec3>) -> Image<Vec3> {
         }
     }
     let (w, h) = IRRADIANCE_SIZE;
-    let mut out = Image::new(w, h, Vec3::ZERO).expect("constant size");
+    let mut out = Image::derived(w, h, Vec3::ZERO);
     for y in 0..h {
         for x in 0..w {
             let n = uv_to_direction(

@@ -140,12 +140,25 @@ pub fn check_size(width: u64, height: u64) -> Result<(u32, u32), FrameError> {
     Ok((width as u32, height as u32))
 }
 
-/// A row-major image of `T`.
-#[derive(Clone, Debug, PartialEq)]
+/// A row-major image of `T`. Its pixels are held in the process's memory account
+/// ([`crate::memory::Held`]) while it lives.
+#[derive(Clone, Debug)]
 pub struct Image<T> {
     width: u32,
     height: u32,
     data: Vec<T>,
+    _held: crate::memory::Held,
+}
+
+impl<T: PartialEq> PartialEq for Image<T> {
+    fn eq(&self, other: &Self) -> bool {
+        (self.width, self.height) == (other.width, other.height) && self.data == other.data
+    }
+}
+
+/// The account's share for `data`.
+fn held<T>(data: &[T]) -> crate::memory::Held {
+    crate::memory::Held::new(std::mem::size_of_val(data) as u64)
 }
 
 impl<T: Copy + Send + Sync> Image<T> {
@@ -167,6 +180,7 @@ impl<T: Copy + Send + Sync> Image<T> {
         Ok(Self {
             width: w,
             height: h,
+            _held: held(&data),
             data,
         })
     }
@@ -191,6 +205,7 @@ impl<T: Copy + bytemuck::Zeroable> Image<T> {
         Ok(Self {
             width: w,
             height: h,
+            _held: held(&data),
             data,
         })
     }
@@ -215,6 +230,14 @@ fn check_budget<T>(w: u32, h: u32) -> Result<(), FrameError> {
 const PARALLEL_FILL_BYTES: usize = 1 << 20;
 
 impl<T: Copy> Image<T> {
+    /// A `width × height` image filled with `fill` whose size derives from memory already held
+    /// (a smaller level of a pyramid, a fixed-size resample): counted in the memory account but
+    /// not refused by it. Panics only on a programming error: a zero or absurd size.
+    pub fn derived(width: u32, height: u32, fill: T) -> Self {
+        let n = width as usize * height as usize;
+        Image::from_vec(width, height, vec![fill; n]).expect("a derived image has a valid size")
+    }
+
     /// Wraps existing pixels; `data.len()` must equal `width * height`.
     pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Result<Self, FrameError> {
         check_size(width as u64, height as u64)?;
@@ -228,6 +251,7 @@ impl<T: Copy> Image<T> {
         Ok(Self {
             width,
             height,
+            _held: held(&data),
             data,
         })
     }
@@ -272,10 +296,12 @@ impl<T: Copy> Image<T> {
     }
     /// A new image with `f` applied to each pixel.
     pub fn map<U: Copy>(&self, f: impl Fn(T) -> U) -> Image<U> {
+        let data: Vec<U> = self.data.iter().map(|&p| f(p)).collect();
         Image {
             width: self.width,
             height: self.height,
-            data: self.data.iter().map(|&p| f(p)).collect(),
+            _held: held(&data),
+            data,
         }
     }
 

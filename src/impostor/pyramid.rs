@@ -42,7 +42,7 @@ impl MaxPyramid {
                 break;
             }
             let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
-            let mut next = Image::new(nw, nh, 0.0f32).expect("smaller than its parent");
+            let mut next = Image::derived(nw, nh, 0.0f32);
             reduce(last, &mut next);
             levels.push(next);
         }

@@ -56,7 +56,6 @@ pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
         document: &gltf.document,
         base,
         textures: HashMap::new(),
-        texture_bytes: 0,
         materials: HashMap::new(),
         mesh: Mesh::default(),
         normals_present: true,
@@ -524,8 +523,6 @@ struct Flatten<'a> {
     base: &'a Path,
     /// Decoded images by index and whether they hold colour (sRGB) or data (linear).
     textures: HashMap<(usize, bool), crate::geom::Texture>,
-    /// Bytes of the images decoded so far: each next decode is checked on top of them.
-    texture_bytes: u64,
     materials: HashMap<Option<usize>, u32>,
     mesh: Mesh,
     normals_present: bool,
@@ -768,8 +765,7 @@ impl Flatten<'_> {
             source,
         };
         let size = crate::frame::io::image_size_of(&bytes, self.path).map_err(texture_error)?;
-        super::budget_texture(&mut self.texture_bytes, || element.clone(), size)
-            .map_err(|e| texture_error(e.into()))?;
+        super::budget_texture(|| element.clone(), size).map_err(|e| texture_error(e.into()))?;
         let img = decode(&bytes, self.path).map_err(texture_error)?;
         let t = Arc::new(img);
         self.textures.insert((image, color), t.clone());

@@ -86,30 +86,23 @@ fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>)
 struct Reads {
     files: Vec<PathBuf>,
     textures: std::collections::HashMap<PathBuf, super::Texture>,
-    /// Bytes of the textures decoded so far: each next decode is checked on top of them.
-    texture_bytes: u64,
 }
 
-/// Bytes one texture pixel costs while it is decoded (the file's pixels, an RGBA8 copy and the
-/// linear result, as `frame::io` decodes) and once it is held (linear RGBA `f32`).
+/// Bytes one texture pixel costs while it is decoded: the file's pixels, an RGBA8 copy and the
+/// linear result, as `frame::io` decodes.
 const TEXTURE_DECODE_BYTES: u64 = 28;
-const TEXTURE_HELD_BYTES: u64 = 16;
 
-/// Refuses decoding a `w × h` texture `what` when the mesh's textures decoded so far (`held`
-/// bytes) and it pass the memory budget together; then counts it in `held`.
+/// Refuses decoding a `w × h` texture `what` when it and what the process holds (the mesh's
+/// textures decoded before it among them) pass the memory budget together.
 fn budget_texture(
-    held: &mut u64,
     what: impl Fn() -> String,
     (w, h): (u32, u32),
 ) -> Result<(), crate::memory::OverBudget> {
     let pixels = u64::from(w) * u64::from(h);
-    crate::memory::check_total(
+    crate::memory::check(
         || format!("{}, a {w} × {h} texture of this mesh,", what()),
-        *held,
         crate::memory::times(pixels, TEXTURE_DECODE_BYTES),
-    )?;
-    *held = held.saturating_add(crate::memory::times(pixels, TEXTURE_HELD_BYTES));
-    Ok(())
+    )
 }
 
 fn load_texture(
@@ -129,8 +122,7 @@ fn load_texture(
         source,
     };
     let size = crate::frame::io::image_size(&at).map_err(texture_error)?;
-    budget_texture(&mut reads.texture_bytes, || at.display().to_string(), size)
-        .map_err(|e| texture_error(e.into()))?;
+    budget_texture(|| at.display().to_string(), size).map_err(|e| texture_error(e.into()))?;
     let image = crate::frame::io::read_png(&at).map_err(texture_error)?;
     let texture = std::sync::Arc::new(image);
     reads.textures.insert(at, texture.clone());
