@@ -17,7 +17,7 @@ pub use parts::{Part, PartError, checksum_file};
 pub use plan::{OutputError, OutputPlan};
 
 use std::io::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Holds the folder of a multi-file artefact (an impostor's EXR and the sidecar that names it)
@@ -46,31 +46,61 @@ impl PublishLock {
 /// disk, then renamed over `path` (a rename within one file system is atomic). On any error the
 /// temporary file is removed and `path` is as it was.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    static NEXT: AtomicU64 = AtomicU64::new(0);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| std::io::Error::other("the path names no file"))?;
-    let tmp = dir.join(format!(
-        ".{}.{}-{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        NEXT.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut f = std::fs::File::create_new(&tmp)?;
+    StagedFile::write(path, bytes)?.commit()
+}
+
+/// A file written whole under a hidden temporary name beside its path, flushed to disk, and made
+/// current by [`StagedFile::commit`] (one rename). A result of several files beside each other
+/// stages every part first, then commits them one after the other: the window in which a kill
+/// leaves some parts new is a few renames long, not the time to encode and write them.
+/// Dropped uncommitted, the temporary file is removed.
+pub struct StagedFile {
+    tmp: PathBuf,
+    path: PathBuf,
+    committed: bool,
+}
+
+impl StagedFile {
+    /// Writes `bytes` under a temporary name beside `path`, flushed to disk.
+    pub fn write(path: &Path, bytes: &[u8]) -> std::io::Result<StagedFile> {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let name = path
+            .file_name()
+            .ok_or_else(|| std::io::Error::other("the path names no file"))?;
+        let staged = StagedFile {
+            tmp: dir.join(format!(
+                ".{}.{}-{}.tmp",
+                name.to_string_lossy(),
+                std::process::id(),
+                NEXT.fetch_add(1, Ordering::Relaxed)
+            )),
+            path: path.to_path_buf(),
+            committed: false,
+        };
+        let mut f = std::fs::File::create_new(&staged.tmp)?;
         f.write_all(bytes)?;
         f.sync_data()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+        Ok(staged)
     }
-    result
+
+    /// Renames the temporary file over the path.
+    pub fn commit(mut self) -> std::io::Result<()> {
+        std::fs::rename(&self.tmp, &self.path)?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for StagedFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 #[cfg(test)]

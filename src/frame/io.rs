@@ -222,13 +222,28 @@ pub fn encode_exr(
 
 /// Writes a depth image as a single-channel (`Z`) float OpenEXR.
 pub fn write_exr_depth(path: &Path, depth: &Image<f32>) -> Result<(), FrameError> {
-    write_exr_channels(path, depth.size(), vec![("Z", depth.pixels().to_vec())])
+    publish(path, &encode_exr_depth(path, depth)?)
+}
+
+/// [`write_exr_depth`]'s file, in memory (`path` only names it in errors).
+pub fn encode_exr_depth(path: &Path, depth: &Image<f32>) -> Result<Vec<u8>, FrameError> {
+    encode_exr(
+        path,
+        depth.size(),
+        vec![("Z", depth.pixels().to_vec())],
+        exr::prelude::Encoding::FAST_LOSSLESS,
+    )
 }
 
 /// Writes a normal image as a three-channel (`N.X`, `N.Y`, `N.Z`) float OpenEXR.
 pub fn write_exr_normals(path: &Path, normals: &Image<Vec3>) -> Result<(), FrameError> {
+    publish(path, &encode_exr_normals(path, normals)?)
+}
+
+/// [`write_exr_normals`]'s file, in memory (`path` only names it in errors).
+pub fn encode_exr_normals(path: &Path, normals: &Image<Vec3>) -> Result<Vec<u8>, FrameError> {
     let px = normals.pixels();
-    write_exr_channels(
+    encode_exr(
         path,
         normals.size(),
         vec![
@@ -236,6 +251,7 @@ pub fn write_exr_normals(path: &Path, normals: &Image<Vec3>) -> Result<(), Frame
             ("N.Y", px.iter().map(|n| n.y).collect()),
             ("N.Z", px.iter().map(|n| n.z).collect()),
         ],
+        exr::prelude::Encoding::FAST_LOSSLESS,
     )
 }
 

@@ -382,15 +382,12 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
         channels,
         exr::prelude::Encoding::SMALL_LOSSLESS,
     )?;
-    let publish = |path: &Path, bytes: &[u8]| {
-        crate::files::write_atomically(path, bytes).map_err(|source| ImpostorFileError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+    let io_at = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ImpostorFileError::Io { path, source }
     };
     let _lock = crate::files::PublishLock::of(json_path);
-    publish(&exr_path, &bytes)?;
-    pause_for_tests();
+    let exr = crate::files::StagedFile::write(&exr_path, &bytes).map_err(io_at(&exr_path))?;
     let exr_fnv1a = crate::files::Part::of_bytes(&exr_name, &bytes).fnv1a;
     let sidecar = Sidecar {
         format: FORMAT.into(),
@@ -411,7 +408,13 @@ pub fn save(impostor: &Impostor, json_path: &Path) -> Result<(), ImpostorFileErr
         path: json_path.to_path_buf(),
         reason: e.to_string(),
     })?;
-    publish(json_path, text.as_bytes())
+    // Both staged whole first: between the two renames only, a reader finds the new EXR beside
+    // the old sidecar, and refuses it by its checksum.
+    let index =
+        crate::files::StagedFile::write(json_path, text.as_bytes()).map_err(io_at(json_path))?;
+    exr.commit().map_err(io_at(&exr_path))?;
+    pause_for_tests();
+    index.commit().map_err(io_at(json_path))
 }
 
 /// A test hook: `TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS` (at most 10 s) holds a writer between

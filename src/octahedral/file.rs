@@ -131,6 +131,17 @@ pub fn read_sidecar(path: &Path) -> Result<Sidecar, OctahedralFileError> {
     Ok(sidecar)
 }
 
+/// A test hook: `TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS` (at most 10 s) holds a writer between
+/// its maps and its sidecar, so that tests can race two writers there.
+fn pause_for_tests() {
+    if let Some(ms) = std::env::var("TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms.min(10_000)));
+    }
+}
+
 /// Refuses the maps beside `path` that its sidecar does not record (another bake's, or a bake
 /// torn by a kill).
 pub fn verify_maps(path: &Path, sidecar: &Sidecar) -> Result<(), OctahedralFileError> {
@@ -229,11 +240,25 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
     let [_, color, normal, depth, orm] = files(json);
     // The maps first, then the sidecar naming them with their checksums, all under the folder's
     // lock: a second writer waits, and a reader refuses maps that are not its sidecar's.
+    // Every map encoded, then staged whole beside its name, then the maps and last the sidecar
+    // naming them with their checksums renamed into place, under the folder's lock: a second
+    // writer waits, a kill leaves at most a few renames undone, and a reader refuses maps that
+    // are not its sidecar's.
+    let maps = [
+        (&color, io::encode_png(&atlas.color, &color)?),
+        (&normal, io::encode_exr_normals(&normal, &atlas.normal)?),
+        (&depth, io::encode_exr_depth(&depth, &atlas.depth)?),
+        (&orm, io::encode_png_data(&atlas.orm, &orm)?),
+    ];
     let _lock = crate::files::PublishLock::of(json);
-    io::write_png(&color, &atlas.color)?;
-    io::write_exr_normals(&normal, &atlas.normal)?;
-    io::write_exr_depth(&depth, &atlas.depth)?;
-    io::write_png_data(&orm, &atlas.orm)?;
+    let io_at = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| OctahedralFileError::Io { path, source }
+    };
+    let mut staged = Vec::new();
+    for (path, bytes) in &maps {
+        staged.push(crate::files::StagedFile::write(path, bytes).map_err(io_at(path))?);
+    }
     let name = |p: &Path| {
         p.file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -254,11 +279,10 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
         orm: Some(name(&orm)),
         parts: None,
     };
-    let dir = json.parent().unwrap_or(Path::new(""));
-    let parts = [&color, &normal, &depth, &orm]
-        .into_iter()
-        .map(|p| crate::files::Part::of(dir, &name(p)))
-        .collect::<Result<Vec<_>, _>>()?;
+    let parts = maps
+        .iter()
+        .map(|(p, bytes)| crate::files::Part::of_bytes(&name(p), bytes))
+        .collect();
     let sidecar = Sidecar {
         parts: Some(parts),
         ..sidecar
@@ -267,12 +291,12 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
         path: json.to_path_buf(),
         source: std::io::Error::other(e),
     })?;
-    crate::files::write_atomically(json, text.as_bytes()).map_err(|source| {
-        OctahedralFileError::Io {
-            path: json.to_path_buf(),
-            source,
-        }
-    })?;
+    let index = crate::files::StagedFile::write(json, text.as_bytes()).map_err(io_at(json))?;
+    for (part, (path, _)) in staged.into_iter().zip(&maps) {
+        part.commit().map_err(io_at(path))?;
+    }
+    pause_for_tests();
+    index.commit().map_err(io_at(json))?;
     Ok(sidecar)
 }
 

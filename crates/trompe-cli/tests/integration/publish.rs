@@ -54,6 +54,28 @@ fn encode(model: &Path, out: &Path) -> Command {
     c
 }
 
+/// How many kills and races each writer gets: a few in CI; `TROMPE_SWEEP_KILLS` and
+/// `TROMPE_SWEEP_RACES` make the same tests the full sweep.
+fn sweep(var: &str, default: u32) -> u32 {
+    std::env::var(var)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+        .max(2)
+}
+
+fn bake(args: &[&str], out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_trompe"));
+    c.args(["impostor", "bake", &s(&common::asset("meshes/teapot.obj"))])
+        .args(args)
+        .arg("-o")
+        .arg(out)
+        .current_dir(common::root())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    c
+}
+
 fn run(mut c: Command) {
     let o = c.output().expect("runs");
     assert!(o.status.success(), "{}", stderr(&o));
@@ -250,9 +272,10 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
         Ok(set.views.len())
     };
     assert_eq!(views(&cap), Ok(2));
+    let kills = sweep("TROMPE_SWEEP_KILLS", 8);
     let (old, new) = kill_during_publish(
         &cap,
-        8,
+        kills,
         (
             || {
                 let mut c = capture(3, &cap);
@@ -264,9 +287,10 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
         views,
         (2, 3),
     );
-    eprintln!("capture: 8 kills, {old} left the old result, {new} the new");
+    eprintln!("capture: {kills} kills, {old} left the old result, {new} the new");
     // Two writers at once: one waits for the other; the folder holds one of them, whole.
-    for trial in 0..3 {
+    let races = sweep("TROMPE_SWEEP_RACES", 3);
+    for trial in 0..races {
         let mut a = capture(2, &cap);
         a.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "200");
         let a = a.spawn().unwrap();
@@ -293,7 +317,7 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
     run(capture(3, &cap));
     let (old, new) = kill_during_publish(
         &enc,
-        8,
+        kills,
         (
             || {
                 let mut c = encode(&cap, &enc);
@@ -305,7 +329,63 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
         masters,
         (2, 3),
     );
-    eprintln!("master encode: 8 kills, {old} left the old result, {new} the new");
+    eprintln!("master encode: {kills} kills, {old} left the old result, {new} the new");
+    eprintln!("capture: {races} races, each left one whole capture");
     run(capture(2, &cap));
     assert!(litter(&cap).is_empty(), "{:?}", litter(&cap));
+}
+
+/// Results of files side by side (a SPOC impostor's EXR and sidecar, an octahedral atlas's four
+/// maps and sidecar): killed at any moment, the sidecar loads with its own maps; two writers at
+/// once leave one bake, whole.
+#[test]
+fn a_killed_or_raced_bake_leaves_one_whole_bake() {
+    let d = scratch("publish_bakes");
+    let kills = sweep("TROMPE_SWEEP_KILLS", 6);
+    let races = sweep("TROMPE_SWEEP_RACES", 3);
+    let spoc = d.join("t.json");
+    let loads = |p: &Path| -> Result<usize, String> {
+        let i = trompe::impostor::file::load(p).map_err(|e| e.to_string())?;
+        Ok(i.gd().size().0 as usize)
+    };
+    let (old, new) = kill_during_publish(
+        &spoc,
+        kills,
+        (
+            || bake(&["--resolution", "96"], &spoc).spawn().unwrap(),
+            || run(bake(&["--resolution", "64"], &spoc)),
+        ),
+        loads,
+        (64, 96),
+    );
+    eprintln!("SPOC bake: {kills} kills, {old} left the old result, {new} the new");
+    let atlas = d.join("o.json");
+    let maps = |p: &Path| -> Result<usize, String> {
+        let sidecar = trompe::octahedral::file::read_sidecar(p).map_err(|e| e.to_string())?;
+        trompe::octahedral::file::verify_maps(p, &sidecar).map_err(|e| e.to_string())?;
+        Ok(sidecar.grid.n as usize)
+    };
+    let octahedral = |n: &str| bake(&["--octahedral", n, "--resolution", "128"], &atlas);
+    let (old, new) = kill_during_publish(
+        &atlas,
+        kills,
+        (|| octahedral("8").spawn().unwrap(), || run(octahedral("4"))),
+        maps,
+        (4, 8),
+    );
+    eprintln!("octahedral bake: {kills} kills, {old} left the old result, {new} the new");
+    for trial in 0..races {
+        let mut slow = octahedral("4");
+        slow.env("TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS", "300");
+        let slow = slow.spawn().unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        let fast = octahedral("8").spawn().unwrap();
+        for c in [slow, fast] {
+            let o = c.wait_with_output().unwrap();
+            assert!(o.status.success(), "trial {trial}: {}", stderr(&o));
+        }
+        let n = maps(&atlas).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
+        assert!(n == 4 || n == 8);
+    }
+    eprintln!("octahedral bake: {races} races, each left one whole atlas");
 }
