@@ -6,9 +6,10 @@
 //! Invariants: a folder's marker is written last, inside the staged folder, so a folder that has
 //! one holds a whole result; files in a folder that its marker does not list (a user's) are
 //! carried into the new result, never dropped; a staged folder left by a killed writer has a
-//! hidden name, and the next writer of the same folder removes it.
+//! hidden name carrying its process id, and the next writer of the same folder removes it once
+//! that process is gone.
 
-use super::PublishLock;
+use super::{PublishLock, alive};
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -271,15 +272,13 @@ pub struct StagedFolder {
     target: PathBuf,
     staging: PathBuf,
     kind: FolderKind,
-    earlier: Option<Vec<String>>,
     published: bool,
-    _lock: PublishLock,
 }
 
 impl StagedFolder {
-    /// Refuses `target` unless it is new, empty or a result of `kind`; takes the publishing lock
-    /// of its parent folder (a second writer waits), removes what killed writers left, and
-    /// makes the hidden folder to write into.
+    /// Refuses `target` unless it is new, empty or a result of `kind`; removes what killed
+    /// writers of it left; makes the hidden folder to write into. Writers of one folder run at
+    /// once; their publishing is serialised ([`StagedFolder::publish`]).
     pub fn begin(target: &Path, kind: FolderKind) -> Result<StagedFolder, FolderError> {
         let name = target
             .file_name()
@@ -292,17 +291,22 @@ impl StagedFolder {
             _ => PathBuf::from("."),
         };
         std::fs::create_dir_all(&parent).map_err(io_at(&parent))?;
-        let lock = PublishLock::of(target);
-        let earlier = match FolderState::of(target, kind)? {
-            FolderState::New => None,
-            FolderState::Made(files) => Some(files),
-        };
+        FolderState::of(target, kind)?;
+        // What writers that died left (their process is gone), under the lock.
         let prefix = format!(".{name}.staging-");
-        for entry in std::fs::read_dir(&parent).map_err(io_at(&parent))? {
-            let entry = entry.map_err(io_at(&parent))?;
-            if entry.file_name().to_string_lossy().starts_with(&prefix) {
-                let litter = entry.path();
-                std::fs::remove_dir_all(&litter).map_err(io_at(&litter))?;
+        {
+            let _lock = PublishLock::of(target);
+            for entry in std::fs::read_dir(&parent).map_err(io_at(&parent))? {
+                let entry = entry.map_err(io_at(&parent))?;
+                let file_name = entry.file_name().to_string_lossy().into_owned();
+                let Some(rest) = file_name.strip_prefix(&prefix) else {
+                    continue;
+                };
+                let pid = rest.split('-').next().and_then(|p| p.parse::<u32>().ok());
+                if pid.is_some_and(|p| !alive(p)) {
+                    let litter = entry.path();
+                    std::fs::remove_dir_all(&litter).map_err(io_at(&litter))?;
+                }
             }
         }
         static NEXT: AtomicU64 = AtomicU64::new(0);
@@ -316,9 +320,7 @@ impl StagedFolder {
             target: target.to_path_buf(),
             staging,
             kind,
-            earlier,
             published: false,
-            _lock: lock,
         })
     }
 
@@ -332,20 +334,21 @@ impl StagedFolder {
         &self.target
     }
 
-    /// The files of the result the folder holds now (empty for a new folder).
-    pub fn earlier_files(&self) -> &[String] {
-        self.earlier.as_deref().unwrap_or_default()
-    }
-
-    /// Makes the staged result current: carries in the files of the user's that the folder
-    /// holds (a name the new result also has is refused, and nothing changes), writes the
-    /// marker, and swaps the staged folder with the old one in one step.
+    /// Makes the staged result current, under the publishing lock of the folder's parent (a
+    /// second writer waits): carries in the files of the user's that the folder holds now (a
+    /// name the new result also has is refused, and nothing changes), writes the marker, and
+    /// swaps the staged folder with the old one in one step.
     pub fn publish(mut self) -> Result<(), FolderError> {
+        let _lock = PublishLock::of(&self.target);
+        // The folder as it is now: another writer may have published since `begin`.
+        let earlier = match FolderState::of(&self.target, self.kind)? {
+            FolderState::New => Vec::new(),
+            FolderState::Made(files) => files,
+        };
         let mut files = relative_files(&self.staging).map_err(io_at(&self.staging))?;
         files.retain(|f| f != MARKER);
         files.sort();
         if self.target.is_dir() {
-            let earlier = self.earlier.clone().unwrap_or_default();
             for f in relative_files(&self.target).map_err(io_at(&self.target))? {
                 if f == MARKER || earlier.contains(&f) {
                     continue;
@@ -530,7 +533,7 @@ mod tests {
             Err(FolderError::NotAFolder { .. })
         ));
         // An unpublished result leaves nothing behind, and a killed one's litter is cleared.
-        let litter = d.join(".layers.staging-1-1");
+        let litter = d.join(".layers.staging-999999999-1");
         std::fs::create_dir_all(&litter).unwrap();
         drop(StagedFolder::begin(&out, FolderKind::LayerSet).unwrap());
         assert!(!litter.exists());

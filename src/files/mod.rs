@@ -71,10 +71,24 @@ impl StagedFile {
         let name = path
             .file_name()
             .ok_or_else(|| std::io::Error::other("the path names no file"))?;
+        // What writers of this name that died left behind (their process is gone).
+        let prefix = format!(".{}.", name.to_string_lossy());
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            for entry in entries.flatten() {
+                let file_name = entry.file_name().to_string_lossy().into_owned();
+                let pid = file_name
+                    .strip_prefix(&prefix)
+                    .and_then(|rest| rest.strip_suffix(".tmp"))
+                    .and_then(|rest| rest.split('-').next())
+                    .and_then(|p| p.parse::<u32>().ok());
+                if pid.is_some_and(|p| !alive(p)) {
+                    let _ = std::fs::remove_file(entry.path());
+                }
+            }
+        }
         let staged = StagedFile {
             tmp: dir.join(format!(
-                ".{}.{}-{}.tmp",
-                name.to_string_lossy(),
+                "{prefix}{}-{}.tmp",
                 std::process::id(),
                 NEXT.fetch_add(1, Ordering::Relaxed)
             )),
@@ -100,6 +114,18 @@ impl Drop for StagedFile {
         if !self.committed {
             let _ = std::fs::remove_file(&self.tmp);
         }
+    }
+}
+
+/// Whether process `pid` runs (Linux: it has a `/proc` entry; elsewhere, assumed).
+fn alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    if cfg!(target_os = "linux") {
+        Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        true
     }
 }
 

@@ -39,8 +39,13 @@ pub enum OutputError {
     },
     /// An output folder cannot take the command's result (a file, a user's folder, another
     /// command's result).
-    #[error("{0}")]
-    Folder(String),
+    #[error("{reason}")]
+    Folder {
+        /// The folder.
+        path: PathBuf,
+        /// Why, naming the folder and what it holds ([`super::FolderError`]'s words).
+        reason: String,
+    },
     /// An output's folder does not exist.
     #[error("{path}: the folder {folder} does not exist")]
     NoFolder {
@@ -146,7 +151,12 @@ impl OutputPlan {
             let earlier = match FolderState::of(dir, *kind) {
                 Ok(FolderState::New) => continue,
                 Ok(FolderState::Made(files)) => files,
-                Err(e) => return Err(OutputError::Folder(e.to_string())),
+                Err(e) => {
+                    return Err(OutputError::Folder {
+                        path: dir.clone(),
+                        reason: e.to_string(),
+                    });
+                }
             };
             for file in earlier {
                 let Some(id) = Identity::of(&dir.join(&file)) else {

@@ -386,23 +386,24 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), FrameError> {
             .layer_size;
         return check_size(size.0 as u64, size.1 as u64);
     }
-    let reader = image::ImageReader::open(path)
-        .map_err(|source| FrameError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?
-        .with_guessed_format()
-        .map_err(|source| FrameError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-    let (w, h) = reader.into_dimensions().map_err(|e| codec(path, e))?;
-    check_size(w as u64, h as u64)
+    let file = std::fs::File::open(path).map_err(|source| FrameError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    header_size(image::ImageReader::new(std::io::BufReader::new(file)), path)
 }
 
 /// [`image_size`] of an encoded image held in memory (`path` only names it in errors).
 pub fn image_size_of(bytes: &[u8], path: &Path) -> Result<(u32, u32), FrameError> {
-    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+    header_size(image::ImageReader::new(std::io::Cursor::new(bytes)), path)
+}
+
+/// The size in an image's header, its format guessed from its first bytes.
+fn header_size<R: std::io::BufRead + std::io::Seek>(
+    reader: image::ImageReader<R>,
+    path: &Path,
+) -> Result<(u32, u32), FrameError> {
+    let reader = reader
         .with_guessed_format()
         .map_err(|source| FrameError::Io {
             path: path.to_path_buf(),

@@ -225,22 +225,32 @@ fn folder_writers_refuse_a_users_folder_and_another_commands_result_changing_not
     eprintln!("{attempts} overwrite attempts, {attempts} refused");
 }
 
-/// Kills a writer of the result `new_n` (`spawn`) at `k` moments spread over its run, with the
-/// publish window held open by the test hook, over the result `old_n` (`reset` writes it):
-/// after each kill `whole(target)` must load one of the two. Returns (old, new) counts.
+/// What kills left: the old result, the new one, and (files side by side only) a torn pair the
+/// loader refused by name.
+#[derive(Debug, Default)]
+struct Kills {
+    old: u32,
+    new: u32,
+    refused: u32,
+}
+
+/// Kills a writer of the result `new_n` (`spawn`) at `k` moments spread over its run, over the
+/// result `old_n` (`reset` writes it): after each kill `whole(target)` must load one of the two,
+/// or — where `torn` names what a loader says of a torn pair — refuse it with those words.
 fn kill_during_publish(
     target: &Path,
     k: u32,
     (spawn, reset): (impl Fn() -> Child, impl Fn()),
     whole: impl Fn(&Path) -> Result<usize, String>,
     (old_n, new_n): (usize, usize),
-) -> (u32, u32) {
+    torn: Option<&str>,
+) -> Kills {
     let t = Instant::now();
     assert!(spawn().wait().unwrap().success());
     let span = t.elapsed().as_millis() as u64;
     assert_eq!(whole(target), Ok(new_n));
     reset();
-    let (mut old, mut new) = (0, 0);
+    let mut kills = Kills::default();
     for i in 0..k {
         let at = span * u64::from(i) / u64::from(k - 1);
         let mut child = spawn();
@@ -248,17 +258,21 @@ fn kill_during_publish(
         let _ = child.kill();
         let _ = child.wait();
         match whole(target) {
-            Ok(n) if n == old_n => old += 1,
+            Ok(n) if n == old_n => kills.old += 1,
             Ok(n) if n == new_n => {
-                new += 1;
+                kills.new += 1;
                 reset();
             }
-            Ok(n) => panic!("kill {i} at {at} ms: {n} views, neither result"),
+            Ok(n) => panic!("kill {i} at {at} ms: {n}, neither result"),
+            Err(e) if torn.is_some_and(|t| e.contains(t)) => {
+                kills.refused += 1;
+                reset();
+            }
             Err(e) => panic!("kill {i} at {at} ms: {e}"),
         }
     }
     assert!(litter(target).len() <= 1, "{:?}", litter(target));
-    (old, new)
+    kills
 }
 
 #[test]
@@ -273,7 +287,7 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
     };
     assert_eq!(views(&cap), Ok(2));
     let kills = sweep("TROMPE_SWEEP_KILLS", 8);
-    let (old, new) = kill_during_publish(
+    let left = kill_during_publish(
         &cap,
         kills,
         (
@@ -286,8 +300,9 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
         ),
         views,
         (2, 3),
+        None,
     );
-    eprintln!("capture: {kills} kills, {old} left the old result, {new} the new");
+    eprintln!("capture: {kills} kills, {left:?}");
     // Two writers at once: one waits for the other; the folder holds one of them, whole.
     let races = sweep("TROMPE_SWEEP_RACES", 3);
     for trial in 0..races {
@@ -315,7 +330,7 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
     };
     assert_eq!(masters(&enc), Ok(2));
     run(capture(3, &cap));
-    let (old, new) = kill_during_publish(
+    let left = kill_during_publish(
         &enc,
         kills,
         (
@@ -328,16 +343,18 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
         ),
         masters,
         (2, 3),
+        None,
     );
-    eprintln!("master encode: {kills} kills, {old} left the old result, {new} the new");
+    eprintln!("master encode: {kills} kills, {left:?}");
     eprintln!("capture: {races} races, each left one whole capture");
     run(capture(2, &cap));
     assert!(litter(&cap).is_empty(), "{:?}", litter(&cap));
 }
 
 /// Results of files side by side (a SPOC impostor's EXR and sidecar, an octahedral atlas's four
-/// maps and sidecar): killed at any moment, the sidecar loads with its own maps; two writers at
-/// once leave one bake, whole.
+/// maps and sidecar): killed at any moment, the sidecar loads with its own maps, or — killed
+/// within the few renames that make them current — is refused by its checksums, never read with
+/// another bake's maps; two writers at once leave one bake, whole.
 #[test]
 fn a_killed_or_raced_bake_leaves_one_whole_bake() {
     let d = scratch("publish_bakes");
@@ -348,7 +365,7 @@ fn a_killed_or_raced_bake_leaves_one_whole_bake() {
         let i = trompe::impostor::file::load(p).map_err(|e| e.to_string())?;
         Ok(i.gd().size().0 as usize)
     };
-    let (old, new) = kill_during_publish(
+    let left = kill_during_publish(
         &spoc,
         kills,
         (
@@ -357,8 +374,9 @@ fn a_killed_or_raced_bake_leaves_one_whole_bake() {
         ),
         loads,
         (64, 96),
+        Some("is not the EXR this sidecar was saved with"),
     );
-    eprintln!("SPOC bake: {kills} kills, {old} left the old result, {new} the new");
+    eprintln!("SPOC bake: {kills} kills, {left:?}");
     let atlas = d.join("o.json");
     let maps = |p: &Path| -> Result<usize, String> {
         let sidecar = trompe::octahedral::file::read_sidecar(p).map_err(|e| e.to_string())?;
@@ -366,14 +384,15 @@ fn a_killed_or_raced_bake_leaves_one_whole_bake() {
         Ok(sidecar.grid.n as usize)
     };
     let octahedral = |n: &str| bake(&["--octahedral", n, "--resolution", "128"], &atlas);
-    let (old, new) = kill_during_publish(
+    let left = kill_during_publish(
         &atlas,
         kills,
         (|| octahedral("8").spawn().unwrap(), || run(octahedral("4"))),
         maps,
         (4, 8),
+        Some("is not the file its index was written with"),
     );
-    eprintln!("octahedral bake: {kills} kills, {old} left the old result, {new} the new");
+    eprintln!("octahedral bake: {kills} kills, {left:?}");
     for trial in 0..races {
         let mut slow = octahedral("4");
         slow.env("TROMPE_TEST_PAUSE_BEFORE_SIDECAR_MS", "300");
