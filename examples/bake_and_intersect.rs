@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!("saved and loaded {}", sidecar.display());
 
     // One ray from the eye to the centre, answered by the impostor and by the exact BVH.
-    let exact = Bvh::build(vec![Arc::new(mesh)]);
+    let exact = Bvh::build(vec![Arc::new(mesh)])?;
     let ray = Ray::new(eye, (b.center() - eye).normalize());
     let (a, e) = (
         impostor.closest_hit(&ray, f32::INFINITY),

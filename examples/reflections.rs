@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let resolution: u32 = args.next().map_or(Ok(256), |a| a.parse())?;
     let scene = Scene::load(&path)?;
     let view = scene.view(scene.render.time)?;
-    let primary = Bvh::build(view.meshes.clone());
+    let primary = Bvh::build(view.meshes.clone())?;
 
     // What answers the rays mirrors and glass send out: one renderer, three answers.
     let mut timings = Timings::default();

@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         });
     let scene = Scene::load(&path)?;
     let view = scene.view(scene.render.time)?;
-    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render)?;
 
     // An impostor of object 0 for the scene's camera, 256² texels, eight-bit depth.
     let eye = scene.camera.position.as_dvec3();

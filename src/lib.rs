@@ -14,10 +14,10 @@
 //! let eye = Vec3::new(0.0, 0.4, 2.0);
 //! let impostor = Impostor::spoc(&mesh).from(eye).resolution(128).build()?;
 //! let ray = Ray::new(eye, (Vec3::ZERO - eye).normalize());
-//! let exact = Bvh::build(vec![Arc::new(mesh)]);
+//! let exact = Bvh::build(vec![Arc::new(mesh)])?;
 //! let (a, b) = (impostor.closest_hit(&ray, f32::INFINITY), exact.closest_hit(&ray, f32::INFINITY));
 //! assert!((a.unwrap().position - b.unwrap().position).length() < 0.01);
-//! # Ok::<(), trompe::impostor::ImpostorError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! Data flows one way: **scene → impostors → ray queries → frame**.

@@ -6,8 +6,9 @@
 //! memory, the control group's `memory.max` and the process's address-space limit (Linux; 8 GiB
 //! where none can be read). [`set_limit`] changes it (`trompe --memory-limit`).
 //!
-//! One account, process-wide, holds what is alive: every image ([`crate::frame::Image`]) draws
-//! its bytes from it when made and returns them when dropped ([`Held`]). A check refuses a new
+//! One account, process-wide, holds what is alive: every image ([`crate::frame::Image`]), every
+//! BVH ([`crate::trace::Bvh`]), the rasterizer's kept set-up and a curved camera's tessellation
+//! draw their bytes from it when made and return them when dropped ([`Held`]). A check refuses a new
 //! request when it and what is held together pass the limit, so six atlases, sixteen textures or
 //! two compared images are refused by their sum, each part fitting alone.
 //!
@@ -62,7 +63,7 @@ pub fn set_limit(bytes: u64) {
 /// Bytes the account holds now.
 static HELD: AtomicU64 = AtomicU64::new(0);
 
-/// Bytes of input-sized memory alive in the process now (every image).
+/// Bytes of input-sized memory alive in the process now (every image and BVH).
 pub fn held() -> u64 {
     HELD.load(Ordering::Relaxed)
 }
@@ -82,6 +83,20 @@ impl Held {
     /// The bytes it holds.
     pub fn bytes(&self) -> u64 {
         self.0
+    }
+
+    /// Holds `bytes` from now on instead (working memory kept between uses, grown or shrunk).
+    pub fn set(&mut self, bytes: u64) {
+        HELD.fetch_add(bytes, Ordering::Relaxed);
+        HELD.fetch_sub(self.0, Ordering::Relaxed);
+        self.0 = bytes;
+    }
+}
+
+impl Default for Held {
+    /// Nothing held.
+    fn default() -> Held {
+        Held::new(0)
     }
 }
 

@@ -572,7 +572,8 @@ impl<'a> Renderer<'a> {
                     Some(relief) => relief,
                     None => {
                         let view = scene.view(t)?;
-                        let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+                        let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render)
+                            .map_err(RenderError::from)?;
                         let objects: Vec<usize> = (0..view.meshes.len()).collect();
                         let settings = self.settings.relief.clone();
                         let pipeline = timings.time("start the relief pipeline", || {

@@ -82,6 +82,9 @@ fn input_sized_allocations_are_refused_past_the_budget_before_they_are_made() {
     .unwrap();
     scene.camera.width = 8192;
     scene.camera.height = 8192;
+    // 327 680 triangles: 90 MiB while their BVH is built.
+    let dense = std::sync::Arc::new(trompe::geom::icosphere(7));
+    let sparse = std::sync::Arc::new(trompe::geom::icosphere(5));
 
     // 64 MiB on top of what the inputs made above hold (the scene's images).
     let before = peak_resident();
@@ -139,6 +142,22 @@ fn input_sized_allocations_are_refused_past_the_budget_before_they_are_made() {
         _ => None,
     };
     assert_eq!(source.map(|b| b.needed), Some(base + (256 << 20)), "{e}");
+
+    // A BVH is refused by its build's peak, and holds its arrays while it is alive.
+    let e = trompe::Bvh::build(vec![dense.clone()]).err().unwrap();
+    assert!(over(&e).contains("a BVH of 327680 triangles"), "{e}");
+    let kept = trompe::Bvh::build(vec![sparse.clone()]).unwrap();
+    let resident = 20_480 * trompe::trace::BVH_RESIDENT_BYTES_PER_TRIANGLE;
+    assert_eq!(memory::held(), base + resident);
+    drop(kept);
+    assert_eq!(memory::held(), base);
+    // So is the rasterizer's set-up of it (vertices seen through the camera, screen triangles).
+    let camera = trompe::eval::fixtures::framing_camera(&dense, 64).unwrap();
+    let e = trompe::raster::rasterize(&camera, &[&*dense], &trompe::raster::NoAttributes, ())
+        .err()
+        .unwrap();
+    assert!(over(&e).contains("rasterizing 327680 triangles"), "{e}");
+    assert_eq!(memory::held(), base);
 
     // What fits still runs under the same budget.
     let small = trompe::Impostor::spoc(&mesh).resolution(64).build();

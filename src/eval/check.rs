@@ -119,6 +119,9 @@ pub enum CheckError {
     /// The impostor's layers could not be peeled.
     #[error("peeling the impostor's layers: {0}")]
     Layers(#[from] crate::impostor::LayerError),
+    /// The exact BVH the impostor is checked against would pass the memory budget.
+    #[error("checking against the exact ray tracer: {0}")]
+    Memory(#[from] crate::memory::OverBudget),
     /// A setting is out of its range.
     #[error("{setting} {value}: {reason}")]
     Setting {
@@ -249,7 +252,7 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
         ),
         _ => None,
     };
-    let mut rays = timings.time("reflected rays", || setup.rays());
+    let mut rays = timings.time("reflected rays", || setup.rays())?;
     let b = setup.target.bounds();
     rays.extend(fidelity::sphere_rays(
         b.center(),
@@ -321,7 +324,7 @@ pub fn check_baked(
     }
     let b = target.bounds();
     let (rays, pinhole_beside) = match setup {
-        Some(setup) => (timings.time("reflected rays", || setup.rays()), None),
+        Some(setup) => (timings.time("reflected rays", || setup.rays())?, None),
         None => {
             let region = settings.region * b.radius();
             let rays = fidelity::viewpoint_rays(&impostor, region, b, settings.rays as usize, 1);
@@ -362,7 +365,7 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         pinhole_beside,
         compare_layers,
     } = checked;
-    let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]));
+    let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]))?;
     let fidelity = timings.time("check", || fidelity::check(&impostor, &exact, &rays));
     let captured = timings.time("surface captured", || {
         fidelity::surface_captured(&impostor, &target, SURFACE_SAMPLES, 1)

@@ -156,9 +156,13 @@ pub fn median(values: &[f64]) -> f64 {
 
 /// Reflected rays of a reflector: `view` looks at `reflector`; every pixel whose ray hits it
 /// spawns the mirror ray about the shading normal (paper 1's setting: the reflector's
-/// secondary rays look up the impostor).
-pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
-    let bvh = Bvh::build(vec![reflector.clone()]);
+/// secondary rays look up the impostor). Refused when the reflector's BVH would pass the
+/// memory budget.
+pub fn reflected_rays(
+    view: &Pinhole,
+    reflector: Arc<Mesh>,
+) -> Result<Vec<Ray>, crate::memory::OverBudget> {
+    let bvh = Bvh::build(vec![reflector.clone()])?;
     let eps = reflector.bounds().radius() * 1e-4;
     let (w, h) = view.resolution();
     let primary: Vec<(Ray, f32)> = (0..w * h)
@@ -170,9 +174,9 @@ pub fn reflected_rays(view: &Pinhole, reflector: Arc<Mesh>) -> Vec<Ray> {
         .collect();
     let mut hits = Vec::new();
     bvh.closest_hits(&primary, &mut hits);
-    (primary.iter().zip(&hits))
+    Ok((primary.iter().zip(&hits))
         .filter_map(|((r, _), hit)| Some(hit.as_ref()?.mirror_ray(r, eps)))
-        .collect()
+        .collect())
 }
 
 /// `count` rays from points spread over a sphere (`center`, `radius`), each aimed at a point of
@@ -415,12 +419,12 @@ impl ReflectorSetup {
 
     /// The reflected rays of the viewer's pixels that see the reflector, kept when they enter
     /// the target's bounding box (the only rays an impostor is ever asked about).
-    pub fn rays(&self) -> Vec<Ray> {
+    pub fn rays(&self) -> Result<Vec<Ray>, crate::memory::OverBudget> {
         let b = self.target.bounds();
-        reflected_rays(&self.view, self.reflector.clone())
+        Ok(reflected_rays(&self.view, self.reflector.clone())?
             .into_iter()
             .filter(|r| b.intersect(r, f32::INFINITY).is_some())
-            .collect()
+            .collect())
     }
 
     /// An impostor camera at the reflector's centre looking at the target, framed tightly on

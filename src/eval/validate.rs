@@ -31,7 +31,7 @@ pub fn raster_vs_bvh(mesh: &Mesh, size: u32) -> Result<RasterAgreement, FrameErr
         reason: "no camera frames this mesh at this size",
     })?;
     let (target, _) = rasterize(&cam, &[mesh], &NoAttributes, ())?;
-    let bvh = Bvh::build(vec![Arc::new(mesh.clone())]);
+    let bvh = Bvh::build(vec![Arc::new(mesh.clone())])?;
     let (w, _) = cam.resolution();
     let per_pixel: Vec<(bool, bool, bool, f64)> = target
         .gd

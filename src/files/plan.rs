@@ -170,8 +170,8 @@ impl OutputPlan {
                 }
             }
         }
-        let mut seen: Vec<(Identity, &PathBuf)> = Vec::new();
-        for (path, _) in &self.outputs {
+        let mut seen: Vec<(Identity, &PathBuf, &[&str])> = Vec::new();
+        for (path, extensions) in &self.outputs {
             // What it would destroy first, then whether it can be written.
             if let Some(id) = Identity::of(path) {
                 if let Some((_, input)) = inputs.iter().find(|(i, _)| i.same(&id)) {
@@ -180,36 +180,29 @@ impl OutputPlan {
                         input: (*input).clone(),
                     });
                 }
-                if let Some((_, first)) = seen.iter().find(|(i, _)| i.same(&id)) {
+                if let Some((_, first, first_extensions)) =
+                    seen.iter().find(|(i, _, _)| i.same(&id))
+                {
+                    // A wrong extension explains the clash: `-o a.exr` where `a.json` is asked
+                    // for and `a.exr` goes beside it.
+                    check_extension(first, first_extensions)?;
+                    check_extension(path, extensions)?;
                     return Err(OutputError::SameOutput {
                         first: (*first).clone(),
                         second: path.clone(),
                     });
                 }
-                seen.push((id, path));
+                seen.push((id, path, extensions));
             }
         }
         Ok(())
     }
 
-    /// The second half of [`OutputPlan::check`]: every output has a known extension and a folder.
+    /// The second half of [`OutputPlan::check`]: every output has a known extension and a
+    /// folder.
     fn check_writable(&self) -> Result<(), OutputError> {
         for (path, extensions) in &self.outputs {
-            let ext = path
-                .extension()
-                .and_then(|e| e.to_str())
-                .map(str::to_ascii_lowercase)
-                .unwrap_or_default();
-            if !extensions.contains(&ext.as_str()) {
-                return Err(OutputError::Extension {
-                    path: path.clone(),
-                    expected: extensions
-                        .iter()
-                        .map(|e| format!(".{e}"))
-                        .collect::<Vec<_>>()
-                        .join(" or "),
-                });
-            }
+            check_extension(path, extensions)?;
             let folder = match path.parent() {
                 Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
                 _ => PathBuf::from("."),
@@ -222,6 +215,26 @@ impl OutputPlan {
             }
         }
         Ok(())
+    }
+}
+
+/// Refuses `path` unless its extension is one of `extensions` (any case).
+fn check_extension(path: &Path, extensions: &[&str]) -> Result<(), OutputError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    match extensions.contains(&ext.as_str()) {
+        true => Ok(()),
+        false => Err(OutputError::Extension {
+            path: path.to_path_buf(),
+            expected: extensions
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(" or "),
+        }),
     }
 }
 
@@ -300,6 +313,16 @@ mod tests {
         p.writes(d.join("a.exr"), &["exr"])
             .writes(d.join("./a.exr"), &["exr"]);
         assert!(matches!(p.check(), Err(OutputError::SameOutput { .. })));
+        // Two outputs one file because one was named with the other's extension: the
+        // extension is what is wrong.
+        let mut p = OutputPlan::new();
+        p.writes(d.join("b.exr"), &["json"])
+            .writes(d.join("b.exr"), &["exr"]);
+        assert!(
+            matches!(&p.check(), Err(OutputError::Extension { expected, .. }) if expected == ".json"),
+            "{:?}",
+            p.check()
+        );
         let mut p = OutputPlan::new();
         p.writes(d.join("a.jpg"), &["png", "exr"]);
         assert!(matches!(p.check(), Err(OutputError::Extension { .. })));

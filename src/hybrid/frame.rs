@@ -185,7 +185,7 @@ pub fn render_frame_from(
     crate::render::check_finite(&view)?;
     let mut stats = FrameStats::default();
     let start = Instant::now();
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone())?;
     stats.bvh = start.elapsed();
 
     let start = Instant::now();
@@ -292,21 +292,23 @@ pub fn render_frame_from(
         .filter(|r| matches!(r, Reflected::Point(..)))
         .count() as u64;
 
+    let mirrors = match clouds.settings.mirrors_occlude {
+        true => Some(Bvh::build(
+            view.meshes
+                .iter()
+                .zip(&view.surfaces)
+                .filter(|(_, s)| is_reflector(s))
+                .map(|(m, _)| m.clone())
+                .collect(),
+        )?),
+        false => None,
+    };
     let answers = SplatAnswers {
         camera,
         width: w,
         gbuffer: &gbuffer,
         radiance: &radiance,
-        mirrors: clouds.settings.mirrors_occlude.then(|| {
-            Bvh::build(
-                view.meshes
-                    .iter()
-                    .zip(&view.surfaces)
-                    .filter(|(_, s)| is_reflector(s))
-                    .map(|(m, _)| m.clone())
-                    .collect(),
-            )
-        }),
+        mirrors,
         hidden: AtomicU64::new(0),
         exact: Exact(&bvh),
         epsilon: scene.render.ray_epsilon,
@@ -746,7 +748,7 @@ mod tests {
         (scene.camera.width, scene.camera.height) = (120, 80);
         let clouds = HybridReflections::prepare(&scene, HybridSettings::default()).unwrap();
         let view = scene.view(0.0).unwrap();
-        let bvh = Bvh::build(view.meshes.clone());
+        let bvh = Bvh::build(view.meshes.clone()).unwrap();
         let gbuffer: Vec<Option<Hit>> = (0..80)
             .flat_map(|y| (0..120).map(move |x| (x, y)))
             .map(|(x, y)| {

@@ -171,14 +171,11 @@ impl Impostor {
         // while a walk from the camera's side would take it for the surface the ray passed.
         let (facing, kept) = facing_camera(mesh, &self.camera);
         // Through a curved camera, drawn tessellated, as the first layer was.
-        let tessellated = |m: &Mesh| {
-            if self.camera.is_curved() {
-                tessellate(projection, m)
-            } else {
-                None
-            }
+        let tessellated = |m: &Mesh| match self.camera.is_curved() {
+            true => tessellate(projection, m).map_err(FrameError::from),
+            false => Ok(None),
         };
-        let pieces = tessellated(&facing);
+        let pieces = tessellated(&facing)?;
         let (drawn, source) = match &pieces {
             Some(t) => (&t.mesh, Some(t.source.as_slice())),
             None => (&facing, None),
@@ -189,7 +186,7 @@ impl Impostor {
         };
         let first_covered = self.gd.pixels().iter().filter(|&&g| g > 0.0).count();
         // The first layer's depth as drawn (a SPOC's resolve has since moved its `gd`).
-        let first = tessellated(mesh);
+        let first = tessellated(mesh)?;
         let first_drawn = first.as_ref().map_or(mesh, |t| &t.mesh);
         let mut above = rasterize(projection, &[first_drawn], &NoAttributes, ())?
             .0

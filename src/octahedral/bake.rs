@@ -181,12 +181,12 @@ pub const AO_RAYS: u32 = 32;
 /// Per vertex of `mesh`, the share of [`AO_RAYS`] cosine-distributed rays over its normal that
 /// leave without meeting the mesh within `reach` (1: open sky, 0: fully occluded). The
 /// directions are a fixed spiral turned by an angle hashed from the vertex index, so the result
-/// is deterministic.
-pub fn vertex_occlusion(mesh: &Mesh, reach: f32) -> Vec<f32> {
-    let bvh = Bvh::build(vec![std::sync::Arc::new(mesh.clone())]);
+/// is deterministic. Refused when the mesh's BVH would pass the memory budget.
+pub fn vertex_occlusion(mesh: &Mesh, reach: f32) -> Result<Vec<f32>, crate::memory::OverBudget> {
+    let bvh = Bvh::build(vec![std::sync::Arc::new(mesh.clone())])?;
     let epsilon = 1e-4 * reach;
     let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    (0..mesh.positions.len())
+    Ok((0..mesh.positions.len())
         .into_par_iter()
         .map(|v| {
             let (p, n) = (mesh.positions[v], mesh.normals[v]);
@@ -213,7 +213,7 @@ pub fn vertex_occlusion(mesh: &Mesh, reach: f32) -> Vec<f32> {
                 .count();
             open as f32 / AO_RAYS as f32
         })
-        .collect()
+        .collect())
 }
 
 /// Roughness and metalness of `mesh`'s triangle `tri` at texture coordinates `uv`, as `surface`
@@ -332,7 +332,7 @@ pub fn bake(
         || format!("an octahedral atlas of {side} × {side}"),
         crate::memory::times(side64 * side64, BYTES_PER_TEXEL),
     )?;
-    let occlusion = vertex_occlusion(mesh, radius);
+    let occlusion = vertex_occlusion(mesh, radius)?;
     let frames: Vec<FrameTexels> = (0..n * n)
         .into_par_iter()
         .map(|k| {

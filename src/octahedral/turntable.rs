@@ -93,7 +93,7 @@ pub fn exact_unshadowed(
     lighting: &Lighting,
     settings: &RenderSettings,
 ) -> Result<Frame, RenderError> {
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone())?;
     let unshadowed = Unshadowed(&bvh);
     let tracer = Tracer {
         view,

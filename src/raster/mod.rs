@@ -203,7 +203,7 @@ fn rasterize_new<P: Projection, S: FragmentShader>(
         (shader, empty),
         &mut target,
         (RowsHold::Empty, ceiling),
-    );
+    )?;
     Ok((target, stats))
 }
 
@@ -257,7 +257,7 @@ pub fn rasterize_into<P: Projection, S: FragmentShader>(
         (shader, empty),
         target,
         (rows, None),
-    ))
+    )?)
 }
 
 /// Rasterizes `objects` into `target` as it is, without clearing it: the depth test compares
@@ -289,7 +289,7 @@ pub fn rasterize_over<P: Projection, S: FragmentShader>(
         (shader, empty),
         target,
         (RowsHold::Drawn, None),
-    ))
+    )?)
 }
 
 /// One covered pixel of [`fragments`]: no depth test decided it.
@@ -317,7 +317,7 @@ pub fn fragments<P: Projection>(
     let (w, h) = camera.resolution();
     crate::frame::check_size(w as u64, h as u64)?;
     let mut binned = setup::Binned::default();
-    setup::screen_triangles(camera, objects, BAND_ROWS, &mut binned);
+    setup::screen_triangles(camera, objects, BAND_ROWS, &mut binned)?;
     let bands = h.div_ceil(BAND_ROWS) as usize;
     Ok((0..bands)
         .into_par_iter()
@@ -396,18 +396,19 @@ impl<T> SetUp<'_, T> {
     }
 }
 
-/// Sets up `objects` (object id = index) through `camera` into `memory`.
+/// Sets up `objects` (object id = index) through `camera` into `memory`; refused when what
+/// `memory` cannot already hold would pass the memory budget.
 pub fn set_up<'a, P: Projection, T>(
     camera: &P,
     objects: &[&Mesh],
     memory: &'a mut RasterMemory<T>,
-) -> SetUp<'a, T> {
-    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut memory.binned);
-    SetUp {
+) -> Result<SetUp<'a, T>, crate::memory::OverBudget> {
+    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut memory.binned)?;
+    Ok(SetUp {
         memory,
         stats,
         size: camera.resolution(),
-    }
+    })
 }
 
 /// A depth image to draw into, and what it holds.
@@ -491,8 +492,8 @@ fn draw_target<P: Projection, S: FragmentShader>(
     (shader, empty): (&S, S::Output),
     target: &mut RasterTarget<S::Output>,
     (rows, ceiling): (RowsHold, Option<&[f32]>),
-) -> RasterStats {
-    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned);
+) -> Result<RasterStats, crate::memory::OverBudget> {
+    let stats = setup::screen_triangles(camera, objects, BAND_ROWS, &mut target.binned)?;
     let RasterTarget {
         gd,
         item,
@@ -510,7 +511,7 @@ fn draw_target<P: Projection, S: FragmentShader>(
     let bands = gd.size().1.div_ceil(BAND_ROWS) as usize;
     let images = BandRows::Images(item.pixels_mut(), attributes.pixels_mut());
     let no_finish = |_: FinishedBand<'_, S::Output>, _: &mut ()| {};
-    pass.draw(stats, gd.pixels_mut(), images, vec![(); bands], no_finish)
+    Ok(pass.draw(stats, gd.pixels_mut(), images, vec![(); bands], no_finish))
 }
 
 /// What the rows of a target hold before a rasterization, so what it does to them first.

@@ -66,6 +66,8 @@ pub(super) struct Binned {
     chunks: Vec<BinnedChunk>,
     /// Per object, its vertices seen through the camera.
     seen: Vec<Vec<SeenVertex>>,
+    /// The account's share for the arrays above, as large as they are.
+    held: crate::memory::Held,
 }
 
 impl Binned {
@@ -73,6 +75,29 @@ impl Binned {
     pub fn chunks(&self) -> &[BinnedChunk] {
         &self.chunks
     }
+
+    /// Bytes its arrays hold now (what setting up again may reuse without allocating).
+    fn bytes(&self) -> u64 {
+        let seen: usize = self
+            .seen
+            .iter()
+            .map(|s| s.capacity() * size_of::<SeenVertex>())
+            .sum();
+        let chunks: usize = (self.chunks.iter())
+            .map(|c| c.tris.capacity() * size_of::<ScreenTri>() + c.order.capacity() * 4)
+            .sum();
+        (seen + chunks) as u64
+    }
+}
+
+/// Bytes setting up `objects` takes: every vertex seen through the camera, every triangle set
+/// up and listed in its band (most triangles touch one band; the estimate allows two).
+fn setup_bytes(objects: &[&Mesh]) -> u64 {
+    use crate::memory::times;
+    let vertices: u64 = objects.iter().map(|m| m.positions.len() as u64).sum();
+    let triangles: u64 = objects.iter().map(|m| m.triangles.len() as u64).sum();
+    times(vertices, size_of::<SeenVertex>() as u64)
+        .saturating_add(times(triangles, (size_of::<ScreenTri>() + 8) as u64))
 }
 
 /// The screen triangles of one input chunk, in input order, and their order by band.
@@ -186,6 +211,26 @@ struct SeenVertex {
 /// `binned` (parallel over fixed chunks of the input, so the result does not depend on the
 /// thread count).
 pub(super) fn screen_triangles<P: Projection>(
+    camera: &P,
+    objects: &[&Mesh],
+    band_rows: u32,
+    binned: &mut Binned,
+) -> Result<RasterStats, crate::memory::OverBudget> {
+    // What the arrays kept from the last set-up cannot hold is checked before it is allocated.
+    let (needed, kept) = (setup_bytes(objects), binned.bytes());
+    if needed > kept {
+        let triangles: usize = objects.iter().map(|m| m.triangles.len()).sum();
+        crate::memory::check(
+            || format!("rasterizing {triangles} triangles"),
+            needed - kept,
+        )?;
+    }
+    let stats = set_up_all(camera, objects, band_rows, binned);
+    binned.held.set(binned.bytes());
+    Ok(stats)
+}
+
+fn set_up_all<P: Projection>(
     camera: &P,
     objects: &[&Mesh],
     band_rows: u32,

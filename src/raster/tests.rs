@@ -400,7 +400,7 @@ fn each_band_is_finished_with_its_own_output() {
             zeroed: false,
         };
         draw_depth_then(
-            set_up(&cam, &[&mesh], &mut memory),
+            set_up(&cam, &[&mesh], &mut memory).unwrap(),
             &StoreFragment,
             None,
             target,
@@ -436,7 +436,7 @@ fn each_band_is_finished_with_its_own_output() {
     };
     let outputs = vec![(); bands];
     draw_depth_then(
-        set_up(&cam, &[&m], &mut memory),
+        set_up(&cam, &[&m], &mut memory).unwrap(),
         &StoreFragment,
         None,
         target,
@@ -453,7 +453,7 @@ fn each_band_is_finished_with_its_own_output() {
     };
     let outputs = vec![(); bands];
     let mut memory = RasterMemory::default();
-    let setup = set_up(&cam, &[&m], &mut memory);
+    let setup = set_up(&cam, &[&m], &mut memory).unwrap();
     assert!(draw_depth_then(setup, &NoAttributes, (), target, outputs, |_, _| {}).is_err());
 }
 
@@ -480,7 +480,7 @@ fn a_depth_pass_set_up_first_draws_nothing_when_the_caller_declines() {
     for (objects, ask) in [(&m, true), (&m, false), (&unclipped, true)] {
         let mut gd = Image::new(16, 16, 0.25f32).unwrap();
         let finished = std::sync::atomic::AtomicUsize::new(0);
-        let setup = set_up(&cam, &[objects], &mut memory);
+        let setup = set_up(&cam, &[objects], &mut memory).unwrap();
         let counted = setup.stats();
         let stats = if ask && counted.has_curved_or_clipped() {
             // Declined: the set-up is dropped, nothing is drawn.

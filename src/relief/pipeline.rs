@@ -843,7 +843,7 @@ mod tests {
     #[test]
     fn deterministic_mode_repeats_its_decisions_and_pixels() {
         let (view, lighting, rs) = sphere_on_floor();
-        let shader = SoftwareShader::new(&view, &lighting, &rs);
+        let shader = SoftwareShader::new(&view, &lighting, &rs).unwrap();
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -876,7 +876,7 @@ mod tests {
     #[test]
     fn a_still_camera_reuses_its_warp_and_a_turned_one_comes_back_from_the_cache() {
         let (view, lighting, rs) = sphere_on_floor();
-        let shader = SoftwareShader::new(&view, &lighting, &rs);
+        let shader = SoftwareShader::new(&view, &lighting, &rs).unwrap();
         let s = PipelineSettings {
             deterministic: Some(1),
             first_resolution: None,
@@ -912,7 +912,7 @@ mod tests {
     #[test]
     fn a_fast_random_path_neither_deadlocks_nor_shows_a_half_made_impostor() {
         let (view, lighting, rs) = sphere_on_floor();
-        let shader = SoftwareShader::new(&view, &lighting, &rs);
+        let shader = SoftwareShader::new(&view, &lighting, &rs).unwrap();
         let mut p = Pipeline::new(shader.clone(), &[0, 1], settings()).unwrap();
         let mut seed = 3u64;
         let mut rnd = || {

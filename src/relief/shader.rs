@@ -37,8 +37,13 @@ pub struct SoftwareShader {
 }
 
 impl SoftwareShader {
-    /// A shader over the scene `view` (its camera is not used), lit by `lighting`.
-    pub fn new(view: &View, lighting: &Lighting, settings: &RenderSettings) -> Arc<Self> {
+    /// A shader over the scene `view` (its camera is not used), lit by `lighting`; refused
+    /// when its BVHs (one over the scene, one an object) would pass the memory budget.
+    pub fn new(
+        view: &View,
+        lighting: &Lighting,
+        settings: &RenderSettings,
+    ) -> Result<Arc<Self>, crate::memory::OverBudget> {
         let objects = view
             .meshes
             .iter()
@@ -52,20 +57,20 @@ impl SoftwareShader {
                     .map(|p| (p.as_dvec3() - centre).length())
                     .fold(0.0, f64::max)
                     * 1.001;
-                Object {
-                    bvh: Bvh::build(vec![m.clone()]),
+                Ok(Object {
+                    bvh: Bvh::build(vec![m.clone()])?,
                     centre,
                     radius,
-                }
+                })
             })
-            .collect();
-        Arc::new(Self {
+            .collect::<Result<_, crate::memory::OverBudget>>()?;
+        Ok(Arc::new(Self {
             view: view.clone(),
             lighting: lighting.clone(),
             settings: *settings,
-            scene: Bvh::build(view.meshes.clone()),
+            scene: Bvh::build(view.meshes.clone())?,
             objects,
-        })
+        }))
     }
 
     /// Objects in the scene.
@@ -264,7 +269,7 @@ pub(crate) mod tests {
     #[test]
     fn the_floor_under_the_ball_is_in_shadow_and_the_rest_is_lit() {
         let (view, lighting, settings) = sphere_on_floor();
-        let shader = SoftwareShader::new(&view, &lighting, &settings);
+        let shader = SoftwareShader::new(&view, &lighting, &settings).unwrap();
         let down = |x: f32| Ray::new(Vec3::new(x, 5.0, 0.3), Vec3::NEG_Y);
         // Straight above the floor beside the ball: lit (0.5 · (0.1·π-free ambient + 1)).
         let lit = shader.radiance(&down(3.0), 0);
@@ -286,7 +291,7 @@ pub(crate) mod tests {
     #[test]
     fn an_impostor_holds_the_object_at_its_heights() {
         let (view, lighting, settings) = sphere_on_floor();
-        let shader = SoftwareShader::new(&view, &lighting, &settings);
+        let shader = SoftwareShader::new(&view, &lighting, &settings).unwrap();
         let eye = DVec3::new(0.0, 1.5, 6.0);
         let imp = shader
             .impostor(1, eye, 64, DepthEncoding::F32, &|| false)

@@ -175,7 +175,10 @@ mod tests {
             time: 0.0,
             ray_epsilon: 1e-4,
         };
-        (SoftwareShader::new(&view, &lighting, &settings), view)
+        (
+            SoftwareShader::new(&view, &lighting, &settings).unwrap(),
+            view,
+        )
     }
 
     fn relief(shader: &SoftwareShader, eye: DVec3, n: u32) -> ReliefImpostor {

@@ -183,7 +183,7 @@ pub fn walk(
     sink: &mut FrameSink<'_>,
 ) -> Result<WalkReport, ReliefError> {
     let view = scene.view(scene.render.time)?;
-    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render)?;
     let objects: Vec<usize> = if settings.objects.is_empty() {
         (0..view.meshes.len()).collect()
     } else {

@@ -24,6 +24,7 @@ use crate::camera::Pinhole;
 use crate::frame::Frame;
 use crate::geom::{Mesh, Ray};
 use crate::impostor::{Impostor, ImpostorBuilder, ImpostorCamera, SurfaceSample, ViewCamera};
+use crate::memory::OverBudget;
 use crate::scene::{Lighting, MazeObject, RenderSettings, Surface, View};
 use crate::trace::{Bvh, Hit, RayQuery, SecondaryQuery};
 use glam::{Affine3A, Mat4, Vec3};
@@ -127,13 +128,13 @@ struct ExactSpecular {
 }
 
 impl ExactSpecular {
-    fn new(view: &View, ids: Vec<u32>) -> Arc<Self> {
+    fn new(view: &View, ids: Vec<u32>) -> Result<Arc<Self>, OverBudget> {
         let bvh = Bvh::build(
             ids.iter()
                 .map(|&o| view.meshes[o as usize].clone())
                 .collect(),
-        );
-        Arc::new(Self { ids, bvh })
+        )?;
+        Ok(Arc::new(Self { ids, bvh }))
     }
 }
 
@@ -162,13 +163,14 @@ impl ReflectorImpostors {
         })?;
         Ok(timings.time("prepare walks, specular BVH", || {
             Self::assemble(view, per_object, inputs.mirrors)
-        }))
+        })?)
     }
 
     /// Wraps impostors made elsewhere (baked, or built with settings of one's own):
     /// `per_object[o]` are those object `o`'s rays meet, their hits carrying the impostors'
-    /// colours; mirrors and glass of `view` see one another exactly.
-    pub fn from_impostors(view: &View, per_object: Vec<Vec<Impostor>>) -> Self {
+    /// colours; mirrors and glass of `view` see one another exactly (through a BVH of them,
+    /// refused past the memory budget).
+    pub fn from_impostors(view: &View, per_object: Vec<Vec<Impostor>>) -> Result<Self, OverBudget> {
         let per_object = per_object
             .into_iter()
             .map(|seen| {
@@ -186,7 +188,11 @@ impl ReflectorImpostors {
 
     /// The answers from the impostors each object's rays meet, `per_object`; the mirror and
     /// glass objects seen exactly as `mirrors` says.
-    pub(super) fn assemble(view: &View, mut per_object: Vec<Vec<Seen>>, mirrors: Mirrors) -> Self {
+    pub(super) fn assemble(
+        view: &View,
+        mut per_object: Vec<Vec<Seen>>,
+        mirrors: Mirrors,
+    ) -> Result<Self, OverBudget> {
         per_object.resize_with(view.surfaces.len(), Vec::new);
         for seen in per_object.iter().flatten() {
             seen.impostor.prepare_walks();
@@ -196,24 +202,26 @@ impl ReflectorImpostors {
         let exact = match mirrors {
             // One BVH of every mirror and glass object, for all of them.
             Mirrors::Exact => {
-                let all = ExactSpecular::new(view, ids.clone().filter(|&o| specular(o)).collect());
+                let all = ExactSpecular::new(view, ids.clone().filter(|&o| specular(o)).collect())?;
                 ids.map(|o| specular(o).then(|| all.clone())).collect()
             }
             // Each sees itself and the glass exactly; the other mirrors are impostors.
             Mirrors::Impostor => {
                 let glass = |o: u32| matches!(view.surfaces[o as usize], Surface::Glass { .. });
                 ids.map(|r| {
-                    specular(r).then(|| {
-                        let seen = (0..view.surfaces.len() as u32)
-                            .filter(|&o| o == r || glass(o))
-                            .collect();
-                        ExactSpecular::new(view, seen)
-                    })
+                    specular(r)
+                        .then(|| {
+                            let seen = (0..view.surfaces.len() as u32)
+                                .filter(|&o| o == r || glass(o))
+                                .collect();
+                            ExactSpecular::new(view, seen)
+                        })
+                        .transpose()
                 })
-                .collect()
+                .collect::<Result<_, _>>()?
             }
         };
-        Self { per_object, exact }
+        Ok(Self { per_object, exact })
     }
 
     /// The impostors the rays of object `reflector` meet.
@@ -382,7 +390,7 @@ pub fn render_impostor(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
-    let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+    let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()))?;
     let inputs = ImpostorInputs {
         shadows: Some(Shadows {
             occluders: &bvh,

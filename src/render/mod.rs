@@ -292,8 +292,6 @@ pub fn render_with(
 /// Bytes a frame pixel costs while it is rendered: the [`Frame`] (36) and the tracer's working
 /// state and the encoded output beside it.
 pub const BYTES_PER_PIXEL: u64 = 64;
-/// Bytes a triangle costs in the BVH and while it is built.
-pub const BVH_BYTES_PER_TRIANGLE: u64 = 256;
 
 /// Refuses a render whose frame, BVH and impostors would need more than the memory budget (an
 /// impostor side no image can have is refused as such first).
@@ -302,7 +300,7 @@ pub fn check_memory(view: &View, method: Method) -> Result<(), RenderError> {
     let (w, h) = crate::camera::Projection::resolution(&view.camera);
     let triangles: u64 = view.meshes.iter().map(|m| m.triangle_count() as u64).sum();
     let mut needed = times(w as u64 * h as u64, BYTES_PER_PIXEL)
-        .saturating_add(times(triangles, BVH_BYTES_PER_TRIANGLE));
+        .saturating_add(times(triangles, crate::trace::BVH_BUILD_BYTES_PER_TRIANGLE));
     let mut what = format!("a {w} × {h} render of {triangles} triangles");
     if let Some(side) = method.impostor_resolution() {
         crate::frame::check_size(side as u64, side as u64)?;
@@ -332,7 +330,7 @@ pub fn render_view(
     match options.method {
         Method::Raster => render_raster(view, lighting, settings, progress, timings),
         Method::Trace => {
-            let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+            let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()))?;
             let tracer = Tracer {
                 view,
                 primary: &bvh,
@@ -355,7 +353,7 @@ pub fn render_view(
             render_impostor(view, lighting, settings, inputs, progress, timings)
         }
         Method::EnvMap => {
-            let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()));
+            let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()))?;
             let tracer = Tracer {
                 view,
                 primary: &bvh,

@@ -35,12 +35,10 @@ pub fn render_raster(
     progress: &dyn Progress,
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
-    let occluders = Occluders(
-        lighting
-            .light
-            .as_ref()
-            .map(|_| timings.time("build BVH (shadows)", || Bvh::build(view.meshes.clone()))),
-    );
+    let occluders = Occluders(match lighting.light {
+        Some(_) => Some(timings.time("build BVH (shadows)", || Bvh::build(view.meshes.clone()))?),
+        None => None,
+    });
     let hits = timings.time("rasterize", || primary_hits(view))?;
     // Depth 1: what mirrors and glass send out is looked up in the environment.
     let settings = RenderSettings {

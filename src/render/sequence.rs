@@ -178,7 +178,7 @@ impl<'a> Sequence<'a> {
             )?;
             return Ok((frame, timings, FrameReport::default()));
         }
-        let bvh = self.bvh_at(&view, t, &mut timings);
+        let bvh = self.bvh_at(&view, t, &mut timings)?;
         let Some(resolution) = self.options.method.impostor_resolution() else {
             // (The raster method returned above.)
             let exact = crate::trace::Exact(bvh.as_ref());
@@ -219,7 +219,7 @@ impl<'a> Sequence<'a> {
         }
         super::check_memory(&view, self.options.method)?;
         super::check_finite(&view)?;
-        let bvh = self.bvh_at(&view, t, &mut timings);
+        let bvh = self.bvh_at(&view, t, &mut timings)?;
         let answers = self.answers(&view, &bvh, (t, resolution), &mut timings)?;
         Ok(Some(PreparedFrame {
             view,
@@ -231,17 +231,24 @@ impl<'a> Sequence<'a> {
     }
 
     /// The BVH of `view` (the scene at `t`): the last one while nothing moved or deformed.
-    fn bvh_at(&mut self, view: &crate::scene::View, t: f32, timings: &mut Timings) -> Arc<Bvh> {
+    fn bvh_at(
+        &mut self,
+        view: &crate::scene::View,
+        t: f32,
+        timings: &mut Timings,
+    ) -> Result<Arc<Bvh>, crate::memory::OverBudget> {
         let poses = self.scene.poses_at(t);
         let still = !self.scene.deforms();
-        match &self.bvh {
+        Ok(match &self.bvh {
             Some((at, bvh)) if still && at == &poses => bvh.clone(),
             _ => {
-                let bvh = Arc::new(timings.time("build BVH", || Bvh::build(view.meshes.clone())));
+                // The last one is let go first: the two are never held together.
+                self.bvh = None;
+                let bvh = Arc::new(timings.time("build BVH", || Bvh::build(view.meshes.clone()))?);
                 self.bvh = still.then(|| (poses, bvh.clone()));
                 bvh
             }
-        }
+        })
     }
 
     /// The answers to the rays mirrors and glass of `view` (the scene at `t`) send out, from
@@ -303,7 +310,7 @@ impl<'a> Sequence<'a> {
                 })?;
                 let answers = Arc::new(timings.time("specular BVH", || {
                     ReflectorImpostors::assemble(view, per_object, self.options.mirrors)
-                }));
+                })?);
                 self.answers = Some(answers.clone());
                 self.last_report = report;
                 answers

@@ -247,7 +247,7 @@ mod tests {
             time: 0.0,
             ray_epsilon: 1e-4,
         };
-        let bvh = Bvh::build(view.meshes.clone());
+        let bvh = Bvh::build(view.meshes.clone()).unwrap();
         let primary = CountedPrimary(&bvh, AtomicU64::new(0));
         let secondary = RedSecondary(AtomicU64::new(0), AtomicU64::new(0));
         let tracer = Tracer {

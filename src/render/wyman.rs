@@ -95,7 +95,7 @@ impl BackFaces {
             .collect();
         let mut d_n = vec![Vec::new(); view.meshes.len()];
         for &o in &glass {
-            d_n[o] = opposite_distances(&view.meshes[o]);
+            d_n[o] = opposite_distances(&view.meshes[o])?;
         }
         Ok(BackFaces {
             camera,
@@ -137,10 +137,11 @@ impl BackFaces {
 
 /// Per vertex of a closed mesh, the distance along its inward normal to the mesh's opposite
 /// surface (0 where the ray leaves an open mesh).
-fn opposite_distances(mesh: &Arc<Mesh>) -> Vec<f32> {
-    let bvh = Bvh::build(vec![mesh.clone()]);
+fn opposite_distances(mesh: &Arc<Mesh>) -> Result<Vec<f32>, crate::memory::OverBudget> {
+    let bvh = Bvh::build(vec![mesh.clone()])?;
     let eps = mesh.bounds().radius() * 1e-4;
-    mesh.positions
+    Ok(mesh
+        .positions
         .par_iter()
         .zip(&mesh.normals)
         .map(|(&p, &n)| {
@@ -148,7 +149,7 @@ fn opposite_distances(mesh: &Arc<Mesh>) -> Vec<f32> {
             bvh.closest_hit(&ray, f32::INFINITY)
                 .map_or(0.0, |h| h.t + eps)
         })
-        .collect()
+        .collect())
 }
 
 /// Wyman's leaving ray for an eye ray of direction `v` entering glass of index `ior` at `p1`

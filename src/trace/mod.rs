@@ -10,7 +10,10 @@
 mod bvh;
 
 pub(crate) use bvh::surface_point;
-pub use bvh::{BruteForce, Bvh};
+pub use bvh::{
+    BUILD_BYTES_PER_TRIANGLE as BVH_BUILD_BYTES_PER_TRIANGLE, BruteForce, Bvh,
+    RESIDENT_BYTES_PER_TRIANGLE as BVH_RESIDENT_BYTES_PER_TRIANGLE,
+};
 
 use crate::frame::envmap::EnvMap;
 use crate::geom::Ray;
@@ -152,7 +155,10 @@ mod tests {
     #[test]
     fn environment_answers_what_geometry_does_not() {
         let sphere: Arc<Mesh> = Arc::new(icosphere(2));
-        let scene = Nearest(Bvh::build(vec![sphere]), EnvMap::constant(Vec3::ONE));
+        let scene = Nearest(
+            Bvh::build(vec![sphere]).unwrap(),
+            EnvMap::constant(Vec3::ONE),
+        );
         let toward = Ray::new(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z);
         let hit = scene.closest_hit(&toward, f32::INFINITY).unwrap();
         assert_eq!(hit.object, 0);

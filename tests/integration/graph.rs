@@ -124,7 +124,7 @@ fn graph_walks_agree_with_the_bvh_and_with_each_other() {
     let mesh = scene();
     let (_, target) = corridor();
     let imp = build(ImpostorCamera::Graph(g), &mesh, 0, &albedo_of(&mesh)).unwrap();
-    let exact = Bvh::build(vec![Arc::new(mesh)]);
+    let exact = Bvh::build(vec![Arc::new(mesh)]).unwrap();
     // Rays from near the bent frustum's apex region toward the cube around the corner.
     let tb = target.bounds();
     let mut rng = SplitMix64::new(5);
@@ -166,7 +166,7 @@ fn graph_texel_walks_return_the_linear_walks_hits() {
     let mesh = scene();
     let (walls, target) = corridor();
     let imp = build(ImpostorCamera::Graph(g), &mesh, 0, &albedo_of(&mesh)).unwrap();
-    let exact = Bvh::build(vec![Arc::new(mesh)]);
+    let exact = Bvh::build(vec![Arc::new(mesh)]).unwrap();
     let (tb, wb) = (target.bounds(), walls.bounds());
     let mut rng = SplitMix64::new(17);
     let rays: Vec<Ray> = (0..100_000)
@@ -261,8 +261,8 @@ fn the_maze_impostor_agrees_with_the_bvh_on_reflected_rays() {
         &albedo_of(&setup.target),
     )
     .unwrap();
-    let exact = Bvh::build(vec![setup.target.clone()]);
-    let rays = setup.rays();
+    let exact = Bvh::build(vec![setup.target.clone()]).unwrap();
+    let rays = setup.rays().unwrap();
     assert!(rays.len() > 1000, "{}", rays.len());
     let r = check(&imp, &exact, &rays);
     assert!(r.exact_hits > rays.len() / 2, "{} hits", r.exact_hits);

@@ -111,7 +111,7 @@ fn exact_reflection_hits(s: &Scene, t: f32) -> Vec<bool> {
     use trompe::glam::DVec2;
     use trompe::{Bvh, Ray, RayQuery};
     let view = s.view(t).unwrap();
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone()).unwrap();
     let (w, h) = (s.camera.width, s.camera.height);
     let mut out = vec![false; (w * h) as usize];
     for y in 0..h {

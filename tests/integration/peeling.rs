@@ -176,7 +176,7 @@ fn the_layered_texel_walk_returns_the_layer_by_layer_linear_walks_hits() {
         .build()
         .unwrap();
     assert!(imp.layer_count() >= 3, "{}", imp.layer_count());
-    let bvh = trompe::Bvh::build(vec![std::sync::Arc::new(mesh.clone())]);
+    let bvh = trompe::Bvh::build(vec![std::sync::Arc::new(mesh.clone())]).unwrap();
     let b = mesh.bounds();
     let rays = trompe::eval::fidelity::sphere_rays(b.center(), b.radius() * 3.0, b, 100_000, 5);
     let c = common::compare_walks(&imp, &bvh, &rays);
@@ -241,7 +241,7 @@ fn batched_queries_return_the_one_ray_answers_on_one_and_two_threads() {
         .layers(Layers::Count(2))
         .build()
         .unwrap();
-    let bvh = trompe::Bvh::build(vec![std::sync::Arc::new(mesh.clone())]);
+    let bvh = trompe::Bvh::build(vec![std::sync::Arc::new(mesh.clone())]).unwrap();
     let b = mesh.bounds();
     let rays: Vec<(Ray, f32)> =
         trompe::eval::fidelity::sphere_rays(b.center(), b.radius() * 2.0, b, 5000, 3)

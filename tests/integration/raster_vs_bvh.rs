@@ -32,7 +32,7 @@ fn teapot_raster_depth_and_ids_match_bvh() {
 #[test]
 fn bvh_hits_equal_brute_force_hits() {
     let mesh = Arc::new(load(&shared("meshes/dragon_res4.obj")).unwrap().mesh);
-    let bvh = Bvh::build(vec![mesh.clone()]);
+    let bvh = Bvh::build(vec![mesh.clone()]).unwrap();
     let brute = BruteForce::new(vec![mesh.clone()]);
     let b = mesh.bounds();
     let mut hits = 0;

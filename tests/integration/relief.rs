@@ -31,7 +31,7 @@ fn orbit(centre: Vec3, radius: f32, height: f32, step: f32, n: usize) -> Vec<Vec
 fn the_heuristic_and_the_brute_force_agree_along_walks() {
     let scene = walk_scene();
     let view = scene.view(0.0).unwrap();
-    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render).unwrap();
     let mut judged = Vec::new();
     for object in 0..2 {
         // Impostors made every 15°, each judged over the 45° that follow: young ones valid,

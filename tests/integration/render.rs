@@ -320,7 +320,7 @@ material = { type = "diffuse", color = [0.8, 0.3, 0.2] }
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/shadow-test.toml");
     let s = Scene::from_toml(text, &path).unwrap();
     let view = s.view(0.0).unwrap();
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone()).unwrap();
     let light = s.lighting.light.as_ref().unwrap();
     let (w, h) = (96, 72);
     for method in [Method::Trace, Method::Raster] {
@@ -394,7 +394,7 @@ fn wyman_exit_rays_are_exact_on_a_spheres_centre_line_and_close_near_it() {
         }],
     };
     let backs = BackFaces::build(&view).unwrap();
-    let bvh = Bvh::build(vec![sphere.clone()]);
+    let bvh = Bvh::build(vec![sphere.clone()]).unwrap();
     let (mut centre, mut errors) = (None, Vec::new());
     for y in 0..65u32 {
         for x in 0..65u32 {
@@ -472,7 +472,7 @@ fn a_planar_mirror_answered_by_a_pinhole_impostor_from_the_mirrored_eye_matches_
         meshes: vec![duck.clone(), mirror],
         surfaces: surfaces.clone(),
     };
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone()).unwrap();
     // Every ray the mirror reflects passes through the eye mirrored in its plane: a pinhole
     // there sees exactly what those rays meet.
     let mirrored = Vec3::new(eye.x, eye.y, -eye.z);
@@ -498,7 +498,7 @@ fn a_planar_mirror_answered_by_a_pinhole_impostor_from_the_mirrored_eye_matches_
         )
     };
     let imp = build(ImpostorCamera::Pinhole(pinhole), &duck, 0, &color).unwrap();
-    let answers = ReflectorImpostors::from_impostors(&view, vec![Vec::new(), vec![imp]]);
+    let answers = ReflectorImpostors::from_impostors(&view, vec![Vec::new(), vec![imp]]).unwrap();
     let settings = trompe::scene::RenderSettings {
         max_depth: 4,
         time: 0.0,
@@ -582,7 +582,7 @@ fn facing_mirrors(size: (u32, u32)) -> (trompe::scene::View, trompe::Image<bool>
             },
         ],
     };
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone()).unwrap();
     let mut second = trompe::Image::new(size.0, size.1, false).unwrap();
     for (x, y) in (0..size.1).flat_map(|y| (0..size.0).map(move |x| (x, y))) {
         let v = {

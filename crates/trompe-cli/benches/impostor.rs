@@ -143,7 +143,7 @@ fn impostor(c: &mut Criterion) {
     // As `trompe bench walks`: reflected rays of a teapot mirror that enter the bunny's box,
     // walked through SPOC impostors of the bunny, beside the bunny's BVH on the same rays.
     let setup = ReflectorSetup::new(&bunny, &teapot, 1.4, 512).expect("valid setup");
-    let rays = setup.rays();
+    let rays = setup.rays().expect("reflected rays");
     let mut group = c.benchmark_group("SPOC walk, reflected rays");
     group.throughput(Throughput::Elements(rays.len() as u64));
     for res in [128u32, 256, 512, 1024, 2048] {
@@ -163,7 +163,7 @@ fn impostor(c: &mut Criterion) {
             })
         });
     }
-    let exact = trompe::trace::Bvh::build(vec![setup.target.clone()]);
+    let exact = trompe::trace::Bvh::build(vec![setup.target.clone()]).expect("bvh");
     group.bench_function("peer: the bunny's BVH", |bch| {
         bch.iter(|| {
             rays.iter()

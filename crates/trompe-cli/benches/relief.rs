@@ -11,7 +11,7 @@ fn relief(c: &mut Criterion) {
     let root = trompe_cli::bench::repo_root();
     let scene = trompe::Scene::load(&root.join("scenes/relief-walk.toml")).expect("scene");
     let view = scene.view(0.0).expect("view");
-    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render).expect("shader");
     let eye = scene.camera.position.as_dvec3();
     let imp = shader
         .impostor(0, eye, SIDE, DepthEncoding::U8, &|| false)
@@ -38,7 +38,7 @@ fn relief(c: &mut Criterion) {
     let teapot = trompe::geom::io::load(&root.join("assets/meshes/teapot.obj"))
         .expect("teapot")
         .mesh;
-    let lone = lone_shader(&teapot);
+    let lone = lone_shader(&teapot).expect("shader");
     let (centre, radius) = lone.bounds(0).expect("bounds");
     let from = centre + trompe::glam::DVec3::new(0.3, 0.4, 1.0).normalize() * radius * 4.0;
     let camera = trompe_cli::bench::framing_camera(&teapot, SIDE);

@@ -14,7 +14,7 @@ fn trace(c: &mut Criterion) {
     group.bench_function("BVH build, bunny", |b| {
         b.iter(|| Bvh::build(vec![mesh.clone()]))
     });
-    let bvh = Bvh::build(vec![mesh.clone()]);
+    let bvh = Bvh::build(vec![mesh.clone()]).expect("the bunny fits the budget");
     let brute = BruteForce::new(vec![mesh.clone()]);
     let primary = primary_rays(&framing_camera(&mesh, 512));
     let reflected = reflected_rays(&bvh, &primary, mesh.bounds().radius() * 1e-4);

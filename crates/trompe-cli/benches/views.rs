@@ -66,7 +66,7 @@ fn views(c: &mut Criterion) {
         ),
         |b| b.iter(|| DepthMap::of_all(&views, &mesh).expect("maps")),
     );
-    let bvh = trompe::Bvh::build(vec![Arc::new(mesh.clone())]);
+    let bvh = trompe::Bvh::build(vec![Arc::new(mesh.clone())]).expect("bvh");
     let camera = views[0].pinhole();
     let rays = trompe_cli::bench::primary_rays(&camera);
     group.throughput(Throughput::Elements(1));

@@ -33,11 +33,11 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use trompe::camera::Pinhole;
-use trompe::frame::Frame;
 use trompe::frame::envmap::EnvMap;
+use trompe::frame::{Frame, FrameError};
 use trompe::geom::{Mesh, Ray};
 use trompe::raster::{ItemId, NoAttributes, RasterStats, RasterTarget, rasterize};
-use trompe::render::{Timings, render_raster};
+use trompe::render::{RenderError, Timings, render_raster};
 use trompe::scene::{Lighting, RenderSettings, Surface, View};
 use trompe::trace::{BruteForce, Bvh, RayQuery};
 
@@ -80,22 +80,55 @@ pub fn time_pair_median<A, B>(
     mut a: impl FnMut() -> A,
     mut b: impl FnMut() -> B,
 ) -> (Duration, Duration) {
+    let never = pair_medians(
+        min_time,
+        || Ok::<_, std::convert::Infallible>(a()),
+        || Ok(b()),
+    );
+    match never {
+        Ok(medians) => medians,
+        Err(never) => match never {},
+    }
+}
+
+/// [`time_pair_median`] of two workloads that can fail (a build refused by the memory budget):
+/// the first failure ends the timing and is returned.
+pub fn try_time_pair_median<A, B, E, F>(
+    min_time: Duration,
+    mut a: impl FnMut() -> Result<A, E>,
+    mut b: impl FnMut() -> Result<B, F>,
+) -> Result<(Duration, Duration), BenchError>
+where
+    BenchError: From<E> + From<F>,
+{
+    pair_medians(
+        min_time,
+        || a().map_err(BenchError::from),
+        || b().map_err(BenchError::from),
+    )
+}
+
+fn pair_medians<A, B, E>(
+    min_time: Duration,
+    mut a: impl FnMut() -> Result<A, E>,
+    mut b: impl FnMut() -> Result<B, E>,
+) -> Result<(Duration, Duration), E> {
     let mut samples = (Vec::new(), Vec::new());
     let start = Instant::now();
     while samples.0.is_empty() || (start.elapsed() < min_time && samples.0.len() < 1000) {
         let t = Instant::now();
-        let output = a();
+        let output = a()?;
         samples.0.push(t.elapsed());
         drop(output);
         let t = Instant::now();
-        let output = b();
+        let output = b()?;
         samples.1.push(t.elapsed());
         drop(output);
     }
     samples.0.sort();
     samples.1.sort();
     let n = samples.0.len();
-    (samples.0[n / 2], samples.1[n / 2])
+    Ok((samples.0[n / 2], samples.1[n / 2]))
 }
 
 /// The pinhole a pinhole impostor of the sphere (`center`, `radius`) seen from `eye` has,
@@ -114,14 +147,17 @@ pub fn fragments_through<P: trompe::camera::Projection>(camera: &P, mesh: &Mesh)
 }
 
 /// Rasterizes `mesh` through `camera` into depth and item buffers; returns pixels written.
-pub fn raster_once(camera: &Pinhole, mesh: &Mesh) -> u64 {
-    plain_raster(camera, mesh).1.written
+pub fn raster_once(camera: &Pinhole, mesh: &Mesh) -> Result<u64, FrameError> {
+    Ok(plain_raster(camera, mesh)?.1.written)
 }
 
 /// Rasterizes `mesh` through `camera` into depth and item buffers (the plain rasterization
 /// peers), returning them, so a timer can leave their freeing out as it does a build's.
-pub fn plain_raster(camera: &Pinhole, mesh: &Mesh) -> (RasterTarget<()>, RasterStats) {
-    rasterize(camera, &[mesh], &NoAttributes, ()).expect("camera size is valid")
+pub fn plain_raster(
+    camera: &Pinhole,
+    mesh: &Mesh,
+) -> Result<(RasterTarget<()>, RasterStats), FrameError> {
+    rasterize(camera, &[mesh], &NoAttributes, ())
 }
 
 /// The raster render method's view of `mesh` alone (diffuse, its own materials) through
@@ -142,14 +178,14 @@ pub fn raster_view(camera: &Pinhole, mesh: &Mesh) -> (View, Lighting) {
 }
 
 /// Renders a [`raster_view`] by the raster method.
-pub fn render_raster_once((view, lighting): &(View, Lighting)) -> Frame {
+pub fn render_raster_once((view, lighting): &(View, Lighting)) -> Result<Frame, RenderError> {
     let mut timings = Timings::default();
     let settings = RenderSettings {
         max_depth: 1,
         time: 0.0,
         ray_epsilon: 1e-4,
     };
-    render_raster(view, lighting, &settings, &(), &mut timings).expect("camera size is valid")
+    render_raster(view, lighting, &settings, &(), &mut timings)
 }
 
 /// The bytes a depth + item rasterization writes, copied once (the raster peer).
@@ -225,14 +261,15 @@ impl Figure {
 }
 
 /// Runs the foundation benchmarks on `mesh` (the bunny); `quick` shortens every timing.
-pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
+pub fn foundation(mesh: &Mesh, quick: bool) -> Result<Vec<Figure>, BenchError> {
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
     let tris = mesh.triangle_count() as f64;
     for size in [512u32, 1024] {
         let cam = framing_camera(mesh, size);
-        let mut written = 0;
+        let mut written = Ok(0);
         let t = time_median(min, || written = raster_once(&cam, mesh));
+        let written = written?;
         let bytes = frame_bytes(size);
         let (src, mut dst) = (vec![1u8; bytes], vec![0u8; bytes]);
         let peer = time_median(min, || memcpy_frame(&src, &mut dst));
@@ -258,7 +295,7 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     let meshes = vec![Arc::new(mesh.clone())];
     let mut bvh = None;
     let build = time_median(min, || bvh = Some(Bvh::build(meshes.clone())));
-    let bvh = bvh.expect("built at least once");
+    let bvh = bvh.expect("built at least once")?;
     out.push(Figure::millis("BVH build (56k triangles)", build));
     let cam = framing_camera(mesh, 512);
     let primary = primary_rays(&cam);
@@ -291,7 +328,7 @@ pub fn foundation(mesh: &Mesh, quick: bool) -> Vec<Figure> {
             )),
         });
     }
-    out
+    Ok(out)
 }
 
 /// Side of the goal's SPOC impostor (a 512² SPOC impostor of the bunny).
@@ -313,21 +350,20 @@ pub fn goal_spoc(mesh: &Mesh) -> (Vec3, trompe::camera::Spoc) {
 /// alternately for `min_time` ([`time_pair_median`]). The first line of [`impostors`] times it
 /// too; alone it is quick, so that two builds of trompe can be compared by alternating many
 /// short runs of each.
-pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> (Duration, Duration) {
+pub fn goal_pair(mesh: &Mesh, min_time: Duration) -> Result<(Duration, Duration), BenchError> {
     use trompe::impostor::{ImpostorCamera, albedo_of, build};
     let (_, spoc) = goal_spoc(mesh);
     let plain = spoc.pinhole().clone();
     let color = albedo_of(mesh);
-    let fresh_spoc_build =
-        || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-    time_pair_median(min_time, fresh_spoc_build, || plain_raster(&plain, mesh))
+    let fresh_spoc_build = || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color);
+    try_time_pair_median(min_time, fresh_spoc_build, || plain_raster(&plain, mesh))
 }
 
 /// Impostor workloads: building a SPOC impostor of `mesh` beside a plain pinhole
 /// rasterization of it at the same resolution (depth and ids only: the strict peer of the
 /// ≤ 1.5× goal) and beside its render by the raster method (the same maps a user gets from a
 /// pinhole). Walks are in [`walks`].
-pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
+pub fn impostors(mesh: &Mesh, quick: bool) -> Result<Vec<Figure>, BenchError> {
     use trompe::impostor::{ImpostorCamera, albedo_of, build};
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
@@ -338,16 +374,15 @@ pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     let plain = spoc.pinhole().clone();
     let color = albedo_of(mesh);
     // The workload of the first three pairs below: a fresh SPOC impostor.
-    let fresh_spoc_build =
-        || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
+    let fresh_spoc_build = || build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color);
     // The goal's line: the very pair `trompe bench --goal` times.
-    let (t_spoc, t_plain) = goal_pair(mesh, min * 2);
+    let (t_spoc, t_plain) = goal_pair(mesh, min * 2)?;
     // The same rasterization through the pinhole a pinhole impostor of the object would have:
     // framing its bounding sphere. The SPOC's reference pinhole above is wider by (1 + k)·1.05,
     // to hold the pushed-out silhouette, so the object is smaller there than in either image.
     let framed = framed_pinhole(eye, b.center(), radius, size).unwrap_or_else(|| plain.clone());
     let (t_spoc_framed, t_framed) =
-        time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&framed, mesh));
+        try_time_pair_median(min * 2, fresh_spoc_build, || plain_raster(&framed, mesh))?;
     // The SPOC `trompe impostor bake` places at the same eye: framed on the mesh's vertices
     // (`ImpostorCamera::fitted`), so the object fills its image — and every texel it covers
     // must be resolved — where the sphere's framing above leaves most of the image empty. And
@@ -363,14 +398,14 @@ pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     {
         let reference = fitted.pinhole().clone();
         let camera = ImpostorCamera::Spoc(fitted);
-        let fresh = || build(camera.clone(), mesh, 0, &color).expect("valid size");
+        let fresh = || build(camera.clone(), mesh, 0, &color);
         let (t_fitted, t_reference) =
-            time_pair_median(min * 2, fresh, || plain_raster(&reference, mesh));
+            try_time_pair_median(min * 2, fresh, || plain_raster(&reference, mesh))?;
         let name = format!(
             "  the same build framed on the mesh, as `impostor bake` frames it ({:.1} % of \
              texels covered; {:.1} % above)",
-            fresh().coverage() * 100.0,
-            fresh_spoc_build().coverage() * 100.0
+            fresh()?.coverage() * 100.0,
+            fresh_spoc_build()?.coverage() * 100.0
         );
         bake_framed.push(Figure::millis(name, t_fitted).versus(
             (t_fitted, t_reference),
@@ -380,14 +415,14 @@ pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
             fitted_at_eye(trompe::impostor::ViewCamera::Pinhole)
         {
             let camera = ImpostorCamera::Pinhole(pinhole.clone());
-            let fresh_pinhole = || build(camera.clone(), mesh, 0, &color).expect("valid size");
+            let fresh_pinhole = || build(camera.clone(), mesh, 0, &color);
             let (t_pinhole_imp, t_pinhole_raster) =
-                time_pair_median(min * 2, fresh_pinhole, || plain_raster(&pinhole, mesh));
-            let (t_spoc, t_pinhole) = time_pair_median(min * 2, fresh, fresh_pinhole);
+                try_time_pair_median(min * 2, fresh_pinhole, || plain_raster(&pinhole, mesh))?;
+            let (t_spoc, t_pinhole) = try_time_pair_median(min * 2, fresh, fresh_pinhole)?;
             let name = format!(
                 "  the pinhole impostor `impostor bake` frames there ({:.1} % of texels \
                  covered; {:.2} × a depth + id rasterization through its own camera)",
-                fresh_pinhole().coverage() * 100.0,
+                fresh_pinhole()?.coverage() * 100.0,
                 t_pinhole_imp.as_secs_f64() / t_pinhole_raster.as_secs_f64()
             );
             bake_framed.push(Figure::millis(name, t_pinhole).versus(
@@ -403,50 +438,33 @@ pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
     );
     // The object's image rendered by the raster method (colour, distance, normals, ids).
     let render_peer = raster_view(&plain, mesh);
-    let (t_spoc_again, t_render) = time_pair_median(min * 2, fresh_spoc_build, || {
+    let (t_spoc_again, t_render) = try_time_pair_median(min * 2, fresh_spoc_build, || {
         render_raster_once(&render_peer)
-    });
+    })?;
     // What the SPOC itself costs in a fresh build: the same maps through its reference pinhole.
     let pinhole_camera = ImpostorCamera::Pinhole(plain.clone());
-    let (t_spoc_vs_pinhole, t_pinhole_fresh) = time_pair_median(min * 2, fresh_spoc_build, || {
-        build(pinhole_camera.clone(), mesh, 0, &color).expect("valid size")
-    });
+    let (t_spoc_vs_pinhole, t_pinhole_fresh) =
+        try_time_pair_median(min * 2, fresh_spoc_build, || {
+            build(pinhole_camera.clone(), mesh, 0, &color)
+        })?;
     // The steady state of a dynamic scene: the same impostor rebuilt every frame, its memory
     // reused, beside a plain rasterization into a reused target.
     let mut builder = trompe::impostor::ImpostorBuilder::new();
-    let mut again = build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color).expect("valid size");
-    let mut plain_target = rasterize(&plain, &[mesh], &NoAttributes, ())
-        .expect("valid size")
-        .0;
-    let (t_rebuild, t_plain_into) = time_pair_median(
+    let mut again = build(ImpostorCamera::Spoc(spoc.clone()), mesh, 0, &color)?;
+    let mut plain_target = rasterize(&plain, &[mesh], &NoAttributes, ())?.0;
+    let (t_rebuild, t_plain_into) = try_time_pair_median(
         min * 2,
-        || {
-            builder
-                .rebuild(&mut again, mesh, 0, &color)
-                .expect("valid size");
-        },
-        || {
-            trompe::raster::rasterize_into(&plain, &[mesh], &NoAttributes, (), &mut plain_target)
-                .expect("valid size");
-        },
-    );
+        || builder.rebuild(&mut again, mesh, 0, &color),
+        || trompe::raster::rasterize_into(&plain, &[mesh], &NoAttributes, (), &mut plain_target),
+    )?;
     // What the SPOC itself costs: the same maps through the pinhole, both rebuilt.
     let mut pinhole_builder = trompe::impostor::ImpostorBuilder::new();
-    let mut pinhole_impostor =
-        build(ImpostorCamera::Pinhole(plain.clone()), mesh, 0, &color).expect("valid size");
-    let (t_rebuild_again, t_pinhole) = time_pair_median(
+    let mut pinhole_impostor = build(ImpostorCamera::Pinhole(plain.clone()), mesh, 0, &color)?;
+    let (t_rebuild_again, t_pinhole) = try_time_pair_median(
         min * 2,
-        || {
-            builder
-                .rebuild(&mut again, mesh, 0, &color)
-                .expect("valid size");
-        },
-        || {
-            pinhole_builder
-                .rebuild(&mut pinhole_impostor, mesh, 0, &color)
-                .expect("valid size");
-        },
-    );
+        || builder.rebuild(&mut again, mesh, 0, &color),
+        || pinhole_builder.rebuild(&mut pinhole_impostor, mesh, 0, &color),
+    )?;
     out.push(
         Figure::millis(
             format!(
@@ -518,7 +536,7 @@ pub fn impostors(mesh: &Mesh, quick: bool) -> Vec<Figure> {
             "= SPOC rebuild time / this (measured alternately)",
         ),
     );
-    out
+    Ok(out)
 }
 
 /// `mesh` with every material's texture left out (its base colours kept): the peer that prices
@@ -541,10 +559,10 @@ pub fn without_textures(mesh: &Mesh) -> Mesh {
 /// pinhole (the goal's peer) and beside the same build with its textures left out — what
 /// sampling them costs, where an untextured mesh's colour repeats from texel to texel.
 /// `name` labels the mesh. Nothing when `mesh` has no texture.
-pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
+pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Result<Vec<Figure>, BenchError> {
     use trompe::impostor::{ImpostorCamera, albedo_of, build};
     if mesh.materials.iter().all(|m| m.texture.is_none()) {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let (_, spoc) = goal_spoc(mesh);
@@ -552,19 +570,20 @@ pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
     let untextured = without_textures(mesh);
     let (sampled, flat) = (albedo_of(mesh), albedo_of(&untextured));
     let camera = ImpostorCamera::Spoc(spoc);
-    let textured_build = || build(camera.clone(), mesh, 0, &sampled).expect("valid size");
-    let flat_build = || build(camera.clone(), &untextured, 0, &flat).expect("valid size");
+    let textured_build = || build(camera.clone(), mesh, 0, &sampled);
+    let flat_build = || build(camera.clone(), &untextured, 0, &flat);
     let (t_textured, t_plain) =
-        time_pair_median(min * 2, textured_build, || plain_raster(&plain, mesh));
-    let (t_textured_again, t_flat) = time_pair_median(min * 2, textured_build, flat_build);
+        try_time_pair_median(min * 2, textured_build, || plain_raster(&plain, mesh))?;
+    let (t_textured_again, t_flat) = try_time_pair_median(min * 2, textured_build, flat_build)?;
     let size = GOAL_SIZE;
-    vec![
+    let coverage = textured_build()?.coverage();
+    Ok(vec![
         Figure::millis(
             format!(
                 "build SPOC impostor {size}² of a textured mesh ({name}, {} triangles; {:.1} % \
                  of texels covered)",
                 mesh.triangle_count(),
-                textured_build().coverage() * 100.0
+                coverage * 100.0
             ),
             t_textured,
         )
@@ -576,7 +595,7 @@ pub fn textured_impostor(mesh: &Mesh, name: &str, quick: bool) -> Vec<Figure> {
             (t_textured_again, t_flat),
             "= the textured build time / this (measured alternately)",
         ),
-    ]
+    ])
 }
 
 /// Graph-camera impostor construction (paper 1 §4.5; the paper builds its maze with 4 bunnies,
@@ -588,46 +607,35 @@ pub fn graph_impostors(
     maze_path: &std::path::Path,
     object: &Mesh,
     quick: bool,
-) -> Vec<Figure> {
+) -> Result<Vec<Figure>, BenchError> {
     use trompe::impostor::{ImpostorCamera, albedo_of, build};
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let size = 512;
-    let Ok(g) = maze.graph_camera(size, maze_path) else {
-        return Vec::new();
-    };
+    let g = maze.graph_camera(size, maze_path)?;
     let mesh = trompe::scene::maze::Maze::with_objects(maze, object, 4);
     let color = albedo_of(&mesh);
     let camera = ImpostorCamera::Graph(g.clone());
-    let (t_graph, t_root) = time_pair_median(
+    let (t_graph, t_root) = try_time_pair_median(
         min * 2,
-        || build(camera.clone(), &mesh, 0, &color).expect("valid size"),
+        || build(camera.clone(), &mesh, 0, &color),
         || plain_raster(g.root(), &mesh),
-    );
+    )?;
     // Rebuilt every frame, its memory reused, beside the root rasterization into a reused target.
     let mut builder = trompe::impostor::ImpostorBuilder::new();
-    let mut again = build(camera.clone(), &mesh, 0, &color).expect("valid size");
-    let mut root_target = rasterize(g.root(), &[&mesh], &NoAttributes, ())
-        .expect("valid size")
-        .0;
-    let (t_rebuild, t_root_into) = time_pair_median(
+    let mut again = build(camera.clone(), &mesh, 0, &color)?;
+    let mut root_target = rasterize(g.root(), &[&mesh], &NoAttributes, ())?.0;
+    let (t_rebuild, t_root_into) = try_time_pair_median(
         min * 2,
-        || {
-            builder
-                .rebuild(&mut again, &mesh, 0, &color)
-                .expect("valid size");
-        },
-        || {
-            trompe::raster::rasterize_into(g.root(), &[&mesh], &NoAttributes, (), &mut root_target)
-                .expect("valid size");
-        },
-    );
+        || builder.rebuild(&mut again, &mesh, 0, &color),
+        || trompe::raster::rasterize_into(g.root(), &[&mesh], &NoAttributes, (), &mut root_target),
+    )?;
     let built = format!(
         "build graph-camera impostor {size}², maze + 4 bunnies ({} triangles, {} frusta)",
         mesh.triangle_count(),
         g.frusta().len()
     );
     let rebuilt = format!("rebuild graph-camera impostor {size}², memory reused");
-    vec![
+    Ok(vec![
         Figure::millis(built, t_graph).versus(
             (t_graph, t_root),
             "× a depth + id rasterization of the same triangles through its root pinhole \
@@ -637,7 +645,7 @@ pub fn graph_impostors(
             (t_rebuild, t_root_into),
             "× that rasterization into a reused target (measured alternately)",
         ),
-    ]
+    ])
 }
 
 /// What `trompe bench` measured: a heading and its rows.
@@ -715,6 +723,12 @@ pub enum BenchError {
     /// A method failed on one of its devices.
     #[error(transparent)]
     Device(#[from] trompe_gpu::DeviceError),
+    /// An impostor's depth layers could not be peeled.
+    #[error(transparent)]
+    Peel(#[from] trompe::impostor::LayerError),
+    /// What a workload holds (a BVH) would pass the memory budget.
+    #[error(transparent)]
+    Memory(#[from] trompe::memory::OverBudget),
     /// A thread pool could not be made.
     #[error("a benchmark's thread pool could not be started")]
     Threads,
@@ -743,12 +757,12 @@ pub fn run(
     let maze_path = inputs.scenes.join("maze.maze");
     let maze = trompe::scene::maze::Maze::load(&maze_path)?;
     let duck = trompe::geom::io::load(&assets.join("gltf/Duck.glb"))?.mesh;
-    let figures = foundation(mesh, quick)
+    let figures = foundation(mesh, quick)?
         .into_iter()
-        .chain(impostors(mesh, quick))
+        .chain(impostors(mesh, quick)?)
         .chain(walks::walks(inputs, quick)?)
-        .chain(textured_impostor(&duck, "Duck.glb", quick))
-        .chain(graph_impostors(&maze, &maze_path, &bunny, quick))
+        .chain(textured_impostor(&duck, "Duck.glb", quick)?)
+        .chain(graph_impostors(&maze, &maze_path, &bunny, quick)?)
         .chain(relief::relief(inputs, quick)?)
         .chain(master::master(inputs, quick)?)
         .chain(layers::layers(inputs, quick)?)
@@ -768,13 +782,13 @@ pub struct GoalReport {
 }
 
 /// Times [`goal_pair`] on `mesh` (read from `path`) `runs` times.
-pub fn goal(path: &std::path::Path, mesh: &Mesh, runs: u32) -> GoalReport {
-    GoalReport {
+pub fn goal(path: &std::path::Path, mesh: &Mesh, runs: u32) -> Result<GoalReport, BenchError> {
+    Ok(GoalReport {
         heading: heading(path, mesh),
         runs: (0..runs)
             .map(|_| goal_pair(mesh, Duration::from_secs(3)))
-            .collect(),
-    }
+            .collect::<Result<_, _>>()?,
+    })
 }
 
 impl std::fmt::Display for GoalReport {

@@ -39,8 +39,9 @@ pub struct Cli {
     /// Worker threads (default: every core).
     #[arg(long, global = true)]
     pub threads: Option<usize>,
-    /// Largest memory one input-sized allocation may take: a frame, an impostor, a decoded
-    /// texture, a glTF scene's instances (e.g. 512M, 4G; default: half the machine's memory).
+    /// Most memory what is sized by input may hold together: frames, impostors, decoded
+    /// textures, BVHs, a glTF scene's instances (e.g. 512M, 4G; default: half the machine's
+    /// memory).
     #[arg(long, global = true, value_name = "SIZE", value_parser = trompe::memory::parse_size)]
     pub memory_limit: Option<u64>,
     /// Print per-step timings and loader warnings.
@@ -765,7 +766,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let path = mesh.unwrap_or_else(|| inputs.assets.join("meshes/bunny.obj"));
             let m = load_mesh(&path)?;
             match goal {
-                Some(runs) => println!("{}", crate::bench::goal(&path, &m, runs)),
+                Some(runs) => println!("{}", crate::bench::goal(&path, &m, runs)?),
                 None => println!("{}", crate::bench::run(&path, &m, &inputs, quick)?),
             }
         }

@@ -77,7 +77,7 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<Drawn
         ImpostorCamera::Pinhole(c) => GpuRasterCamera::pinhole(c),
         ImpostorCamera::Orthographic(c) => GpuRasterCamera::orthographic(c),
         ImpostorCamera::Spoc(c) => {
-            tessellation = trompe::impostor::tessellate(c, mesh);
+            tessellation = trompe::impostor::tessellate(c, mesh)?;
             GpuRasterCamera::spoc(c)
         }
         other => {

@@ -51,6 +51,9 @@ pub enum GpuError {
     /// The frame's size is not a valid image size.
     #[error(transparent)]
     Frame(#[from] trompe::frame::FrameError),
+    /// What the work holds on the CPU side (the BVH it uploads) would pass the memory budget.
+    #[error(transparent)]
+    Memory(#[from] trompe::memory::OverBudget),
     /// A texture the work needs is wider or taller than the device allows.
     #[error("{what} needs a texture {side} texels a side; {adapter} allows {limit}")]
     TextureTooLarge {

@@ -292,7 +292,7 @@ impl<'a> GpuTracer<'a> {
         let bvh = match secondary {
             Secondary::Exact => {
                 impostors = None;
-                built = Bvh::build(view.meshes.clone());
+                built = Bvh::build(view.meshes.clone())?;
                 &built
             }
             Secondary::Impostors { answers, bvh } => {

@@ -145,16 +145,16 @@ impl ImpostorBuilder {
         // the tessellation is drawn instead of the mesh.
         let curved = impostor.camera.is_curved();
         let source = (mesh, object);
-        let setup = set_up(projection, &[mesh], &mut self.raster);
+        let setup = set_up(projection, &[mesh], &mut self.raster)?;
         let pieces = if curved && setup.stats().has_curved_or_clipped() {
-            tessellate_with(projection, mesh, &mut self.tessellation)
+            tessellate_with(projection, mesh, &mut self.tessellation)?
         } else {
             None
         };
         match &pieces {
             None => draw_and_resolve(setup, impostor, source, None, color, before)?,
             Some(t) => {
-                let setup = set_up(projection, &[&t.mesh], &mut self.raster);
+                let setup = set_up(projection, &[&t.mesh], &mut self.raster)?;
                 let drawn = Some(t.source.as_slice());
                 draw_and_resolve(setup, impostor, source, drawn, color, before)?
             }
@@ -370,7 +370,7 @@ mod tests {
         let sphere = crate::geom::icosphere(1);
         let spoc = Spoc::around(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 0.5, 1.2, 256).unwrap();
         assert!(
-            tessellate(&spoc, &sphere).is_some(),
+            tessellate(&spoc, &sphere).unwrap().is_some(),
             "the case must tessellate"
         );
         let camera = ImpostorCamera::Spoc(spoc);
@@ -394,7 +394,9 @@ mod tests {
         // image must be covered on one interval, with no pinholes between shared edges.
         let sphere = crate::geom::icosphere(1);
         let spoc = Spoc::around(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 0.5, 1.2, 512).unwrap();
-        let tess = tessellate(&spoc, &sphere).expect("big triangles must split");
+        let tess = tessellate(&spoc, &sphere)
+            .unwrap()
+            .expect("big triangles must split");
         assert!(
             tess.source.len() > 2 * sphere.triangle_count(),
             "{}",

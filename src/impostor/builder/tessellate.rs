@@ -8,6 +8,14 @@ use super::*;
 pub(super) const MAX_DEVIATION_PX: f64 = crate::raster::STRAIGHT_EDGE_TOLERANCE_PX;
 /// Recursion cap of the tessellation per source triangle.
 pub(super) const MAX_SPLITS: u32 = 12;
+/// Bytes a sub-triangle costs while a [`Tessellation`] is made: its corners and source in a
+/// worker's pieces (76) and again once they are joined, then its normals, indices and
+/// material (52).
+pub const BYTES_PER_SUB_TRIANGLE: u64 = 208;
+/// Bytes a sub-triangle holds in a made [`Tessellation`].
+const HELD_PER_SUB_TRIANGLE: u64 = 128;
+/// Sub-triangles a worker makes between two looks at the memory budget.
+const BUDGET_STEP: u64 = 4096;
 
 /// A sub-triangle's source triangle and the barycentrics of its corners in it.
 pub type SourceTriangle = (u32, [Vec3; 3]);
@@ -26,7 +34,12 @@ impl Tessellation {
             face_material: vec![0; n],
             materials: vec![Material::default()],
         };
-        Tessellation { mesh, source }
+        let held = crate::memory::Held::new(crate::memory::times(n as u64, HELD_PER_SUB_TRIANGLE));
+        Tessellation {
+            mesh,
+            source,
+            _held: held,
+        }
     }
 }
 
@@ -37,6 +50,8 @@ pub struct Tessellation {
     pub mesh: Mesh,
     /// `(source triangle, corner barycentrics)` per sub-triangle.
     pub source: Vec<SourceTriangle>,
+    /// The account's share for the arrays above.
+    _held: crate::memory::Held,
 }
 
 /// Splits triangles until every edge's projected midpoint lies within 0.5 px of the midpoint of
@@ -44,7 +59,16 @@ pub struct Tessellation {
 /// and it splits at its midpoint, so two triangles sharing an edge split it identically: the
 /// tessellation has no T-junctions and the image no cracks.
 /// Returns `None` when no edge needs a split (the mesh can be rasterized as it is).
-pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation> {
+///
+/// # Errors
+/// When the sub-triangles, counted as they are made ([`BYTES_PER_SUB_TRIANGLE`] each), and
+/// what the process holds pass the memory budget: a camera can curve a triangle into up to
+/// 2^12 pieces, so the output is not known before it is made; it stops within a few thousand
+/// sub-triangles of the limit.
+pub fn tessellate<P: Projection>(
+    camera: &P,
+    mesh: &Mesh,
+) -> Result<Option<Tessellation>, crate::memory::OverBudget> {
     tessellate_with(camera, mesh, &mut TessellationScratch::default())
 }
 
@@ -54,6 +78,15 @@ pub fn tessellate<P: Projection>(camera: &P, mesh: &Mesh) -> Option<Tessellation
 pub(super) struct TessellationScratch {
     pub(super) projected: Vec<Option<ImagePoint>>,
     pub(super) splits: Vec<bool>,
+    /// The account's share for the arrays above, as large as they are.
+    held: crate::memory::Held,
+}
+
+impl TessellationScratch {
+    fn bytes(&self) -> u64 {
+        (self.projected.capacity() * size_of::<Option<ImagePoint>>() + self.splits.capacity())
+            as u64
+    }
 }
 
 /// [`tessellate`] with reusable working memory.
@@ -61,7 +94,7 @@ pub(super) fn tessellate_with<P: Projection>(
     camera: &P,
     mesh: &Mesh,
     scratch: &mut TessellationScratch,
-) -> Option<Tessellation> {
+) -> Result<Option<Tessellation>, crate::memory::OverBudget> {
     // Split decisions depend on the edge alone (see above).
     // Whether edge (a, b), whose ends project to (pa, pb), must split. The camera's cheap
     // bound settles nearly every edge of a detailed mesh without projecting its midpoint.
@@ -84,7 +117,27 @@ pub(super) fn tessellate_with<P: Projection>(
     };
     // Most triangles of a detailed mesh need no split (the paper notes this): find them from
     // the projected vertices alone, and give back the mesh untouched when none does.
-    let TessellationScratch { projected, splits } = scratch;
+    let needed = crate::memory::times(
+        mesh.positions.len() as u64,
+        size_of::<Option<ImagePoint>>() as u64,
+    )
+    .saturating_add(mesh.triangles.len() as u64);
+    if needed > scratch.bytes() {
+        crate::memory::check(
+            || {
+                format!(
+                    "tessellating {} triangles for a curved camera",
+                    mesh.triangles.len()
+                )
+            },
+            needed - scratch.bytes(),
+        )?;
+    }
+    let TessellationScratch {
+        projected,
+        splits,
+        held,
+    } = scratch;
     projected.clear();
     projected.par_extend(
         mesh.positions
@@ -115,10 +168,26 @@ pub(super) fn tessellate_with<P: Projection>(
             .into_par_iter()
             .map(needs_any_split),
     );
+    held.set((projected.capacity() * size_of::<Option<ImagePoint>>() + splits.capacity()) as u64);
     let splits = &*splits;
     if !splits.contains(&true) {
-        return None;
+        return Ok(None);
     }
+    // Every worker adds what it made to `made` every BUDGET_STEP sub-triangles and stops when
+    // the total no longer fits the budget.
+    let made = std::sync::atomic::AtomicU64::new(0);
+    let count = mesh.triangles.len();
+    let budget = |more: u64| {
+        let total = made.fetch_add(more, std::sync::atomic::Ordering::Relaxed) + more;
+        crate::memory::check(
+            || {
+                format!(
+                    "tessellating {count} triangles for a curved camera ({total} pieces so far)"
+                )
+            },
+            crate::memory::times(total, BYTES_PER_SUB_TRIANGLE),
+        )
+    };
     // Fixed chunks of source triangles, tessellated in parallel and concatenated in order.
     let tris: Vec<usize> = (0..mesh.triangles.len()).collect();
     let chunks: Vec<(Vec<Vec3>, Vec<SourceTriangle>)> = tris
@@ -127,7 +196,12 @@ pub(super) fn tessellate_with<P: Projection>(
             let mut positions = Vec::with_capacity(chunk.len() * 3);
             let mut source = Vec::with_capacity(chunk.len());
             let mut stack = Vec::new();
+            let mut counted = 0;
             for &t in chunk {
+                if (source.len() - counted) as u64 >= BUDGET_STEP {
+                    budget((source.len() - counted) as u64)?;
+                    counted = source.len();
+                }
                 if !splits[t] {
                     positions.extend_from_slice(&mesh.corners(t));
                     source.push((t as u32, [Vec3::X, Vec3::Y, Vec3::Z]));
@@ -159,14 +233,15 @@ pub(super) fn tessellate_with<P: Projection>(
                     }
                 }
             }
-            (positions, source)
+            budget((source.len() - counted) as u64)?;
+            Ok((positions, source))
         })
-        .collect();
+        .collect::<Result<_, crate::memory::OverBudget>>()?;
     let mut positions = Vec::new();
     let mut source = Vec::new();
     for (p, s) in chunks {
         positions.extend(p);
         source.extend(s);
     }
-    Some(Tessellation::new(positions, source))
+    Ok(Some(Tessellation::new(positions, source)))
 }

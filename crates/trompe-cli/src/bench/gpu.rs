@@ -183,7 +183,7 @@ pub fn gpu(
             let b = m.bounds();
             (lo.min(b.min), hi.max(b.max))
         });
-        let bvh = Bvh::build(meshes);
+        let bvh = Bvh::build(meshes)?;
         let rays = incoherent_rays(rays_n, lo, hi);
         let start = Instant::now();
         let hits: Vec<_> = rays
@@ -256,7 +256,7 @@ fn secondary_pass(
                 Ray::new(origin, (target - origin).normalize_or(Vec3::Y))
             })
             .collect();
-        let bvh = Bvh::build(vec![Arc::new(mesh.clone())]);
+        let bvh = Bvh::build(vec![Arc::new(mesh.clone())])?;
         let timed = |f: &dyn Fn()| {
             let start = Instant::now();
             f();

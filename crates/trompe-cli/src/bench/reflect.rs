@@ -319,7 +319,7 @@ pub fn tables(inputs: &Shipped, selection: &Selection) -> Result<ReflectTables, 
 /// read a walk.
 fn walk_lengths(scene: &Scene, t: f32, side: u32) -> Result<(u64, f64), BenchError> {
     let view = scene.view(t)?;
-    let bvh = Bvh::build(view.meshes.clone());
+    let bvh = Bvh::build(view.meshes.clone())?;
     let mut timings = Timings::default();
     let answers = trompe::render::ReflectorImpostors::build(
         &view,

@@ -4,7 +4,7 @@
 //! the same object's image; and a walk's frame through relief impostors beside direct
 //! rasterization and beside ray tracing the frame with the software shader.
 
-use super::{BenchError, Figure, time_pair_median};
+use super::{BenchError, Figure, time_pair_median, try_time_pair_median};
 use glam::DVec3;
 use std::time::{Duration, Instant};
 use trompe::camera::Pinhole;
@@ -34,7 +34,9 @@ pub fn copy_texels(impostor: &ReliefImpostor, into: &mut (Vec<trompe::relief::Sr
 }
 
 /// A shader over the object `mesh` alone, lit as the raster benches light it.
-pub fn lone_shader(mesh: &trompe::geom::Mesh) -> std::sync::Arc<SoftwareShader> {
+pub fn lone_shader(
+    mesh: &trompe::geom::Mesh,
+) -> Result<std::sync::Arc<SoftwareShader>, trompe::memory::OverBudget> {
     let camera = super::framing_camera(mesh, SIDE);
     let (view, lighting) = super::raster_view(&camera, mesh);
     let settings = trompe::scene::RenderSettings {
@@ -58,7 +60,7 @@ pub fn relief(
         .map_err(|_| BenchError::Threads)?;
     let scene = Scene::load(&inputs.scenes.join("relief-walk.toml")).map_err(Box::new)?;
     let view = scene.view(scene.render.time)?;
-    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render)?;
     let eye = scene.camera.position.as_dvec3();
 
     // The pre-warp, one core, beside a copy of the texel buffers it reads.
@@ -90,18 +92,18 @@ pub fn relief(
         ("meshes/bunny.obj", "bunny"),
     ] {
         let mesh = trompe::geom::io::load(&assets.join(file))?.mesh;
-        let lone = lone_shader(&mesh);
+        let lone = lone_shader(&mesh)?;
         let (c, r) = lone.bounds(0)?;
         let from = c + DVec3::new(0.3, 0.4, 1.0).normalize() * r * 4.0;
         let camera = super::framing_camera(&mesh, SIDE);
         let raster = super::raster_view(&camera, &mesh);
         let pair = one.install(|| {
-            time_pair_median(
+            try_time_pair_median(
                 min,
                 || lone.impostor(0, from, SIDE, DepthEncoding::U8, &|| false),
                 || super::render_raster_once(&raster),
             )
-        });
+        })?;
         out.push(
             Figure::millis(
                 format!(

@@ -44,18 +44,16 @@ pub fn walks(
 ) -> Result<Vec<Figure>, BenchError> {
     let load = |name: &str| trompe::geom::io::load(&inputs.assets.join(name)).map(|m| m.mesh);
     let (bunny, teapot) = (load("meshes/bunny.obj")?, load("meshes/teapot.obj")?);
-    Ok(walks_of(&bunny, &teapot, quick))
+    walks_of(&bunny, &teapot, quick)
 }
 
 /// The walk figures with `bunny` the replaced object and `teapot` the mirror.
-pub fn walks_of(bunny: &Mesh, teapot: &Mesh, quick: bool) -> Vec<Figure> {
+pub fn walks_of(bunny: &Mesh, teapot: &Mesh, quick: bool) -> Result<Vec<Figure>, BenchError> {
     let min = Duration::from_millis(if quick { 200 } else { 1500 });
     let mut out = Vec::new();
-    let Ok(setup) = ReflectorSetup::new(bunny, teapot, 1.4, 512) else {
-        return out;
-    };
-    let rays = setup.rays();
-    let exact = Bvh::build(vec![setup.target.clone()]);
+    let setup = ReflectorSetup::new(bunny, teapot, 1.4, 512)?;
+    let rays = setup.rays()?;
+    let exact = Bvh::build(vec![setup.target.clone()])?;
     out.push(Figure {
         name: format!(
             "impostor walks below: reflected rays of a teapot mirror that enter the box of the \
@@ -69,13 +67,12 @@ pub fn walks_of(bunny: &Mesh, teapot: &Mesh, quick: bool) -> Vec<Figure> {
     let color = albedo_of(&setup.target);
     let mut at_goal = None;
     for side in SIDES {
-        let Ok(imp) = setup
-            .camera(ViewCamera::Spoc(None), side)
-            .map_err(|e| e.to_string())
-            .and_then(|cam| build(cam, &setup.target, 0, &color).map_err(|e| e.to_string()))
-        else {
-            continue;
-        };
+        let imp = build(
+            setup.camera(ViewCamera::Spoc(None), side)?,
+            &setup.target,
+            0,
+            &color,
+        )?;
         imp.prepare_walks();
         let modes = [
             (WalkMode::Linear, "linear (paper 1 §3.2)"),
@@ -148,13 +145,14 @@ pub fn walks_of(bunny: &Mesh, teapot: &Mesh, quick: bool) -> Vec<Figure> {
         }
     }
     let Some(imp) = at_goal else {
-        return out;
+        return Ok(out);
     };
     // Scene size: the same surface in 16 times the triangles, through the same camera.
     let big = setup.target.subdivided().subdivided();
-    if let Ok(big_imp) = build(imp.camera().clone(), &big, 0, &albedo_of(&big)) {
+    {
+        let big_imp = build(imp.camera().clone(), &big, 0, &albedo_of(&big))?;
         big_imp.prepare_walks();
-        let big_exact = Bvh::build(vec![std::sync::Arc::new(big.clone())]);
+        let big_exact = Bvh::build(vec![std::sync::Arc::new(big.clone())])?;
         let (t_big, t_small) = time_pair_median(
             min,
             || query_all(&big_imp, &rays),
@@ -189,7 +187,8 @@ pub fn walks_of(bunny: &Mesh, teapot: &Mesh, quick: bool) -> Vec<Figure> {
     }
     // Depth layers: the automatic count against one, on the same rays.
     let mut layered = imp.clone();
-    if layered.peel(&setup.target, 0, &color, Layers::Auto).is_ok() {
+    {
+        layered.peel(&setup.target, 0, &color, Layers::Auto)?;
         layered.prepare_walks();
         let (t_layered, t_one) = time_pair_median(
             min,
@@ -209,5 +208,5 @@ pub fn walks_of(bunny: &Mesh, teapot: &Mesh, quick: bool) -> Vec<Figure> {
             )),
         });
     }
-    out
+    Ok(out)
 }

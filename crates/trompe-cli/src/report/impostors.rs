@@ -50,8 +50,8 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     s.paragraph("The Utah teapot (largest extent 1) is replaced by a 512² depth image built from the centre of a reflective bunny beside it: a pinhole depth image, and a single-pole occlusion camera (SPOC, `docs/conventions.md` §3) whose strength k = 2Δ/z_O comes from the reflector's size Δ and distance z_O. The SPOC pushes deeper samples away from the pole, so it sees around the silhouette.");
     let color = |s: &SurfaceSample| teapot_color(s.normal);
     let setup = ReflectorSetup::new(&teapot, &bunny, 1.4, 1024).map_err(camera_error)?;
-    let exact = trompe::trace::Bvh::build(vec![setup.target.clone()]);
-    let rays = setup.rays();
+    let exact = trompe::trace::Bvh::build(vec![setup.target.clone()])?;
+    let rays = setup.rays()?;
     let mut figures = Vec::new();
     let mut table = Table::new([
         "camera",
@@ -121,8 +121,8 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     ]);
     for distance in [1.1f32, 1.4, 1.8] {
         let st = ReflectorSetup::new(&teapot, &bunny, distance, 1024).map_err(camera_error)?;
-        let exact = trompe::trace::Bvh::build(vec![st.target.clone()]);
-        let rays = st.rays();
+        let exact = trompe::trace::Bvh::build(vec![st.target.clone()])?;
+        let rays = st.rays()?;
         let mut cells = Vec::new();
         for kind in [ViewCamera::Pinhole, ViewCamera::Spoc(None)] {
             let cam = st.camera(kind, 512).map_err(camera_error)?;
@@ -238,7 +238,7 @@ where
         })?;
         impostors.push(build(camera, teapot, 0, color)?);
     }
-    let exact = trompe::trace::Bvh::build(vec![std::sync::Arc::new(teapot.clone())]);
+    let exact = trompe::trace::Bvh::build(vec![std::sync::Arc::new(teapot.clone())])?;
     let b = teapot.bounds();
     s.heading("A baked impostor on rays from around its viewpoint");
     s.paragraph("The teapot baked as `trompe impostor bake` does by default — 3 bounding radii away, the SPOC's strength chosen for rays from within one radius of its viewpoint — then checked as `trompe impostor check MESH --impostor FILE` does: 20 000 rays from points on a sphere around the viewpoint, aimed at points of the teapot's box.");
@@ -316,7 +316,7 @@ fn mirror_frames(
         time: 0.0,
         ray_epsilon: 1e-4,
     };
-    let primary = trompe::trace::Bvh::build(view.meshes.clone());
+    let primary = trompe::trace::Bvh::build(view.meshes.clone())?;
     let render_with = |secondary: &dyn trompe::trace::SecondaryQuery| {
         let tracer = trompe::render::Tracer {
             view: &view,
@@ -350,7 +350,7 @@ fn mirror_frames(
         answers.push(trompe::render::ReflectorImpostors::from_impostors(
             &view,
             vec![Vec::new(), vec![imp]],
-        ));
+        )?);
     }
     s.heading("The bunny as a mirror (paper 1, Fig. 1)");
     s.paragraph("One tracer renders every frame: primary rays see the exact scene, and only what answers the rays the bunny reflects changes — the exact BVH, the SPOC impostor, the pinhole impostor, or the environment alone. Scores compare each frame with the exact one over the bunny's pixels.");

@@ -266,7 +266,7 @@ fn shadow_edit(
     };
     let render_with = |with: bool| -> Result<Image<Rgba>, ReportError> {
         let shader =
-            trompe::relief::SoftwareShader::new(&view(with), &scene.lighting, &scene.render);
+            trompe::relief::SoftwareShader::new(&view(with), &scene.lighting, &scene.render)?;
         Ok(shader.render(&camera, &[0])?.color)
     };
     let (without, with) = (render_with(false)?, render_with(true)?);

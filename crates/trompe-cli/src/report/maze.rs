@@ -56,8 +56,8 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         let bunny = trompe::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
         let setup =
             ReflectorSetup::in_maze(&maze, &bunny, 384).map_err(|e| frame_err(e.to_string()))?;
-        let exact = trompe::trace::Bvh::build(vec![setup.target.clone()]);
-        let rays = setup.rays();
+        let exact = trompe::trace::Bvh::build(vec![setup.target.clone()])?;
+        let rays = setup.rays()?;
         let mut rows = Table::new([
             "walk",
             "rays",

@@ -77,6 +77,9 @@ pub enum ReportError {
     /// The output directory is a user's, or another command's result.
     #[error(transparent)]
     Folder(#[from] trompe::files::FolderError),
+    /// What a section holds (a BVH) would pass the memory budget.
+    #[error(transparent)]
+    Memory(#[from] trompe::memory::OverBudget),
     /// The output directory could not be written.
     #[error("{path}: {source}")]
     Io {

@@ -49,7 +49,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
 
     // The impostor of the bunny the walk starts with, and where it stays valid.
     let view = scene.view(scene.render.time)?;
-    let shader = trompe::relief::SoftwareShader::new(&view, &scene.lighting, &scene.render);
+    let shader = trompe::relief::SoftwareShader::new(&view, &scene.lighting, &scene.render)?;
     let eye = cameras
         .first()
         .map_or(scene.camera.position.as_dvec3(), |(_, c)| c.position());

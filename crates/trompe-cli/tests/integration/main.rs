@@ -6,6 +6,7 @@ mod cli;
 mod hybrid;
 mod layers;
 mod master;
+mod memory;
 mod octahedral;
 mod peeling;
 mod publish;

@@ -177,27 +177,3 @@ fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
     ]);
     fails_cleanly(&o, "shards");
 }
-
-/// The atlases of a scene are refused by their sum: at 100 MiB the first fits and the second,
-/// on top of it, does not; the error names the object and what is held.
-#[test]
-fn a_scenes_atlases_are_refused_by_their_sum() {
-    let out = scratch("octahedral_sum").join("o.png");
-    let o = trompe(&[
-        "--memory-limit",
-        "100M",
-        "render",
-        "scenes/teapots.toml",
-        "--method",
-        "octahedral",
-        "--octahedral",
-        "8",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    fails_cleanly(
-        &o,
-        "object 1: an octahedral atlas of 1024 × 1024 (on top of",
-    );
-    assert!(!out.exists());
-}

@@ -408,3 +408,68 @@ fn a_killed_or_raced_bake_leaves_one_whole_bake() {
     }
     eprintln!("octahedral bake: {races} races, each left one whole atlas");
 }
+
+fn layers_build(views: u32, out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_trompe"));
+    c.args(["layers", "build", "scenes/street.toml", "--views"])
+        .arg(views.to_string())
+        .args(["--size", "64x48", "-o"])
+        .arg(out)
+        .current_dir(common::root())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    c
+}
+
+/// A layer set (a project file, one OpenRaster file a view and the cameras): killed while it
+/// is built or published, the folder loads as the old set or the new one; two builds at once
+/// leave one set, its views' files all of that build.
+#[test]
+fn a_killed_or_raced_layer_set_leaves_a_whole_one() {
+    let d = scratch("publish_layers");
+    let kills = sweep("TROMPE_SWEEP_KILLS", 6);
+    let races = sweep("TROMPE_SWEEP_RACES", 3);
+    let scene = trompe::Scene::load(&common::root().join("scenes/street.toml")).unwrap();
+    let set = d.join("street");
+    let views = |dir: &Path| -> Result<usize, String> {
+        let (meshes, names) = trompe::layers::scene_objects(&scene).map_err(|e| e.to_string())?;
+        let set = trompe::layers::file::load(dir, meshes, names).map_err(|e| e.to_string())?;
+        Ok(set.views.len())
+    };
+    run(layers_build(2, &set));
+    let left = kill_during_publish(
+        &set,
+        kills,
+        (
+            || {
+                let mut c = layers_build(3, &set);
+                c.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "300");
+                c.spawn().unwrap()
+            },
+            || run(layers_build(2, &set)),
+        ),
+        views,
+        (2, 3),
+        None,
+    );
+    eprintln!("layers build: {kills} kills, {left:?}");
+    for trial in 0..races {
+        let mut a = layers_build(2, &set);
+        a.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "200");
+        let a = a.spawn().unwrap();
+        let b = layers_build(3, &set).spawn().unwrap();
+        for c in [a, b] {
+            let o = c.wait_with_output().unwrap();
+            assert!(o.status.success(), "trial {trial}: {}", stderr(&o));
+        }
+        let n = views(&set).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
+        assert!(n == 2 || n == 3);
+        let ora = std::fs::read_dir(&set)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.path().extension().is_some_and(|x| x == "ora"))
+            .count();
+        assert_eq!(ora, n, "trial {trial}: one build's views, not a mix");
+    }
+    eprintln!("layers build: {races} races, each left one whole set");
+}

@@ -53,6 +53,7 @@ fn scene() -> Bvh {
         load("bunny.obj", 1.0, Vec3::ZERO),
         load("teapot.obj", 0.02, Vec3::new(1.0, 0.25, 0.25)),
     ])
+    .expect("two small meshes fit the budget")
 }
 
 /// `n` incoherent rays: origins spread through (and around) the scene, directions uniform.
@@ -146,7 +147,7 @@ pub fn the_same_rays_give_the_same_bits_on_repeated_runs(gpu: &Gpu) {
 }
 
 pub fn an_empty_scene_misses_and_no_rays_is_no_work(gpu: &Gpu) {
-    let empty = Bvh::build(Vec::new());
+    let empty = Bvh::build(Vec::new()).unwrap();
     let on_gpu = GpuBvh::upload(gpu, &empty).unwrap();
     let rays = incoherent_rays(100, 1);
     assert!(
