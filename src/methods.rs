@@ -607,6 +607,7 @@ impl<'a> Renderer<'a> {
                 (out.frame, report)
             }
         };
+        crate::render::check_radiance(&frame)?;
         Ok(MethodFrame {
             frame,
             timings,

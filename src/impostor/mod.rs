@@ -41,8 +41,8 @@ pub const BYTES_PER_TEXEL: u64 = 64;
 pub use bake::{BakeError, BakeReport, BakeSettings, bake};
 pub use billboard::Billboard;
 pub use builder::{
-    DrawnError, DrawnTexel, ImpostorBuilder, SurfaceSample, Tessellation, albedo_of, build,
-    resolve_drawn, tessellate,
+    DrawnError, DrawnImage, DrawnTexel, ImpostorBuilder, SourceTriangle, SurfaceSample,
+    Tessellation, albedo_of, build, graph_pieces, resolve_drawn, tessellate,
 };
 pub use camera::{ImpostorCamera, ViewCamera};
 pub use front::front_bounds;

@@ -301,13 +301,14 @@ impl SecondaryQuery for ReflectorImpostors {
 /// the impostor methods to resolve as they resolve their own ([`crate::impostor::resolve_drawn`],
 /// paper 1 §3.1); the cameras it does not draw are built by the library.
 pub trait ImpostorDrawer: Send + Sync {
-    /// The visibility image of `mesh` through `camera`, or `None` where it does not draw this
-    /// camera; `Err` with the device's reason where it failed.
+    /// The visibility image of `mesh` through `camera` (through a graph camera, with each
+    /// texel's frustum), or `None` where it does not draw this camera; `Err` with the device's
+    /// reason where it failed.
     fn draw(
         &self,
         camera: &ImpostorCamera,
         mesh: &Mesh,
-    ) -> Option<Result<Vec<crate::impostor::DrawnTexel>, String>>;
+    ) -> Option<Result<crate::impostor::DrawnImage, String>>;
 }
 
 impl std::fmt::Debug for dyn ImpostorDrawer + '_ {

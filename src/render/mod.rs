@@ -208,6 +208,20 @@ pub enum RenderError {
     /// The time asked for is not a finite number.
     #[error("time {0}: must be a finite number of seconds")]
     Time(f32),
+    /// A pixel's radiance passed `f32`'s range (or was made of such a value): the scene's
+    /// environment, light or material values are too large to render.
+    #[error(
+        "the frame's pixel ({x}, {y}) is {value}: the scene's radiance passes f32's range (lower \
+         its environment or light intensity, or its colours)"
+    )]
+    Radiance {
+        /// Column.
+        x: u32,
+        /// Row.
+        y: u32,
+        /// The channel that is not finite (`inf`, `NaN`).
+        value: f32,
+    },
     /// An object's coordinates, placed and animated, are beyond
     /// [`crate::geom::MAX_COORDINATE`] or not finite.
     #[error(
@@ -327,7 +341,7 @@ pub fn render_view(
 ) -> Result<Frame, RenderError> {
     check_finite(view)?;
     let refraction = options.refraction;
-    match options.method {
+    let frame = match options.method {
         Method::Raster => render_raster(view, lighting, settings, progress, timings),
         Method::Trace => {
             let bvh = timings.time("build BVH", || Bvh::build(view.meshes.clone()))?;
@@ -363,6 +377,26 @@ pub fn render_view(
             };
             trace_frame(&tracer, (refraction, options.primary), progress, timings)
         }
+    }?;
+    check_radiance(&frame)?;
+    Ok(frame)
+}
+
+/// Refuses a frame whose colour is not finite somewhere (radiance past `f32`'s range: an
+/// environment intensity of 3e38), naming the first such pixel: such a frame is no picture.
+pub fn check_radiance(frame: &Frame) -> Result<(), RenderError> {
+    let (w, _) = frame.color.size();
+    match (frame.color.pixels().iter().enumerate()).find(|(_, c)| !c.is_finite()) {
+        Some((i, c)) => Err(RenderError::Radiance {
+            x: i as u32 % w,
+            y: i as u32 / w,
+            value: c
+                .to_array()
+                .into_iter()
+                .find(|v| !v.is_finite())
+                .unwrap_or(f32::NAN),
+        }),
+        None => Ok(()),
     }
 }
 

@@ -778,3 +778,33 @@ fn rasterized_and_traced_primaries_shade_a_degenerate_normal_triangle_the_same()
         );
     }
 }
+
+/// A radiance past f32's range (an environment 3e38 times as bright) makes no picture: every
+/// method refuses the frame, naming its first pixel that is not a number, rather than writing it.
+#[test]
+fn a_frame_whose_radiance_overflows_is_refused() {
+    let path = common::root().join("scenes/diffuse.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("intensity = 0.55", "intensity = 3e38")
+        .replace("resolution = [480, 320]", "resolution = [24, 16]");
+    let scene = Scene::from_toml(&text, &path).unwrap();
+    let e = render(&scene, Method::Trace, &()).unwrap_err();
+    assert!(
+        matches!(e, trompe::render::RenderError::Radiance { .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("passes f32's range"), "{e}");
+    for kind in [
+        trompe::methods::MethodKind::Raster,
+        trompe::methods::MethodKind::C3rc,
+    ] {
+        let mut r = trompe::methods::Renderer::new(&scene, kind, Default::default()).unwrap();
+        let e = r.frame(0.0, None, &()).map(|_| ()).unwrap_err();
+        assert!(
+            e.to_string().contains("passes f32's range"),
+            "{}: {e}",
+            kind.name()
+        );
+    }
+}

@@ -7,7 +7,9 @@
 // has depth t_near / t, 1 on the near plane and 0 at infinity, the nearest kept.
 //
 // The same pass draws impostors (paper 1 §3.1, crates/trompe-gpu/src/build.rs): through a
-// pinhole as above; through a SPOC (§3), each corner of the tessellated mesh pushed from the pole
+// pinhole as above; through a graph camera (§4.5), frustum by frustum over one image, each
+// frustum's matrix in the pinhole's form about its apex and its depth `near · gd`, so the largest
+// gd wins across frusta; through a SPOC (§3), each corner of the tessellated mesh pushed from the pole
 // by 1 + κ(z) after its pinhole projection, depth and barycentrics as the pinhole's; or through
 // an orthographic camera, whose image coordinates and gd are affine in the point (depth = gd: 1
 // on the image plane, 0 as deep as it sees; nothing behind it).
@@ -43,8 +45,10 @@ fn draw_corner(@location(0) position: vec3<f32>, @location(1) corner_leaf: vec2<
         let v = dot(camera.row_v, p);
         out.clip = vec4<f32>(2.0 * u / camera.size.x - 1.0, 1.0 - 2.0 * v / camera.size.y, dot(camera.row_t, p), 1.0);
     } else {
-        let r = position - camera.eye.xyz;
-        var w = vec3<f32>(dot(camera.row_u.xyz, r), dot(camera.row_v.xyz, r), dot(camera.row_t.xyz, r));
+        // About the eye (a graph camera's frustum: its apex, where its rows' w terms vanish up
+        // to rounding; a pinhole's are 0).
+        let r = vec4<f32>(position - camera.eye.xyz, 1.0);
+        var w = vec3<f32>(dot(camera.row_u, r), dot(camera.row_v, r), dot(camera.row_t, r));
         if (camera.size.z == 2.0 && w.z > 0.0) {
             // The SPOC: q = w.xy / w.z pushed from the pole by 1 + κ(f·w.z).
             let pole = camera.spoc.xy;

@@ -4,21 +4,26 @@
 //! primary pass's shader) — read back and resolved into the maps by the library
 //! ([`trompe::impostor::resolve_drawn`]), exactly as it resolves its own rasterizer's image.
 //!
-//! Pinhole and orthographic cameras (a cube map is six pinholes), and the SPOC: the mesh
+//! Pinhole and orthographic cameras (a cube map is six pinholes), the SPOC — the mesh
 //! tessellated by the library's rule (§3.1: an edge splits while its image strays half a pixel
 //! from its chord), each corner projected through the SPOC in the vertex shader, each texel
-//! named by its source triangle. Not here yet: a graph camera's image (frustum by frustum, each
-//! frustum's triangles clipped to it) and depth layers by peeling; the library builds those.
+//! named by its source triangle — and the graph camera (§4.5): the library clips the triangles
+//! to each frustum ([`trompe::impostor::graph_pieces`]), and the GPU draws every frustum's
+//! pieces through its own matrix over one image, the largest `gd` kept. Not here yet: depth
+//! layers by peeling; the library peels.
 //!
 //! Invariant: a GPU-built impostor differs from the CPU-built one only where the two
 //! rasterizers' coverage rules or depth rounding pick another triangle for a texel
 //! (`tests/system/build.rs` states the bound).
 
 use crate::device::{Gpu, GpuError};
-use crate::trace::{GpuRasterCamera, draw_into_visibility, raster_pipeline_of, visibility_texture};
+use crate::trace::{
+    GpuRasterCamera, draw_into_visibility, draw_ranges_into_visibility, raster_pipeline_of,
+    visibility_texture,
+};
 use glam::{Vec2, Vec3};
 use trompe::geom::Mesh;
-use trompe::impostor::{DrawnTexel, Impostor, ImpostorCamera, SurfaceSample};
+use trompe::impostor::{DrawnImage, DrawnTexel, Impostor, ImpostorCamera, SurfaceSample};
 
 /// Why an impostor could not be built on the GPU.
 #[derive(Debug, thiserror::Error)]
@@ -48,28 +53,24 @@ pub fn build_impostor<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     )?)
 }
 
-/// The GPU as the impostor methods' drawer ([`trompe::render::ImpostorDrawer`]): it draws the
-/// pinhole, orthographic and SPOC impostors (cube maps, floors, SPOCs, pinhole-impostor's
-/// planar images) and leaves graph cameras to the library.
+/// The GPU as the impostor methods' drawer ([`trompe::render::ImpostorDrawer`]): it draws every
+/// impostor the methods build (cube maps, floors, SPOCs, pinhole-impostor's planar images, the
+/// maze's graph cameras).
 pub struct GpuDrawer<'a>(pub &'a Gpu);
 
 impl trompe::render::ImpostorDrawer for GpuDrawer<'_> {
-    fn draw(
-        &self,
-        camera: &ImpostorCamera,
-        mesh: &Mesh,
-    ) -> Option<Result<Vec<DrawnTexel>, String>> {
-        match camera {
-            ImpostorCamera::Graph(_) => None,
-            _ => Some(draw(self.0, camera, mesh).map_err(|e| e.to_string())),
-        }
+    fn draw(&self, camera: &ImpostorCamera, mesh: &Mesh) -> Option<Result<DrawnImage, String>> {
+        Some(draw(self.0, camera, mesh).map_err(|e| e.to_string()))
     }
 }
 
-/// The visibility image of `mesh` through `camera` (pinhole, orthographic or SPOC), drawn on
-/// `gpu`: per texel, row-major, the triangle of `mesh` its centre sees and the barycentrics of
-/// its corners 1 and 2 there.
-pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<DrawnTexel>, GpuError> {
+/// The visibility image of `mesh` through `camera`, drawn on `gpu`: per texel, row-major, the
+/// triangle of `mesh` its centre sees and the barycentrics of its corners 1 and 2 there, and
+/// through a graph camera the frustum that drew it.
+pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<DrawnImage, GpuError> {
+    if let ImpostorCamera::Graph(g) = camera {
+        return draw_graph(gpu, g, mesh);
+    }
     let (w, h) = camera.resolution();
     // Through a SPOC, the tessellation the library would draw, where it splits anything.
     let mut tessellation = None;
@@ -107,20 +108,110 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<Vec<Drawn
         "the impostor's visibility image",
     )?;
     let source = tessellation.as_ref().map(|t| t.source.as_slice());
-    Ok(texels
-        .iter()
-        .map(|t| {
-            let triangle = t[0].checked_sub(1)?;
-            let b = Vec2::new(f32::from_bits(t[1]), f32::from_bits(t[2]));
-            match source {
-                None => Some((triangle, b)),
-                // A sub-triangle's point, named in its source triangle.
-                Some(source) => {
-                    let &(s, c) = source.get(triangle as usize)?;
-                    let w = c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y;
-                    Some((s, Vec2::new(w.y, w.z)))
+    Ok(DrawnImage {
+        texels: texels
+            .iter()
+            .map(|t| {
+                let triangle = t[0].checked_sub(1)?;
+                let b = Vec2::new(f32::from_bits(t[1]), f32::from_bits(t[2]));
+                match source {
+                    None => Some((triangle, b)),
+                    Some(source) => in_source(source.get(triangle as usize)?, b),
+                }
+            })
+            .collect(),
+        frusta: None,
+    })
+}
+
+/// A sub-triangle's point at barycentrics `b` (of its corners 1 and 2), named in its source
+/// triangle.
+fn in_source(&(s, c): &trompe::impostor::SourceTriangle, b: Vec2) -> DrawnTexel {
+    let w = c[0] * (1.0 - b.x - b.y) + c[1] * b.x + c[2] * b.y;
+    Some((s, Vec2::new(w.y, w.z)))
+}
+
+/// A graph camera's image (§4.5): every frustum's pieces ([`trompe::impostor::graph_pieces`])
+/// drawn through its matrix, in order, over one image and one depth buffer.
+fn draw_graph(
+    gpu: &Gpu,
+    g: &trompe::camera::GraphCamera,
+    mesh: &Mesh,
+) -> Result<DrawnImage, GpuError> {
+    let (w, h) = g.resolution();
+    gpu.check_texture("the impostor's visibility image", w, h)?;
+    let pieces = trompe::impostor::graph_pieces(g, mesh);
+    // Every frustum's pieces in one vertex buffer, frustum after frustum; `first[j]` is where
+    // frustum j's start.
+    let mut corners: Vec<[Vec3; 3]> = Vec::new();
+    let mut first = Vec::with_capacity(pieces.len() + 1);
+    // Depth is near · gd: near the smallest w (1/gd) of anything drawn keeps it within 1.
+    let mut near = f64::INFINITY;
+    for (j, piece) in pieces.iter().enumerate() {
+        first.push(corners.len() as u32);
+        let m = &g.frusta()[j].matrix;
+        for t in &piece.mesh.triangles {
+            let c = t.map(|i| piece.mesh.positions[i as usize]);
+            for p in c {
+                let w = (*m * p.as_dvec3().extend(1.0)).w;
+                if w > 0.0 {
+                    near = near.min(w);
                 }
             }
+            corners.push(c);
+        }
+    }
+    first.push(corners.len() as u32);
+    let near = if near.is_finite() { near } else { 1.0 };
+    let empty = || DrawnImage {
+        texels: vec![None; w as usize * h as usize],
+        frusta: Some(vec![0; w as usize * h as usize]),
+    };
+    if corners.is_empty() {
+        return Ok(empty());
+    }
+    let (pipeline, vertices, _) = raster_pipeline_of(gpu, &corners)?;
+    let draws: Vec<_> = (0..pieces.len())
+        .filter(|&j| first[j] < first[j + 1])
+        .map(|j| {
+            let camera = GpuRasterCamera::frustum(g, j, near);
+            (camera, 3 * first[j]..3 * first[j + 1])
         })
-        .collect())
+        .collect();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let visibility = visibility_texture(gpu, w, h);
+    draw_ranges_into_visibility(
+        gpu,
+        &mut encoder,
+        (&pipeline, &vertices),
+        &draws,
+        &visibility,
+        (w, h),
+    );
+    let texels = gpu.read_texture(
+        encoder,
+        &visibility,
+        (w, h),
+        "the impostor's visibility image",
+    )?;
+    let mut image = empty();
+    for (i, t) in texels.iter().enumerate() {
+        let Some(leaf) = t[0].checked_sub(1) else {
+            continue;
+        };
+        // The frustum whose range holds the piece.
+        let j = first.partition_point(|&f| f <= leaf).saturating_sub(1);
+        let Some(source) = pieces
+            .get(j)
+            .and_then(|p| p.source.get((leaf - first[j]) as usize))
+        else {
+            continue;
+        };
+        let b = Vec2::new(f32::from_bits(t[1]), f32::from_bits(t[2]));
+        image.texels[i] = in_source(source, b);
+        if let Some(f) = image.frusta.as_mut() {
+            f[i] = j as u32;
+        }
+    }
+    Ok(image)
 }

@@ -7,7 +7,7 @@
 //! |---|---|
 //! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]); `--primary rasterized` draws the eye's hits with the GPU rasterizer |
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
-//! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), a graph camera's by the library; all kept across frames, placed and lit by the library's [`Sequence`] |
+//! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), graph cameras' frustum by frustum; all kept across frames, placed and lit by the library's [`Sequence`] |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -298,6 +298,7 @@ impl<'a> DeviceRenderer<'a> {
                     *held = answers.map(|(a, _)| a);
                 }
                 let frame = timings.time("GPU frame", || tracer.frame(&view.camera))?;
+                trompe::render::check_radiance(&frame).map_err(MethodError::from)?;
                 if !still {
                     *kept = None;
                 }

@@ -232,6 +232,29 @@ impl GpuRasterCamera {
         raster
     }
 
+    /// Through frustum `j` of a graph camera (§4.5): its matrix takes `(p, 1)` to
+    /// `(u·w, v·w, 1, w)` with `gd = 1/w`, the pinhole's form about its apex; depth is
+    /// `near · gd`, so every frustum's depths compare as the library compares their `gd`
+    /// (`near` at most the smallest `w` drawn, so no depth passes 1).
+    pub(crate) fn frustum(g: &trompe::camera::GraphCamera, j: usize, near: f64) -> Self {
+        let (w, h) = g.resolution();
+        let f = &g.frusta()[j];
+        // Rows 0, 1 and 3 (x, y and w) about the apex, where all three vanish.
+        let row = |i: usize| {
+            let r = f.matrix.row(i);
+            let at_apex = r.truncate().dot(f.apex) + r.w;
+            [r.x as f32, r.y as f32, r.z as f32, at_apex as f32]
+        };
+        GpuRasterCamera {
+            row_u: row(0),
+            row_v: row(1),
+            row_t: row(3),
+            eye: v4(f.apex.as_vec3(), near as f32),
+            size: [w as f32, h as f32, 0.0, 0.0],
+            spoc: [0.0; 4],
+        }
+    }
+
     /// Through an orthographic camera: `u = (p − corner)·a/|a|²`, `v` likewise, and
     /// `gd = 1 − (p − corner)·dir/depth`, each a row times `(p, 1)`.
     pub(crate) fn orthographic(camera: &trompe::camera::Orthographic) -> Self {
@@ -533,17 +556,38 @@ pub(crate) fn draw_into_visibility(
     (pipeline, vertices, vertex_count): &(wgpu::RenderPipeline, wgpu::Buffer, u32),
     camera: &GpuRasterCamera,
     visibility: &wgpu::Texture,
+    size: (u32, u32),
+) {
+    let draws = [(*camera, 0..*vertex_count)];
+    draw_ranges_into_visibility(gpu, encoder, (pipeline, vertices), &draws, visibility, size);
+}
+
+/// [`draw_into_visibility`] of several ranges of the vertices, each through its own camera, in
+/// order, over one image and one depth buffer: a graph camera's frusta, each drawing the
+/// triangles clipped to it (paper 1 §4.5). A fragment replaces a texel only when strictly
+/// nearer, so ties keep the earlier draw.
+pub(crate) fn draw_ranges_into_visibility(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    (pipeline, vertices): (&wgpu::RenderPipeline, &wgpu::Buffer),
+    draws: &[(GpuRasterCamera, std::ops::Range<u32>)],
+    visibility: &wgpu::Texture,
     (w, h): (u32, u32),
 ) {
-    let uniform = gpu.uniform_with("raster camera", bytemuck::bytes_of(camera));
-    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("raster"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: uniform.as_entire_binding(),
-        }],
-    });
+    let groups: Vec<wgpu::BindGroup> = draws
+        .iter()
+        .map(|(camera, _)| {
+            let uniform = gpu.uniform_with("raster camera", bytemuck::bytes_of(camera));
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("raster"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                }],
+            })
+        })
+        .collect();
     let depth = texture(
         gpu,
         "raster depth",
@@ -578,9 +622,11 @@ pub(crate) fn draw_into_visibility(
         ..Default::default()
     });
     pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, &group, &[]);
     pass.set_vertex_buffer(0, vertices.slice(..));
-    pass.draw(0..*vertex_count, 0..1);
+    for ((_, range), group) in draws.iter().zip(&groups) {
+        pass.set_bind_group(0, group, &[]);
+        pass.draw(range.clone(), 0..1);
+    }
 }
 
 /// A `w × h` visibility texture, drawn into and read by the shading pass (or read back).

@@ -5,8 +5,9 @@
 //! (`resolve.rs`), so an impostor built either way is walked, saved and lit alike.
 //!
 //! Invariants: the depth of a texel is that of the point its barycentrics name (for a projective
-//! camera the depth a rasterizer interpolates at the texel's centre); an image naming a triangle
-//! the mesh does not have, or of the wrong size, is refused, never read past.
+//! camera the depth a rasterizer interpolates at the texel's centre; through a graph camera,
+//! through the frustum that drew it); an image naming a triangle the mesh does not have or a
+//! frustum the camera does not have, or of the wrong size, is refused, never read past.
 
 use super::SurfaceSample;
 use super::resolve::{MapsBefore, Visible, full_barycentrics, resolve, zeroed_impostor};
@@ -20,6 +21,16 @@ use thiserror::Error;
 /// centre sees and the barycentric weights of that triangle's corners 1 and 2 there (`None`:
 /// nothing).
 pub type DrawnTexel = Option<(u32, Vec2)>;
+
+/// A visibility image drawn elsewhere, row-major: per texel what it sees and, through a graph
+/// camera, the frustum that drew it (`None` for the cameras drawn in one pass).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DrawnImage {
+    /// What each texel sees.
+    pub texels: Vec<DrawnTexel>,
+    /// Through a graph camera, per texel the frustum whose clipped triangles drew it.
+    pub frusta: Option<Vec<u32>>,
+}
 
 /// Why a visibility image drawn elsewhere could not be resolved.
 #[derive(Debug, Error)]
@@ -44,33 +55,69 @@ pub enum DrawnError {
         /// The mesh's triangles.
         count: usize,
     },
-    /// A graph camera: its image is drawn frustum by frustum, each frustum's triangles clipped
-    /// to it.
+    /// A graph camera's image without the frustum of each texel, or another camera's with it.
     #[error(
-        "a {0} camera's visibility image is not drawn in one pass; build it with `ImpostorBuilder::build`"
+        "a {0} camera's visibility image needs the frustum of each texel exactly when it is a graph camera's (drawn frustum by frustum, its triangles clipped to each: `graph_pieces`)"
     )]
     Camera(&'static str),
+    /// A texel names a frustum the graph camera does not have.
+    #[error("texel {texel} of the visibility image names frustum {frustum} of a camera of {count}")]
+    Frustum {
+        /// The texel, row-major.
+        texel: usize,
+        /// The frustum it names.
+        frustum: u32,
+        /// The camera's frusta.
+        count: usize,
+    },
     /// The maps could not be allocated.
     #[error(transparent)]
     Maps(#[from] FrameError),
 }
 
-/// An impostor of `mesh` (object id `object`) through `camera` — a pinhole, an orthographic
-/// camera or a SPOC — from `drawn`, the visibility image a rasterizer drew of it through that
-/// camera (row-major; through a SPOC, drawn from the mesh's [`super::tessellate`]ion, each
-/// texel named by its source triangle), each texel coloured by `color` as [`super::build`]
-/// colours it. Through a SPOC each texel's depth is then moved onto its triangle's plane, as a
-/// build's are.
+/// An impostor of `mesh` (object id `object`) through `camera` from `drawn`, the visibility
+/// image a rasterizer drew of it through that camera, each texel coloured by `color` as
+/// [`super::build`] colours it. Through a SPOC the image is drawn from the mesh's
+/// [`super::tessellate`]ion, each texel named by its source triangle, and each texel's depth is
+/// then moved onto its triangle's plane, as a build's are. Through a graph camera it is drawn
+/// frustum by frustum from [`super::graph_pieces`] (the largest `gd` kept, ties to the earlier
+/// frustum), and names each texel's frustum.
 pub fn resolve_drawn<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     camera: ImpostorCamera,
     (mesh, object): (&Mesh, u32),
     color: &F,
-    drawn: &[DrawnTexel],
+    drawn: &DrawnImage,
 ) -> Result<Impostor, DrawnError> {
-    if matches!(camera, ImpostorCamera::Graph(_)) {
-        return Err(DrawnError::Camera(camera.kind()));
-    }
     let (width, height) = camera.resolution();
+    let frusta = match (&camera, &drawn.frusta) {
+        (ImpostorCamera::Graph(g), Some(frusta)) if frusta.len() == drawn.texels.len() => {
+            let count = g.frusta().len();
+            if let Some((texel, &frustum)) = frusta
+                .iter()
+                .enumerate()
+                .find(|(_, f)| **f as usize >= count)
+            {
+                return Err(DrawnError::Frustum {
+                    texel,
+                    frustum,
+                    count,
+                });
+            }
+            Some(frusta.as_slice())
+        }
+        (ImpostorCamera::Graph(_), Some(frusta)) => {
+            return Err(DrawnError::Size {
+                got: frusta.len(),
+                width,
+                height,
+            });
+        }
+        (ImpostorCamera::Graph(_), None) | (_, Some(_)) => {
+            return Err(DrawnError::Camera(camera.kind()));
+        }
+        (_, None) => None,
+    };
+    let drawn = drawn.texels.as_slice();
     if drawn.len() as u64 != u64::from(width) * u64::from(height) {
         return Err(DrawnError::Size {
             got: drawn.len(),
@@ -93,17 +140,20 @@ pub fn resolve_drawn<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
     let mut impostor = zeroed_impostor(camera)?;
     // Each texel's depth: that of the point it sees (0, empty, where the camera refuses the
     // point: a hair behind its near plane).
+    // Through a graph camera, through the frustum that drew the texel, as a build measures it.
     let depth: Vec<f32> = drawn
         .iter()
-        .map(|d| {
+        .enumerate()
+        .map(|(i, d)| {
             d.map_or(0.0, |(t, b)| {
                 let corners = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
                 let w = full_barycentrics(b);
-                let p = corners[0] * w.x + corners[1] * w.y + corners[2] * w.z;
-                impostor
-                    .camera
-                    .project(p.as_dvec3())
-                    .map_or(0.0, |q| q.gd as f32)
+                let p = (corners[0] * w.x + corners[1] * w.y + corners[2] * w.z).as_dvec3();
+                let seen = match (&impostor.camera, frusta) {
+                    (ImpostorCamera::Graph(g), Some(f)) => g.project_in(f[i] as usize, p),
+                    (camera, _) => camera.project(p),
+                };
+                seen.map_or(0.0, |q| q.gd as f32)
             })
         })
         .collect();
@@ -113,7 +163,7 @@ pub fn resolve_drawn<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         Some(Visible {
             triangle,
             bary: full_barycentrics(b),
-            frustum: None,
+            frustum: frusta.map(|f| f[i]),
         })
     };
     resolve(

@@ -10,7 +10,7 @@ mod resolve;
 mod tessellate;
 
 use clip::*;
-pub use drawn::{DrawnError, DrawnTexel, resolve_drawn};
+pub use drawn::{DrawnError, DrawnImage, DrawnTexel, resolve_drawn};
 pub(super) use resolve::impostor_bounds;
 use resolve::*;
 pub(super) use resolve::{
@@ -178,11 +178,7 @@ impl ImpostorBuilder {
             unreachable!("called for graph cameras only")
         };
         let (w, h) = g.resolution();
-        let groups = group_bounds(mesh);
-        let pieces: Vec<Tessellation> = (0..g.frusta().len())
-            .into_par_iter()
-            .map(|j| clip_to_frustum(g, j, mesh, &groups))
-            .collect();
+        let pieces = graph_pieces(g, mesh);
         let target = match &mut self.graph_target {
             Some(t) if t.gd.size() == (w, h) => {
                 t.gd.pixels_mut().par_iter_mut().for_each(|v| *v = 0.0);
@@ -215,6 +211,18 @@ impl ImpostorBuilder {
         });
         Ok(())
     }
+}
+
+/// What a graph camera's image is drawn from (§4.5): per frustum, in order, the pieces of
+/// `mesh`'s triangles clipped to it, each named by its source triangle. Drawn through each
+/// frustum's own matrix over one image, the largest `gd` kept and ties to the earlier frustum,
+/// they make the image [`ImpostorBuilder::build`] draws, and [`resolve_drawn`] resolves.
+pub fn graph_pieces(g: &crate::camera::GraphCamera, mesh: &Mesh) -> Vec<Tessellation> {
+    let groups = group_bounds(mesh);
+    (0..g.frusta().len())
+        .into_par_iter()
+        .map(|j| clip_to_frustum(g, j, mesh, &groups))
+        .collect()
 }
 
 /// Draws `setup` — a mesh set up through the impostor's camera, or its tessellation, whose

@@ -57,8 +57,8 @@ fn main() {
             build::gpu_built_impostors_match_the_cpu_built_texel_for_texel,
         ),
         on_gpu(
-            "build::a_camera_the_gpu_does_not_draw_is_refused",
-            build::a_camera_the_gpu_does_not_draw_is_refused,
+            "build::gpu_built_graph_impostors_match_the_cpu_built",
+            build::gpu_built_graph_impostors_match_the_cpu_built,
         ),
         on_gpu(
             "walk::the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays",
