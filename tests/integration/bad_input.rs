@@ -449,3 +449,130 @@ fn messages_name_what_is_wrong() {
         assert!(e.contains("longer than 1 MiB"), "{e}");
     }
 }
+
+/// Every number of a scene — camera, light, render settings, placements, animation,
+/// deformation, materials — set in turn to 3e38, −3e38, 1e20, NaN and ∞, and the scene rendered
+/// by every method: each variant is refused by the loader or the method with an error, or
+/// renders; none panics.
+#[test]
+fn every_number_at_the_edge_of_f32_is_an_error_or_a_frame_never_a_panic() {
+    const SCENE: &str = r#"
+[camera]
+position = [0.0, 0.8, 1.9]
+look_at = [0.0, 0.25, 0.0]
+fov_y = 40.0
+resolution = [12, 8]
+
+[light]
+direction = [0.4, 1.0, 0.6]
+intensity = 1.5
+
+[render]
+max_depth = 4
+time = 0.5
+background = [0.2, 0.3, 0.4]
+
+[[object]]
+shape = "plane"
+scale = 2.0
+material = { type = "diffuse", color = [0.4, 0.4, 0.4] }
+
+[[object]]
+shape = "cube"
+fit = 0.4
+translate = [-0.3, 0.2, 0.0]
+rotate = [0.0, 30.0, 0.0]
+material = { type = "diffuse", color = [0.8, 0.5, 0.3] }
+
+[object.deform]
+kind = "twist"
+amount = 0.5
+hz = 1.0
+
+[[object]]
+shape = "sphere"
+fit = 0.3
+translate = [0.3, 0.2, 0.0]
+material = { type = "mirror", tint = [0.9, 0.9, 0.9] }
+
+[object.animate]
+velocity = [0.1, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+degrees_per_second = 20.0
+
+[[object]]
+shape = "sphere"
+fit = 0.2
+translate = [0.0, 0.5, 0.3]
+material = { type = "glass", ior = 1.5 }
+"#;
+    let path = common::root().join("scenes/edge-sweep.toml");
+    // Number tokens outside comments and strings.
+    let mut numbers = Vec::new();
+    let bytes = SCENE.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() {
+        let c = bytes[i];
+        let starts = (c.is_ascii_digit() || c == b'-')
+            && !(i > 0 && (bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_'));
+        if c == b'"' {
+            i += 1 + SCENE[i + 1..].find('"').unwrap() + 1;
+        } else if starts {
+            let end = i
+                + 1
+                + SCENE[i + 1..]
+                    .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+                    .unwrap_or(SCENE.len() - i - 1);
+            numbers.push((i, end));
+            i = end;
+        } else {
+            i += 1;
+        }
+    }
+    assert!(numbers.len() > 50, "{} numbers", numbers.len());
+    let settings = trompe::methods::MethodSettings {
+        impostor_resolution: 16,
+        octahedral_frames: 2,
+        octahedral_frame_size: 8,
+        capture: trompe::views::capture::CaptureSettings {
+            count: 2,
+            size: (16, 12),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let (mut variants, mut refused, mut frames, mut errors) = (0, 0, 0, 0);
+    for &(start, end) in &numbers {
+        for value in ["3e38", "-3e38", "1e20", "nan", "inf"] {
+            let text = format!("{}{value}{}", &SCENE[..start], &SCENE[end..]);
+            let what = format!("{} = {value}", &SCENE[start.saturating_sub(24)..start]);
+            variants += 1;
+            let loaded = std::panic::catch_unwind(|| trompe::Scene::from_toml(&text, &path));
+            let scene = match loaded {
+                Err(_) => panic!("loading panicked: {what}"),
+                Ok(Err(_)) => {
+                    refused += 1;
+                    continue;
+                }
+                Ok(Ok(scene)) => scene,
+            };
+            for kind in trompe::methods::MethodKind::for_scenes() {
+                let rendered = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    let mut r = trompe::methods::Renderer::new(&scene, kind, settings.clone())?;
+                    r.frame(scene.render.time, None, &()).map(|_| ())
+                }));
+                match rendered {
+                    Err(_) => panic!("{} panicked: {what}", kind.name()),
+                    Ok(Err(_)) => errors += 1,
+                    Ok(Ok(())) => frames += 1,
+                }
+            }
+        }
+    }
+    println!(
+        "{variants} variants of {} numbers: {refused} refused by the loader; {frames} frames and \
+         {errors} errors from the methods; no panic",
+        numbers.len()
+    );
+    assert!(refused > 0 && frames > 0 && errors > 0);
+}
