@@ -346,6 +346,20 @@ fn a_killed_or_raced_capture_or_encoding_leaves_a_whole_one() {
         None,
     );
     eprintln!("master encode: {kills} kills, {left:?}");
+    // Two encodings at once: one waits for the other; the folder holds one of them, whole.
+    for trial in 0..races {
+        let mut a = encode(&small, &enc);
+        a.env("TROMPE_TEST_PAUSE_IN_PUBLISH_MS", "200");
+        let a = a.spawn().unwrap();
+        let b = encode(&cap, &enc).spawn().unwrap();
+        for c in [a, b] {
+            let o = c.wait_with_output().unwrap();
+            assert!(o.status.success(), "trial {trial}: {}", stderr(&o));
+        }
+        let n = masters(&enc).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
+        assert!(n == 2 || n == 3, "trial {trial}: {n}");
+    }
+    eprintln!("master encode: {races} races, each left one whole encoding");
     eprintln!("capture: {races} races, each left one whole capture");
     run(capture(2, &cap));
     assert!(litter(&cap).is_empty(), "{:?}", litter(&cap));
@@ -377,6 +391,17 @@ fn a_killed_or_raced_bake_leaves_one_whole_bake() {
         Some("is not the EXR this sidecar was saved with"),
     );
     eprintln!("SPOC bake: {kills} kills, {left:?}");
+    for trial in 0..races {
+        let slow = bake(&["--resolution", "64"], &spoc).spawn().unwrap();
+        let fast = bake(&["--resolution", "96"], &spoc).spawn().unwrap();
+        for c in [slow, fast] {
+            let o = c.wait_with_output().unwrap();
+            assert!(o.status.success(), "trial {trial}: {}", stderr(&o));
+        }
+        let n = loads(&spoc).unwrap_or_else(|e| panic!("trial {trial}: {e}"));
+        assert!(n == 64 || n == 96, "trial {trial}: {n}");
+    }
+    eprintln!("SPOC bake: {races} races, each left one whole bake");
     let atlas = d.join("o.json");
     let maps = |p: &Path| -> Result<usize, String> {
         let sidecar = trompe::octahedral::file::read_sidecar(p).map_err(|e| e.to_string())?;
