@@ -14,41 +14,12 @@ fn peak_resident() -> Option<u64> {
     Some(kib * 1024)
 }
 
-/// A glTF whose 40 levels of two nodes each all point at both nodes of the next level: a few
-/// kilobytes that instance one triangle 2⁴⁰ times.
-fn instancing_dag(dir: &Path) -> std::path::PathBuf {
-    const LEVELS: usize = 40;
-    let mut nodes = Vec::new();
-    for level in 0..LEVELS {
-        for _ in 0..2 {
-            if level + 1 == LEVELS {
-                nodes.push(r#"{"mesh":0}"#.to_string());
-            } else {
-                let (a, b) = (2 * (level + 1), 2 * (level + 1) + 1);
-                nodes.push(format!(r#"{{"children":[{a},{b}]}}"#));
-            }
-        }
-    }
-    // One triangle: 36 bytes of positions, base64 of nine little-endian floats.
-    let positions = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA";
-    let doc = format!(
-        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],"nodes":[{}],
-"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
-"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{positions}"}}],
-"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}}],
-"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}]}}"#,
-        nodes.join(",")
-    );
-    let path = dir.join("dag.gltf");
-    std::fs::write(&path, doc).unwrap();
-    path
-}
-
 #[test]
 fn input_sized_allocations_are_refused_past_the_budget_before_they_are_made() {
     let d = common::scratch("memory_budget");
     // Inputs are made before the budget is lowered.
-    let dag = instancing_dag(&d);
+    // 40 levels: a few kilobytes that instance one triangle 2⁴⁰ times.
+    let dag = common::instanced_triangle(&d, "dag.gltf", 40);
     // A 4096² grey PNG (a few kilobytes compressed; 448 MiB decoded), as an OBJ's texture.
     let big = d.join("big.png");
     image::GrayImage::new(4096, 4096).save(&big).unwrap();

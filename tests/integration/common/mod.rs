@@ -3,7 +3,7 @@
 
 pub mod layer_scene;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 /// The repository's root: the workspace folder, which holds `Cargo.lock`, `assets/` and
@@ -193,4 +193,33 @@ pub fn has_command(tool: &str) -> bool {
         .args(["-c", &format!("command -v {tool}")])
         .output()
         .is_ok_and(|o| o.status.success())
+}
+
+/// A glTF whose `levels` levels of two nodes each point at both nodes of the next level: one
+/// triangle instanced 2^`levels` times, in a few kilobytes (`name` in `dir`).
+pub fn instanced_triangle(dir: &Path, name: &str, levels: usize) -> PathBuf {
+    let mut nodes = Vec::new();
+    for level in 0..levels {
+        for _ in 0..2 {
+            if level + 1 == levels {
+                nodes.push(r#"{"mesh":0}"#.to_string());
+            } else {
+                let (a, b) = (2 * (level + 1), 2 * (level + 1) + 1);
+                nodes.push(format!(r#"{{"children":[{a},{b}]}}"#));
+            }
+        }
+    }
+    // One triangle: 36 bytes of positions, base64 of nine little-endian floats.
+    let positions = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA";
+    let doc = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],"nodes":[{}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{positions}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}]}}"#,
+        nodes.join(",")
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, doc).unwrap();
+    path
 }
