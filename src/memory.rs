@@ -8,9 +8,10 @@
 //!
 //! One account, process-wide, holds what is alive: every image ([`crate::frame::Image`]), every
 //! BVH ([`crate::trace::Bvh`]), the rasterizer's kept set-up and a curved camera's tessellation
-//! draw their bytes from it when made and return them when dropped ([`Held`]). A check refuses a new
-//! request when it and what is held together pass the limit, so six atlases, sixteen textures or
-//! two compared images are refused by their sum, each part fitting alone.
+//! draw their bytes from it when made and return them when dropped ([`Held`]). A check refuses
+//! a new request when it and what is held together pass the limit, so six atlases, sixteen
+//! textures or two compared images are refused by their sum, each part fitting alone. A mesh is
+//! checked when it is loaded but not held.
 //!
 //! Invariant: a check is made before the allocation it guards, so a refusal costs nothing.
 
@@ -63,7 +64,8 @@ pub fn set_limit(bytes: u64) {
 /// Bytes the account holds now.
 static HELD: AtomicU64 = AtomicU64::new(0);
 
-/// Bytes of input-sized memory alive in the process now (every image and BVH).
+/// Bytes of input-sized memory alive in the process now (images, BVHs, the rasterizer's kept
+/// set-up, tessellations).
 pub fn held() -> u64 {
     HELD.load(Ordering::Relaxed)
 }
