@@ -141,8 +141,8 @@ fn draw_graph(
     let (w, h) = g.resolution();
     gpu.check_texture("the impostor's visibility image", w, h)?;
     let pieces = trompe::impostor::graph_pieces(g, mesh);
-    // Every frustum's pieces in one vertex buffer, frustum after frustum; `first[j]` is where
-    // frustum j's start.
+    // Every frustum's pieces in one vertex buffer, frustum after frustum; `first[j]` is the
+    // index of frustum j's first piece.
     let mut corners: Vec<[Vec3; 3]> = Vec::new();
     let mut first = Vec::with_capacity(pieces.len() + 1);
     // Depth is near · gd: near the smallest w (1/gd) of anything drawn keeps it within 1.
