@@ -18,8 +18,7 @@
 
 use crate::device::{Gpu, GpuError};
 use crate::trace::{
-    GpuRasterCamera, draw_into_visibility, draw_ranges_into_visibility, raster_pipeline_of,
-    visibility_texture,
+    GpuRasterCamera, draw_ranges_into_visibility, raster_pipeline_of, visibility_texture,
 };
 use glam::{Vec2, Vec3};
 use trompe::geom::Mesh;
@@ -97,16 +96,8 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<DrawnImag
         .iter()
         .map(|t| t.map(|i| drawn.positions[i as usize]))
         .collect();
-    let raster = raster_pipeline_of(gpu, &corners)?;
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    let visibility = visibility_texture(gpu, w, h);
-    draw_into_visibility(gpu, &mut encoder, &raster, &uniform, &visibility, (w, h));
-    let texels = gpu.read_texture(
-        encoder,
-        &visibility,
-        (w, h),
-        "the impostor's visibility image",
-    )?;
+    let draws = [(uniform, 0..3 * corners.len() as u32)];
+    let texels = draw_and_read(gpu, &corners, &draws, (w, h))?;
     let source = tessellation.as_ref().map(|t| t.source.as_slice());
     Ok(DrawnImage {
         texels: texels
@@ -170,7 +161,6 @@ fn draw_graph(
     if corners.is_empty() {
         return Ok(empty());
     }
-    let (pipeline, vertices, _) = raster_pipeline_of(gpu, &corners)?;
     let draws: Vec<_> = (0..pieces.len())
         .filter(|&j| first[j] < first[j + 1])
         .map(|j| {
@@ -178,22 +168,7 @@ fn draw_graph(
             (camera, 3 * first[j]..3 * first[j + 1])
         })
         .collect();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    let visibility = visibility_texture(gpu, w, h);
-    draw_ranges_into_visibility(
-        gpu,
-        &mut encoder,
-        (&pipeline, &vertices),
-        &draws,
-        &visibility,
-        (w, h),
-    );
-    let texels = gpu.read_texture(
-        encoder,
-        &visibility,
-        (w, h),
-        "the impostor's visibility image",
-    )?;
+    let texels = draw_and_read(gpu, &corners, &draws, (w, h))?;
     let mut image = empty();
     for (i, t) in texels.iter().enumerate() {
         let Some(leaf) = t[0].checked_sub(1) else {
@@ -214,4 +189,31 @@ fn draw_graph(
         }
     }
     Ok(image)
+}
+
+/// The `w × h` visibility image of `triangles`, each range of their corners drawn through its
+/// camera in order ([`draw_ranges_into_visibility`]), read back row-major.
+fn draw_and_read(
+    gpu: &Gpu,
+    triangles: &[[Vec3; 3]],
+    draws: &[(GpuRasterCamera, std::ops::Range<u32>)],
+    (w, h): (u32, u32),
+) -> Result<Vec<[u32; 4]>, GpuError> {
+    let (pipeline, vertices, _) = raster_pipeline_of(gpu, triangles)?;
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let visibility = visibility_texture(gpu, w, h);
+    draw_ranges_into_visibility(
+        gpu,
+        &mut encoder,
+        (&pipeline, &vertices),
+        draws,
+        &visibility,
+        (w, h),
+    );
+    gpu.read_texture(
+        encoder,
+        &visibility,
+        (w, h),
+        "the impostor's visibility image",
+    )
 }
