@@ -9,13 +9,17 @@
 //! (by the mesh's winding) faces the camera: the rays an impostor answers come from around its
 //! camera, and meet a back face only from inside the object. Every layer is an [`Impostor`] of its own — the same
 //! camera, box and maps — and a walk answers a ray with the nearest crossing of any layer's
-//! surface.
+//! surface. A device may draw the layers ([`Impostor::peel_drawn`]: a GPU's rasterizer under the
+//! same ceiling); the library still chooses the triangles, stops and resolves.
 //!
 //! Invariants: every layer has the first layer's camera and box; a texel covered in layer
 //! `l + 1` is covered in layer `l`, with a larger `gd` there (as drawn, before a SPOC's resolve
 //! moves `gd` onto the stored plane); no layer is empty.
 
-use super::builder::{Barycentrics, MapsBefore, Visible, full_barycentrics, resolve, to_source};
+use super::builder::{
+    Barycentrics, DrawnError, DrawnImage, MapsBefore, Visible, full_barycentrics, resolve,
+    resolve_drawn, to_source,
+};
 use super::{Impostor, ImpostorCamera, SurfaceSample, tessellate};
 use crate::camera::Projection;
 use crate::frame::{FrameError, Image};
@@ -74,6 +78,22 @@ impl std::str::FromStr for Layers {
 }
 
 impl Layers {
+    /// The most layers peeled, the first included.
+    fn most(self) -> usize {
+        match self {
+            Layers::Count(n) => n as usize,
+            Layers::Auto => MAX_LAYERS as usize,
+        }
+    }
+
+    /// Whether a new layer covering `covered` texels is kept, the first layer covering `first`.
+    fn keeps(self, covered: usize, first: usize) -> bool {
+        match self {
+            Layers::Auto => covered as f64 > AUTO_SHARE * first as f64,
+            Layers::Count(_) => covered > 0,
+        }
+    }
+
     /// The setting, if its count is in range.
     pub fn checked(self) -> Result<Layers, LayerError> {
         match self {
@@ -109,6 +129,12 @@ pub enum LayerError {
     /// A layer's maps could not be allocated.
     #[error("peeling a layer: {0}")]
     Maps(#[from] FrameError),
+    /// A layer drawn elsewhere ([`Impostor::peel_drawn`]) could not be resolved.
+    #[error("a layer drawn elsewhere: {0}")]
+    Drawn(#[from] DrawnError),
+    /// The device drawing a layer failed, with its reason.
+    #[error("drawing a layer: {0}")]
+    Device(String),
 }
 
 impl Impostor {
@@ -180,10 +206,7 @@ impl Impostor {
             Some(t) => (&t.mesh, Some(t.source.as_slice())),
             None => (&facing, None),
         };
-        let most = match layers {
-            Layers::Count(n) => n as usize,
-            Layers::Auto => MAX_LAYERS as usize,
-        };
+        let most = layers.most();
         let first_covered = self.gd.pixels().iter().filter(|&&g| g > 0.0).count();
         // The first layer's depth as drawn (a SPOC's resolve has since moved its `gd`).
         let first = tessellated(mesh)?;
@@ -205,11 +228,7 @@ impl Impostor {
             let (target, _) =
                 rasterize_behind(projection, &[drawn], &Barycentrics, Vec2::ZERO, &ceiling)?;
             let covered = target.gd.pixels().iter().filter(|&&g| g > 0.0).count();
-            let enough = match layers {
-                Layers::Auto => covered as f64 > AUTO_SHARE * first_covered as f64,
-                Layers::Count(_) => covered > 0,
-            };
-            if !enough {
+            if !layers.keeps(covered, first_covered) {
                 break;
             }
             let mut layer = super::builder::zeroed_impostor(self.camera.clone())?;
@@ -226,6 +245,60 @@ impl Impostor {
                     }
                 })
             });
+            self.deeper.push(layer);
+        }
+        Ok(())
+    }
+}
+
+impl Impostor {
+    /// [`Impostor::peel`] with each layer's visibility image drawn elsewhere — a GPU's
+    /// rasterizer (paper 1 §3.1 builds impostors by rasterization; `trompe-gpu`'s build).
+    ///
+    /// `draw` is called once a layer with the triangles of `mesh` facing the camera (by its
+    /// winding; their indices are the drawn image's), and returns the nearest of them strictly
+    /// behind the layer it drew before, under a ceiling [`PEEL_GAP`] nearer the camera than
+    /// that layer's depth as drawn; before its first call, that layer is the first: `mesh`
+    /// drawn whole through the impostor's camera. Which triangles are drawn, when peeling stops
+    /// and how a layer is resolved are the library's, as in [`Impostor::peel`].
+    ///
+    /// # Errors
+    /// What [`Impostor::peel`] refuses, the device's reason where `draw` failed, and an image
+    /// of the wrong size or naming a triangle the facing mesh lacks.
+    pub fn peel_drawn<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+        &mut self,
+        (mesh, object): (&Mesh, u32),
+        color: &F,
+        layers: Layers,
+        draw: &mut dyn FnMut(&Mesh) -> Result<DrawnImage, String>,
+    ) -> Result<(), LayerError> {
+        let layers = layers.checked()?;
+        self.deeper.clear();
+        self.maps_changed();
+        if layers == Layers::ONE {
+            return Ok(());
+        }
+        if let ImpostorCamera::Graph(_) = self.camera {
+            return Err(LayerError::GraphCamera);
+        }
+        let (facing, kept) = facing_camera(mesh, &self.camera);
+        let first_covered = self.gd.pixels().iter().filter(|&&g| g > 0.0).count();
+        while self.layer_count() < layers.most() {
+            let mut drawn = draw(&facing).map_err(LayerError::Device)?;
+            let covered = drawn.texels.iter().filter(|t| t.is_some()).count();
+            if !layers.keeps(covered, first_covered) {
+                break;
+            }
+            for (texel, d) in drawn.texels.iter_mut().enumerate() {
+                if let Some((triangle, _)) = d {
+                    *triangle = *kept.get(*triangle as usize).ok_or(DrawnError::Triangle {
+                        texel,
+                        triangle: *triangle,
+                        count: kept.len(),
+                    })?;
+                }
+            }
+            let layer = resolve_drawn(self.camera.clone(), (mesh, object), color, &drawn)?;
             self.deeper.push(layer);
         }
         Ok(())

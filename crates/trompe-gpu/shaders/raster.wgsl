@@ -1,7 +1,8 @@
 // The primary pass by rasterization (paper 1 §6 rasterizes it): every triangle drawn by the GPU
 // rasterizer through the pinhole's McMillan matrix into a visibility buffer — per pixel the
-// BVH-leaf-ordered triangle + 1 (0 where nothing is drawn) and the perspective-correct
-// barycentrics of its corners 1 and 2 — which trace.wgsl shades as the raster method.
+// BVH-leaf-ordered triangle + 1 (0 where nothing is drawn), the perspective-correct
+// barycentrics of its corners 1 and 2 and the depth drawn — which trace.wgsl shades as the
+// raster method.
 //
 // Depth is reversed: a point t = (M⁻¹(X − C)).z along the image-plane normal (in focal units)
 // has depth t_near / t, 1 on the near plane and 0 at infinity, the nearest kept.
@@ -72,7 +73,27 @@ fn draw_corner(@location(0) position: vec3<f32>, @location(1) corner_leaf: vec2<
     return out;
 }
 
+// What a texel records: the leaf + 1, the barycentrics of corners 1 and 2, and the depth drawn.
+fn record(in: Corner) -> vec4<u32> {
+    return vec4<u32>(in.leaf + 1u, bitcast<u32>(in.bary.y), bitcast<u32>(in.bary.z), bitcast<u32>(in.clip.z));
+}
+
 @fragment
 fn visible(in: Corner) -> @location(0) vec4<u32> {
-    return vec4<u32>(in.leaf + 1u, bitcast<u32>(in.bary.y), bitcast<u32>(in.bary.z), 0u);
+    return record(in);
+}
+
+// Depth peeling (layered impostors, src/impostor/peel.rs): per texel the bits of a ceiling
+// depth — the layer drawn before's, moved PEEL_GAP nearer the camera; 0 where it holds nothing.
+@group(1) @binding(0) var ceiling: texture_2d<u32>;
+
+// A fragment is drawn only strictly behind the ceiling (reversed depth: a smaller depth), so
+// each texel keeps the nearest surface behind the layer before.
+@fragment
+fn visible_behind(in: Corner) -> @location(0) vec4<u32> {
+    let under = bitcast<f32>(textureLoad(ceiling, vec2<i32>(in.clip.xy), 0).x);
+    if (in.clip.z >= under) {
+        discard;
+    }
+    return record(in);
 }

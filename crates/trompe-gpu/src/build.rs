@@ -9,8 +9,10 @@
 //! from its chord), each corner projected through the SPOC in the vertex shader, each texel
 //! named by its source triangle — and the graph camera (§4.5): the library clips the triangles
 //! to each frustum ([`trompe::impostor::graph_pieces`]), and the GPU draws every frustum's
-//! pieces through its own matrix over one image, the largest `gd` kept. Not here yet: depth
-//! layers by peeling; the library peels.
+//! pieces through its own matrix over one image, the largest `gd` kept. Depth layers are
+//! peeled by the GPU too ([`peel`]): each layer drawn again under the one before's depth as a
+//! ceiling, the library choosing the triangles, the stop and the resolve
+//! ([`Impostor::peel_drawn`]).
 //!
 //! Invariant: a GPU-built impostor differs from the CPU-built one only where the two
 //! rasterizers' coverage rules or depth rounding pick another triangle for a texel
@@ -18,11 +20,14 @@
 
 use crate::device::{Gpu, GpuError};
 use crate::trace::{
-    GpuRasterCamera, draw_ranges_into_visibility, raster_pipeline_of, visibility_texture,
+    GpuRasterCamera, draw_ranges_into_visibility, raster_pipeline_of, texture, visibility_pipeline,
+    visibility_texture,
 };
 use glam::{Vec2, Vec3};
 use trompe::geom::Mesh;
-use trompe::impostor::{DrawnImage, DrawnTexel, Impostor, ImpostorCamera, SurfaceSample};
+use trompe::impostor::{
+    DrawnImage, DrawnTexel, Impostor, ImpostorCamera, LayerError, Layers, PEEL_GAP, SurfaceSample,
+};
 
 /// Why an impostor could not be built on the GPU.
 #[derive(Debug, thiserror::Error)]
@@ -33,6 +38,9 @@ pub enum BuildError {
     /// The library's, resolving the image.
     #[error(transparent)]
     Drawn(#[from] trompe::impostor::DrawnError),
+    /// The library's, peeling layers.
+    #[error(transparent)]
+    Layers(#[from] LayerError),
 }
 
 /// An impostor of `mesh` (object id `object`) through `camera`, drawn on `gpu` and resolved by
@@ -50,6 +58,42 @@ pub fn build_impostor<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
         color,
         &drawn,
     )?)
+}
+
+/// Peels `impostor`'s depth layers on `gpu` ([`Impostor::peel`] drawn by the GPU): `mesh`
+/// (object id `object`, coloured by `color`) is the mesh it was built from. The first layer's
+/// depth is drawn once more; then each layer is the facing triangles drawn under the one
+/// before's depth, [`PEEL_GAP`] nearer the camera, as the library's ceiling.
+///
+/// # Errors
+/// What [`Impostor::peel`] refuses (a graph camera, a count out of range), and the device's.
+pub fn peel<F: Fn(&SurfaceSample) -> Vec3 + Sync>(
+    gpu: &Gpu,
+    impostor: &mut Impostor,
+    (mesh, object): (&Mesh, u32),
+    color: &F,
+    layers: Layers,
+) -> Result<(), BuildError> {
+    let camera = impostor.camera().clone();
+    // The depth drawn at each texel by the layer before, as the device writes it.
+    let mut above: Option<Vec<f32>> = None;
+    let mut draw = |facing: &Mesh| -> Result<DrawnImage, String> {
+        let depth = match above.take() {
+            Some(depth) => depth,
+            None => {
+                draw_under(gpu, &camera, mesh, None)
+                    .map_err(|e| e.to_string())?
+                    .1
+            }
+        };
+        let ceiling: Vec<f32> = depth.iter().map(|d| d * (1.0 - PEEL_GAP)).collect();
+        let (image, depth) =
+            draw_under(gpu, &camera, facing, Some(&ceiling)).map_err(|e| e.to_string())?;
+        above = Some(depth);
+        Ok(image)
+    };
+    impostor.peel_drawn((mesh, object), color, layers, &mut draw)?;
+    Ok(())
 }
 
 /// The GPU as the impostor methods' drawer ([`trompe::render::ImpostorDrawer`]): it draws every
@@ -70,6 +114,18 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<DrawnImag
     if let ImpostorCamera::Graph(g) = camera {
         return draw_graph(gpu, g, mesh);
     }
+    Ok(draw_under(gpu, camera, mesh, None)?.0)
+}
+
+/// [`draw`] through a pinhole, orthographic or SPOC camera, under a `ceiling` if given (per
+/// texel, row-major, a depth as the device writes it: only fragments strictly behind it are
+/// drawn), and the depth drawn at each texel (0 where nothing is).
+fn draw_under(
+    gpu: &Gpu,
+    camera: &ImpostorCamera,
+    mesh: &Mesh,
+    ceiling: Option<&[f32]>,
+) -> Result<(DrawnImage, Vec<f32>), GpuError> {
     let (w, h) = camera.resolution();
     // Through a SPOC, the tessellation the library would draw, where it splits anything.
     let mut tessellation = None;
@@ -97,9 +153,10 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<DrawnImag
         .map(|t| t.map(|i| drawn.positions[i as usize]))
         .collect();
     let draws = [(uniform, 0..3 * corners.len() as u32)];
-    let texels = draw_and_read(gpu, &corners, &draws, (w, h))?;
+    let texels = draw_and_read(gpu, &corners, (&draws, ceiling), (w, h))?;
     let source = tessellation.as_ref().map(|t| t.source.as_slice());
-    Ok(DrawnImage {
+    let depth = texels.iter().map(|t| f32::from_bits(t[3])).collect();
+    let image = DrawnImage {
         texels: texels
             .iter()
             .map(|t| {
@@ -112,7 +169,8 @@ pub fn draw(gpu: &Gpu, camera: &ImpostorCamera, mesh: &Mesh) -> Result<DrawnImag
             })
             .collect(),
         frusta: None,
-    })
+    };
+    Ok((image, depth))
 }
 
 /// A sub-triangle's point at barycentrics `b` (of its corners 1 and 2), named in its source
@@ -168,7 +226,7 @@ fn draw_graph(
             (camera, 3 * first[j]..3 * first[j + 1])
         })
         .collect();
-    let texels = draw_and_read(gpu, &corners, &draws, (w, h))?;
+    let texels = draw_and_read(gpu, &corners, (&draws, None), (w, h))?;
     let mut image = empty();
     for (i, t) in texels.iter().enumerate() {
         let Some(leaf) = t[0].checked_sub(1) else {
@@ -192,21 +250,29 @@ fn draw_graph(
 }
 
 /// The `w × h` visibility image of `triangles`, each range of their corners drawn through its
-/// camera in order ([`draw_ranges_into_visibility`]), read back row-major.
+/// camera in order ([`draw_ranges_into_visibility`]) under `ceiling` if given, read back
+/// row-major.
 fn draw_and_read(
     gpu: &Gpu,
     triangles: &[[Vec3; 3]],
-    draws: &[(GpuRasterCamera, std::ops::Range<u32>)],
+    (draws, ceiling): (&[(GpuRasterCamera, std::ops::Range<u32>)], Option<&[f32]>),
     (w, h): (u32, u32),
 ) -> Result<Vec<[u32; 4]>, GpuError> {
-    let (pipeline, vertices, _) = raster_pipeline_of(gpu, triangles)?;
+    let (mut pipeline, vertices, _) = raster_pipeline_of(gpu, triangles)?;
+    let ceiling = match ceiling {
+        None => None,
+        Some(depth) => {
+            pipeline = visibility_pipeline(gpu, true);
+            Some(ceiling_group(gpu, &pipeline, depth, (w, h))?)
+        }
+    };
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     let visibility = visibility_texture(gpu, w, h);
     draw_ranges_into_visibility(
         gpu,
         &mut encoder,
         (&pipeline, &vertices),
-        draws,
+        (draws, ceiling.as_ref()),
         &visibility,
         (w, h),
     );
@@ -216,4 +282,52 @@ fn draw_and_read(
         (w, h),
         "the impostor's visibility image",
     )
+}
+
+/// The bind group of a `w × h` depth-peeling ceiling for `pipeline` (drawing behind one):
+/// `depth`'s bits in a one-channel integer texture, read texel by texel.
+fn ceiling_group(
+    gpu: &Gpu,
+    pipeline: &wgpu::RenderPipeline,
+    depth: &[f32],
+    (w, h): (u32, u32),
+) -> Result<wgpu::BindGroup, GpuError> {
+    if depth.len() as u64 != u64::from(w) * u64::from(h) {
+        return Err(GpuError::Unsupported {
+            what: format!(
+                "a ceiling of {} texels for an image of {w} × {h}",
+                depth.len()
+            ),
+        });
+    }
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let ceiling = texture(gpu, "ceiling", (w, h), wgpu::TextureFormat::R32Uint, usage);
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &ceiling,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytemuck::cast_slice(depth),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * w),
+            rows_per_image: Some(h),
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    let view = ceiling.create_view(&Default::default());
+    Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("ceiling"),
+        layout: &pipeline.get_bind_group_layout(1),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::TextureView(&view),
+        }],
+    }))
 }

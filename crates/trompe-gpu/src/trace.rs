@@ -559,18 +559,29 @@ pub(crate) fn draw_into_visibility(
     size: (u32, u32),
 ) {
     let draws = [(*camera, 0..*vertex_count)];
-    draw_ranges_into_visibility(gpu, encoder, (pipeline, vertices), &draws, visibility, size);
+    draw_ranges_into_visibility(
+        gpu,
+        encoder,
+        (pipeline, vertices),
+        (&draws, None),
+        visibility,
+        size,
+    );
 }
 
 /// [`draw_into_visibility`] of several ranges of the vertices, each through its own camera, in
 /// order, over one image and one depth buffer: a graph camera's frusta, each drawing the
 /// triangles clipped to it (paper 1 §4.5). A fragment replaces a texel only when strictly
-/// nearer, so ties keep the earlier draw.
+/// nearer, so ties keep the earlier draw. With a `ceiling` (group 1 of a pipeline drawing
+/// behind one, [`visibility_pipeline`]), only fragments strictly behind it are drawn.
 pub(crate) fn draw_ranges_into_visibility(
     gpu: &Gpu,
     encoder: &mut wgpu::CommandEncoder,
     (pipeline, vertices): (&wgpu::RenderPipeline, &wgpu::Buffer),
-    draws: &[(GpuRasterCamera, std::ops::Range<u32>)],
+    (draws, ceiling): (
+        &[(GpuRasterCamera, std::ops::Range<u32>)],
+        Option<&wgpu::BindGroup>,
+    ),
     visibility: &wgpu::Texture,
     (w, h): (u32, u32),
 ) {
@@ -623,6 +634,9 @@ pub(crate) fn draw_ranges_into_visibility(
     });
     pass.set_pipeline(pipeline);
     pass.set_vertex_buffer(0, vertices.slice(..));
+    if let Some(ceiling) = ceiling {
+        pass.set_bind_group(1, ceiling, &[]);
+    }
     for ((_, range), group) in draws.iter().zip(&groups) {
         pass.set_bind_group(0, group, &[]);
         pass.draw(range.clone(), 0..1);
@@ -638,7 +652,7 @@ pub(crate) fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
 }
 
 /// A `w × h` 2-D texture of one level.
-fn texture(
+pub(crate) fn texture(
     gpu: &Gpu,
     label: &str,
     (w, h): (u32, u32),
@@ -689,7 +703,21 @@ pub(crate) fn raster_pipeline_of(
     let bytes: &[u8] = bytemuck::cast_slice(&corners);
     gpu.check_storage("the triangles' corners", bytes.len() as u64)?;
     let vertices = gpu.vertices_with("corners", bytes);
-    let pipeline = gpu.render_pipeline("visibility", || {
+    Ok((
+        visibility_pipeline(gpu, false),
+        vertices,
+        corners.len() as u32,
+    ))
+}
+
+/// The visibility pass's pipeline; `behind`: under a depth-peeling ceiling bound as group 1
+/// (`raster.wgsl`'s `visible_behind`).
+pub(crate) fn visibility_pipeline(gpu: &Gpu, behind: bool) -> wgpu::RenderPipeline {
+    let (name, fragment) = match behind {
+        false => ("visibility", "visible"),
+        true => ("visibility behind a ceiling", "visible_behind"),
+    };
+    gpu.render_pipeline(name, || {
         let module = gpu.module("raster.wgsl", RASTER_SHADER);
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32x2];
         gpu.device
@@ -720,7 +748,7 @@ pub(crate) fn raster_pipeline_of(
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some("visible"),
+                    entry_point: Some(fragment),
                     compilation_options: Default::default(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: VISIBILITY,
@@ -731,8 +759,7 @@ pub(crate) fn raster_pipeline_of(
                 multiview_mask: None,
                 cache: None,
             })
-    });
-    Ok((pipeline, vertices, corners.len() as u32))
+    })
 }
 
 /// The impostors every mirror and glass object of `view` sees, walked by the shader, and the

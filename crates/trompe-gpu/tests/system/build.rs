@@ -26,8 +26,12 @@ fn triangle_colour(s: &SurfaceSample) -> Vec3 {
 }
 
 /// How two impostors of one mesh through one camera differ: texels covered by one only, texels
-/// storing another triangle, the largest relative `gd` difference where they store the same.
+/// storing another triangle, the largest depth difference where they store the same — relative
+/// to the depth through a projective camera (`gd` is 1 / distance there, so its relative
+/// difference is the distance's), and to the depth range through an orthographic one (whose
+/// `gd` is affine in depth, 1 on the image plane and 0 as deep as it sees).
 fn differences(cpu: &Impostor, gpu: &Impostor) -> (usize, usize, usize, f32) {
+    let affine = matches!(cpu.camera(), ImpostorCamera::Orthographic(_));
     let (w, h) = cpu.gd().size();
     let (mut covered, mut one_only, mut other, mut worst) = (0, 0, 0, 0.0f32);
     for y in 0..h {
@@ -39,7 +43,8 @@ fn differences(cpu: &Impostor, gpu: &Impostor) -> (usize, usize, usize, f32) {
                     if cpu.color_at(x, y) != gpu.color_at(x, y) {
                         other += 1;
                     } else {
-                        worst = worst.max((a - b).abs() / a);
+                        let scale = if affine { 1.0 } else { a };
+                        worst = worst.max((a - b).abs() / scale);
                     }
                 }
                 (false, false) => {}
@@ -81,7 +86,7 @@ pub fn gpu_built_impostors_match_the_cpu_built_texel_for_texel(gpu: &Gpu) {
         let texels = cpu.gd().pixels().len();
         println!(
             "{name}: {covered} texels covered by both, {one_only} by one only, {other} store \
-             another triangle; gd within {worst:.1e} relative"
+             another triangle; depth within {worst:.1e}"
         );
         assert!(covered > texels / 10, "{name}: {covered} covered");
         // Two rasterizers' coverage rules and depth rounding: at most 0.5 % of the covered
@@ -168,4 +173,81 @@ pub fn gpu_built_graph_impostors_match_the_cpu_built(gpu: &Gpu) {
     let e =
         trompe::impostor::resolve_drawn(camera, (&mesh, 3), &triangle_colour, &wrong).unwrap_err();
     assert!(e.to_string().contains("frustum 99"), "{e}");
+}
+
+/// Depth layers peeled by the GPU (`trompe_gpu::build::peel`: each layer drawn under the one
+/// before's depth as a ceiling) against the library's peel of the same impostor, layer by layer,
+/// through a pinhole, an orthographic camera and a SPOC of 256² (as above); and a graph camera
+/// refused as the library refuses it.
+pub fn gpu_peeled_layers_match_the_cpu_peeled(gpu: &Gpu) {
+    use trompe::impostor::Layers;
+    let mesh = bunny();
+    let b = mesh.bounds();
+    let (centre, radius) = (b.center(), b.radius());
+    let eye = centre + Vec3::new(0.7, 0.25, 0.6).normalize() * (2.5 * radius);
+    for kind in [
+        ViewCamera::Pinhole,
+        ViewCamera::Orthographic,
+        ViewCamera::Spoc(None),
+    ] {
+        let camera =
+            ImpostorCamera::fitted(kind, eye, centre, radius, 0.1, 256, &mesh.positions).unwrap();
+        let name = camera.kind();
+        for layers in [Layers::Count(4), Layers::Auto] {
+            let mut cpu =
+                trompe::impostor::build(camera.clone(), &mesh, 3, &triangle_colour).unwrap();
+            cpu.peel(&mesh, 3, &triangle_colour, layers).unwrap();
+            let mut on_gpu = trompe_gpu::build::build_impostor(
+                gpu,
+                camera.clone(),
+                (&mesh, 3),
+                &triangle_colour,
+            )
+            .unwrap();
+            trompe_gpu::build::peel(gpu, &mut on_gpu, (&mesh, 3), &triangle_colour, layers)
+                .unwrap();
+            assert_eq!(
+                on_gpu.layer_count(),
+                cpu.layer_count(),
+                "{name}, {layers} layers"
+            );
+            assert!(cpu.layer_count() > 1, "{name}: the bunny has depth layers");
+            for (l, (c, g)) in cpu.layers().zip(on_gpu.layers()).enumerate() {
+                let (covered, one_only, other, worst) = differences(c, g);
+                println!(
+                    "{name}, {layers} layers, layer {}: {covered} texels covered by both, \
+                     {one_only} by one only, {other} store another triangle; depth within \
+                     {worst:.1e}",
+                    l + 1
+                );
+                assert!(covered > 0, "{name}: layer {} is empty", l + 1);
+                // As for the first layer: two rasterizers' coverage rules and depth rounding,
+                // here also at the ceiling, where a surface lies within the peeling gap of the
+                // layer before.
+                assert!(
+                    one_only + other <= covered / 200,
+                    "{name}, layer {}: {one_only} + {other} of {covered}",
+                    l + 1
+                );
+                assert!(worst <= 1e-5, "{name}, layer {}: gd {worst:e}", l + 1);
+            }
+        }
+    }
+    // A graph camera holds one layer, on either device.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let plan = root.join("scenes/maze.maze");
+    let maze = trompe::scene::maze::Maze::load(&plan).unwrap();
+    let camera = ImpostorCamera::Graph(maze.graph_camera(64, &plan).unwrap());
+    let maze_mesh = trompe::scene::maze::Maze::with_objects(&maze, &mesh, 1);
+    let mut imp =
+        trompe_gpu::build::build_impostor(gpu, camera, (&maze_mesh, 3), &triangle_colour).unwrap();
+    let e = trompe_gpu::build::peel(
+        gpu,
+        &mut imp,
+        (&maze_mesh, 3),
+        &triangle_colour,
+        Layers::Count(2),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("--layers 1"), "{e}");
 }

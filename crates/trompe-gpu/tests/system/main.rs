@@ -61,6 +61,10 @@ fn main() {
             build::gpu_built_graph_impostors_match_the_cpu_built,
         ),
         on_gpu(
+            "build::gpu_peeled_layers_match_the_cpu_peeled",
+            build::gpu_peeled_layers_match_the_cpu_peeled,
+        ),
+        on_gpu(
             "walk::the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays",
             walk::the_gpu_walk_answers_as_the_cpu_walk_on_reflected_rays,
         ),
