@@ -20,8 +20,8 @@
 
 use crate::device::{Gpu, GpuError};
 use crate::trace::{
-    GpuRasterCamera, draw_ranges_into_visibility, raster_pipeline_of, texture, visibility_pipeline,
-    visibility_texture,
+    GpuRasterCamera, RasterDraw, draw_ranges_into_visibility, raster_pipeline_of, texture,
+    visibility_pipeline, visibility_texture,
 };
 use glam::{Vec2, Vec3};
 use trompe::geom::Mesh;
@@ -255,7 +255,7 @@ fn draw_graph(
 fn draw_and_read(
     gpu: &Gpu,
     triangles: &[[Vec3; 3]],
-    (draws, ceiling): (&[(GpuRasterCamera, std::ops::Range<u32>)], Option<&[f32]>),
+    (draws, ceiling): (&[RasterDraw], Option<&[f32]>),
     (w, h): (u32, u32),
 ) -> Result<Vec<[u32; 4]>, GpuError> {
     let (mut pipeline, vertices, _) = raster_pipeline_of(gpu, triangles)?;

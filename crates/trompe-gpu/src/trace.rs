@@ -569,6 +569,9 @@ pub(crate) fn draw_into_visibility(
     );
 }
 
+/// One draw of the visibility pass: a range of the corners drawn through a camera.
+pub(crate) type RasterDraw = (GpuRasterCamera, std::ops::Range<u32>);
+
 /// [`draw_into_visibility`] of several ranges of the vertices, each through its own camera, in
 /// order, over one image and one depth buffer: a graph camera's frusta, each drawing the
 /// triangles clipped to it (paper 1 §4.5). A fragment replaces a texel only when strictly
@@ -578,10 +581,7 @@ pub(crate) fn draw_ranges_into_visibility(
     gpu: &Gpu,
     encoder: &mut wgpu::CommandEncoder,
     (pipeline, vertices): (&wgpu::RenderPipeline, &wgpu::Buffer),
-    (draws, ceiling): (
-        &[(GpuRasterCamera, std::ops::Range<u32>)],
-        Option<&wgpu::BindGroup>,
-    ),
+    (draws, ceiling): (&[RasterDraw], Option<&wgpu::BindGroup>),
     visibility: &wgpu::Texture,
     (w, h): (u32, u32),
 ) {
