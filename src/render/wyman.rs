@@ -93,10 +93,7 @@ impl BackFaces {
                 Some((glass[f.item.object as usize] as u32, t, n))
             })
             .collect();
-        let mut d_n = vec![Vec::new(); view.meshes.len()];
-        for &o in &glass {
-            d_n[o] = opposite_distances(&view.meshes[o])?;
-        }
+        let d_n = vertex_distances(view)?;
         Ok(BackFaces {
             camera,
             width,
@@ -133,6 +130,21 @@ impl BackFaces {
         let [a, b, c] = mesh.triangles[triangle as usize].map(|k| d[k as usize]);
         a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y
     }
+}
+
+/// Per object of `view`, `d_N` at each vertex of a glass object (empty for other objects): the
+/// per-vertex distances Wyman's second pass interpolates, one ray each.
+///
+/// # Errors
+/// A glass object whose BVH exceeds the memory budget.
+pub fn vertex_distances(view: &View) -> Result<Vec<Vec<f32>>, crate::memory::OverBudget> {
+    let mut d_n = vec![Vec::new(); view.meshes.len()];
+    for (o, surface) in view.surfaces.iter().enumerate() {
+        if let (Surface::Glass { .. }, Some(mesh)) = (surface, view.meshes.get(o)) {
+            d_n[o] = opposite_distances(mesh)?;
+        }
+    }
+    Ok(d_n)
 }
 
 /// Per vertex of a closed mesh, the distance along its inward normal to the mesh's opposite

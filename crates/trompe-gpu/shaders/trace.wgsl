@@ -19,10 +19,12 @@ struct Triangle {
     n0: vec4<f32>,
     // xyz: vertex normal 1; w: its object (bits).
     n1: vec4<f32>,
+    // xyz: vertex normal 2; w: Wyman's d_N at corner 0 (glass, under Wyman's refraction).
     n2: vec4<f32>,
-    // The face normal (unit, or zero for a degenerate triangle).
+    // xyz: the face normal (unit, or zero for a degenerate triangle); w: d_N at corner 1.
     ng: vec4<f32>,
     uv01: vec4<f32>,
+    // xy: corner 2's texture coordinates; z: d_N at corner 2.
     uv2: vec4<f32>,
 }
 
@@ -56,8 +58,13 @@ struct View {
     // The radiance panorama and its irradiance grid: first texel, width, height.
     radiance: vec4<u32>,
     irradiance: vec4<u32>,
-    // x: 1 where the primary hits come from the visibility buffer (the raster method).
+    // x: 1 where the primary hits come from the visibility buffer (the raster method); y: 1
+    // where the eye's refractions into glass are Wyman's.
     mode: vec4<u32>,
+    // The eye camera's rows of M⁻¹: pixel (u, v) = (row_u·r, row_v·r) / row_t·r for r = X − eye.
+    row_u: vec4<f32>,
+    row_v: vec4<f32>,
+    row_t: vec4<f32>,
 }
 
 @group(0) @binding(5) var<storage, read> triangles: array<Triangle>;
@@ -70,6 +77,8 @@ struct View {
 @group(0) @binding(11) var<storage, read_write> out_normal: array<vec4<f32>>;
 // The raster method's visibility buffer (raster.wgsl): leaf triangle + 1, b1 and b2 bits.
 @group(0) @binding(12) var visibility: texture_2d<u32>;
+// Wyman's first pass: the glass objects' back faces drawn through the eye, as `visibility`.
+@group(0) @binding(20) var backs: texture_2d<u32>;
 
 const PI: f32 = 3.14159265358979;
 // The largest f32: no hit lies beyond it (the CPU's queries ask up to infinity).
@@ -217,6 +226,83 @@ fn visible_hit(pixel: vec2<u32>, origin: vec3<f32>, d: vec3<f32>) -> Visible {
     return Visible(Hit(dot(position - origin, d), k, b1, b2), position);
 }
 
+// The back face of glass object `object` drawn at `pixel` in Wyman's first pass: found (w = 1),
+// its distance from the eye (z) and its outward normal — as src/render/wyman.rs's `BackFaces`
+// holds it.
+struct Back {
+    normal: vec3<f32>,
+    t: f32,
+    found: bool,
+}
+
+fn back_at(pixel: vec2<u32>, object: u32) -> Back {
+    let none = Back(vec3<f32>(0.0), 0.0, false);
+    let texel = textureLoad(backs, vec2<i32>(pixel), 0);
+    if (texel.x == 0u) {
+        return none;
+    }
+    let k = texel.x - 1u;
+    let tri = triangles[k];
+    if (bitcast<u32>(tri.n1.w) != object) {
+        return none;
+    }
+    let b1 = bitcast<f32>(texel.y);
+    let b2 = bitcast<f32>(texel.z);
+    let b0 = 1.0 - b1 - b2;
+    let position = corners[3u * k].xyz * b0 + corners[3u * k + 1u].xyz * b1
+        + corners[3u * k + 2u].xyz * b2;
+    let interpolated = tri.n0.xyz * b0 + tri.n1.xyz * b1 + tri.n2.xyz * b2;
+    let rcp = 1.0 / length(interpolated);
+    var normal = tri.ng.xyz;
+    if (rcp > 0.0 && rcp <= FAR) {
+        normal = interpolated * rcp;
+    }
+    return Back(normal, length(position - view.eye.xyz), true);
+}
+
+// The back face of `object` at the pixel `p` projects to (none off the image or behind the eye).
+fn back_at_point(p: vec3<f32>, object: u32) -> Back {
+    let r = vec4<f32>(p - view.eye.xyz, 0.0);
+    let z = dot(view.row_t, r);
+    if (z <= 0.0) {
+        return Back(vec3<f32>(0.0), 0.0, false);
+    }
+    let uv = floor(vec2<f32>(dot(view.row_u, r), dot(view.row_v, r)) / z);
+    if (uv.x < 0.0 || uv.y < 0.0 || uv.x >= f32(view.size.x) || uv.y >= f32(view.size.y)) {
+        return Back(vec3<f32>(0.0), 0.0, false);
+    }
+    return back_at(vec2<u32>(uv), object);
+}
+
+// Wyman's leaving ray (src/render/wyman.rs's `exit_ray`) for an eye ray of direction `v` entering
+// glass of index `ior` at `p1` (normal `n1` facing the eye), `d_v` the distance to the back face
+// along `v` and `d_n` the interpolated per-vertex distance: the exit point and direction.
+struct Exit {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+fn wyman_exit(object: u32, p1: vec3<f32>, n1: vec3<f32>, v: vec3<f32>, ior: f32, d_v: f32, d_n: f32) -> Exit {
+    // Entering from outside, the ray always refracts.
+    let t1 = refract_through(v, n1, 1.0 / ior).xyz;
+    let theta_i = acos(clamp(-dot(v, n1), -1.0, 1.0));
+    let theta_t = acos(clamp(-dot(t1, n1), -1.0, 1.0));
+    var r = 1.0 / ior;
+    if (theta_i > 1e-4) {
+        r = theta_t / theta_i;
+    }
+    let p2 = p1 + t1 * (r * d_v + (1.0 - r) * d_n);
+    let back = back_at_point(p2, object);
+    if (!back.found) {
+        return Exit(p2, t1);
+    }
+    let t2 = refract_through(t1, -back.normal, ior);
+    if (t2.w == 0.0) {
+        return Exit(p2, reflect_about(t1, -back.normal));
+    }
+    return Exit(p2, t2.xyz);
+}
+
 // What a primary hit leaves in the pixel's buffers.
 struct Surface {
     t: f32,
@@ -321,7 +407,24 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
             let kr = fresnel(max(-dot(d, n), 0.0), eta);
             reflected_weight = ray.weight * kr;
             let t = refract_through(d, n, eta);
-            if (t.w != 0.0 && kr < 1.0) {
+            if (is_primary && front && view.mode.y != 0u) {
+                // Wyman's refraction: the second interface found in images, the ray leaving
+                // from it into the open.
+                var d_v = 0.0;
+                let back = back_at(id.xy, object);
+                if (back.found) {
+                    d_v = max(back.t - hit.t, 0.0);
+                }
+                let d_n = tri.n2.w * b0 + tri.ng.w * hit.b1 + tri.uv2.z * hit.b2;
+                let exit = wyman_exit(object, position, n, d, ior, d_v, d_n);
+                let weight = ray.weight * (1.0 - kr) * tint * tint;
+                if (last) {
+                    sum = sum + weight * environment(exit.dir);
+                } else if (count < PENDING) {
+                    stack[count] = Pending(exit.origin + exit.dir * eps, ray.depth + 1u, exit.dir, object, weight);
+                    count = count + 1u;
+                }
+            } else if (t.w != 0.0 && kr < 1.0) {
                 let weight = ray.weight * (1.0 - kr) * tint;
                 if (last) {
                     sum = sum + weight * environment(t.xyz);

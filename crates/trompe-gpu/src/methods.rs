@@ -118,6 +118,8 @@ pub struct GpuMethod<'a> {
     kind: MethodKind,
     /// How the eye's hits are found.
     primary: Primary,
+    /// How the eye's refractions into glass are found.
+    refraction: Refraction,
     /// The scene on the device and the objects' poses it was uploaded at: kept while nothing
     /// moves or deforms (the camera may move), as the CPU keeps its BVH.
     kept: Option<(Vec<Mat4>, GpuTracer<'a>)>,
@@ -147,12 +149,6 @@ impl<'a> DeviceRenderer<'a> {
                     }
                     .into());
                 }
-                if settings.refraction != Refraction::Exact {
-                    return Err(GpuError::Unsupported {
-                        what: "Wyman's refraction (the GPU traces both interfaces)".into(),
-                    }
-                    .into());
-                }
                 let impostor_method =
                     matches!(kind, MethodKind::Impostor | MethodKind::PinholeImpostor);
                 if impostor_method && settings.mirrors != Mirrors::Exact {
@@ -163,9 +159,10 @@ impl<'a> DeviceRenderer<'a> {
                     }
                     .into());
                 }
-                let primary = match kind {
-                    MethodKind::Raster => Primary::Rasterized,
-                    _ => settings.primary,
+                // The raster method's glass looks the panorama up: it refracts nothing.
+                let (primary, refraction) = match kind {
+                    MethodKind::Raster => (Primary::Rasterized, Refraction::Exact),
+                    _ => (settings.primary, settings.refraction),
                 };
                 let resolution = settings.impostor_resolution;
                 let method = match kind {
@@ -188,6 +185,7 @@ impl<'a> DeviceRenderer<'a> {
                     scene,
                     kind,
                     primary,
+                    refraction,
                     kept: None,
                     impostors,
                 })))
@@ -226,6 +224,7 @@ impl<'a> DeviceRenderer<'a> {
                     scene,
                     kind,
                     primary,
+                    refraction,
                     kept,
                     impostors,
                 } = m.as_mut();
@@ -287,7 +286,7 @@ impl<'a> DeviceRenderer<'a> {
                                 &view,
                                 &scene.lighting,
                                 &settings,
-                                *primary,
+                                (*primary, *refraction),
                                 secondary,
                             )
                         })?;

@@ -17,7 +17,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::frame::{Frame, Image, NO_OBJECT, Rgba};
-use trompe::render::{Primary, ReflectorImpostors};
+use trompe::render::{Primary, ReflectorImpostors, Refraction};
 use trompe::scene::{Lighting, RenderSettings, Surface, View};
 use trompe::trace::Bvh;
 
@@ -92,6 +92,7 @@ struct GpuView {
     radiance: [u32; 4],
     irradiance: [u32; 4],
     mode: [u32; 4],
+    rows: [[f32; 4]; 3],
 }
 
 /// Every image the shader reads, one after another, as `(first texel, width, height)`.
@@ -139,6 +140,13 @@ pub fn render(
     GpuTracer::new(gpu, view, lighting, settings, Primary::Traced)?.frame(&view.camera)
 }
 
+/// A triangle of a glass object, for Wyman's first pass: its leaf, corners and face normal.
+struct GlassFace {
+    leaf: u32,
+    corners: [Vec3; 3],
+    normal: Vec3,
+}
+
 /// A scene on the device, ready to trace through any camera: its BVH, its triangles' shading
 /// data, materials, textures and panorama uploaded once.
 pub struct GpuTracer<'a> {
@@ -154,6 +162,9 @@ pub struct GpuTracer<'a> {
     /// Under an impostor method: the impostors and each object's list of those it sees
     /// (binding 18).
     impostors: Option<(UploadedWalks, wgpu::Buffer)>,
+    /// Under Wyman's refraction: the glass objects' triangles, whose back faces each frame
+    /// draws through the eye (binding 20).
+    glass: Option<Vec<GlassFace>>,
 }
 
 /// What answers the rays mirrors and glass send out into the open.
@@ -290,17 +301,25 @@ impl<'a> GpuTracer<'a> {
         settings: &RenderSettings,
         primary: Primary,
     ) -> Result<GpuTracer<'a>, GpuError> {
-        Self::with_secondary(gpu, view, lighting, settings, primary, Secondary::Exact)
+        Self::with_secondary(
+            gpu,
+            view,
+            lighting,
+            settings,
+            (primary, Refraction::Exact),
+            Secondary::Exact,
+        )
     }
 
-    /// [`GpuTracer::new`], the rays mirrors and glass send out into the open answered as
-    /// `secondary` says.
+    /// [`GpuTracer::new`], the eye's refractions into glass found as `refraction` says (exactly,
+    /// or by Wyman's image-space approximation as `trompe::render::wyman` finds them), and the
+    /// rays mirrors and glass send out into the open answered as `secondary` says.
     pub fn with_secondary(
         gpu: &'a Gpu,
         view: &View,
         lighting: &Lighting,
         settings: &RenderSettings,
-        primary: Primary,
+        (primary, refraction): (Primary, Refraction),
         secondary: Secondary<'_>,
     ) -> Result<GpuTracer<'a>, GpuError> {
         if settings.max_depth > MAX_DEPTH {
@@ -378,6 +397,13 @@ impl<'a> GpuTracer<'a> {
                 _ => first,
             }
         };
+        // Under Wyman's refraction, d_N at each glass vertex (one ray each, on the CPU as the
+        // paper precomputes it), and the glass triangles whose back faces each frame draws.
+        let wyman = refraction == Refraction::Wyman;
+        let d_n = match wyman {
+            true => trompe::render::wyman::vertex_distances(view)?,
+            false => Vec::new(),
+        };
         let triangles: Vec<GpuTriangle> = bvh
             .leaf_sources()
             .iter()
@@ -386,16 +412,37 @@ impl<'a> GpuTracer<'a> {
                 let corners = mesh.triangles[t as usize].map(|i| i as usize);
                 let n = corners.map(|i| mesh.normals[i]);
                 let uv = corners.map(|i| mesh.uvs.as_ref().map_or(Vec2::ZERO, |uv| uv[i]));
+                let d = d_n
+                    .get(o as usize)
+                    .filter(|d| !d.is_empty())
+                    .map_or([0.0; 3], |d| {
+                        corners.map(|i| d.get(i).copied().unwrap_or(0.0))
+                    });
                 GpuTriangle {
                     n0: v4(n[0], f32::from_bits(material_of(o as usize, t as usize))),
                     n1: v4(n[1], f32::from_bits(o)),
-                    n2: v4(n[2], 0.0),
-                    ng: v4(mesh.face_normal(t as usize), 0.0),
+                    n2: v4(n[2], d[0]),
+                    ng: v4(mesh.face_normal(t as usize), d[1]),
                     uv01: [uv[0].x, uv[0].y, uv[1].x, uv[1].y],
-                    uv2: [uv[2].x, uv[2].y, 0.0, 0.0],
+                    uv2: [uv[2].x, uv[2].y, d[2], 0.0],
                 }
             })
             .collect();
+        let glass = wyman.then(|| {
+            bvh.leaf_sources()
+                .iter()
+                .zip(bvh.leaf_corners())
+                .enumerate()
+                .filter(|(_, ((o, _), _))| {
+                    matches!(view.surfaces.get(*o as usize), Some(Surface::Glass { .. }))
+                })
+                .map(|(leaf, (&(o, t), &corners))| GlassFace {
+                    leaf: leaf as u32,
+                    corners,
+                    normal: view.meshes[o as usize].face_normal(t as usize),
+                })
+                .collect()
+        });
 
         let environment_rotation = environment.rotation();
         let sun = lighting.light.as_ref();
@@ -412,7 +459,13 @@ impl<'a> GpuTracer<'a> {
             ),
             radiance,
             irradiance,
-            mode: [u32::from(primary == Primary::Rasterized), 0, 0, 0],
+            mode: [
+                u32::from(primary == Primary::Rasterized),
+                u32::from(wyman),
+                0,
+                0,
+            ],
+            rows: [[0.0; 4]; 3],
         };
         let raster = match primary {
             Primary::Traced => None,
@@ -444,6 +497,7 @@ impl<'a> GpuTracer<'a> {
             uniform,
             raster,
             impostors,
+            glass,
         })
     }
 
@@ -457,6 +511,8 @@ impl<'a> GpuTracer<'a> {
         uniform.a = v4(a.as_vec3(), 0.0);
         uniform.b = v4(b.as_vec3(), 0.0);
         uniform.c = v4(c.as_vec3(), 0.0);
+        let rows = GpuRasterCamera::pinhole(camera);
+        uniform.rows = [rows.row_u, rows.row_v, rows.row_t];
         uniform.size[0] = w;
         uniform.size[1] = h;
         let pixels = u64::from(w) * u64::from(h);
@@ -475,6 +531,12 @@ impl<'a> GpuTracer<'a> {
             None => visibility_texture(gpu, 1, 1),
         };
         let visibility_view = visibility.create_view(&Default::default());
+        let backs = match &self.glass {
+            Some(glass) => self.draw_back_faces(&mut encoder, glass, camera)?,
+            // Not read: a binding stands in.
+            None => visibility_texture(gpu, 1, 1),
+        };
+        let backs_view = backs.create_view(&Default::default());
         let [nodes, corners, triangles, materials, texels] = &self.scene;
         let walks = self
             .impostors
@@ -500,10 +562,16 @@ impl<'a> GpuTracer<'a> {
                 binding,
                 resource: b.as_entire_binding(),
             })
-            .chain([wgpu::BindGroupEntry {
-                binding: 12,
-                resource: wgpu::BindingResource::TextureView(&visibility_view),
-            }])
+            .chain([
+                wgpu::BindGroupEntry {
+                    binding: 12,
+                    resource: wgpu::BindingResource::TextureView(&visibility_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 20,
+                    resource: wgpu::BindingResource::TextureView(&backs_view),
+                },
+            ])
             .collect::<Vec<_>>(),
         });
         {
@@ -545,6 +613,40 @@ impl GpuTracer<'_> {
         let uniform = GpuRasterCamera::pinhole(camera);
         draw_into_visibility(self.gpu, encoder, raster, &uniform, &visibility, (w, h));
         visibility
+    }
+
+    /// Wyman's first pass: the back faces of the glass objects (those facing away from the
+    /// eye, chosen as `trompe::render::wyman::BackFaces` chooses them) drawn through `camera`
+    /// into a new visibility texture, the nearest kept.
+    fn draw_back_faces(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        glass: &[GlassFace],
+        camera: &Pinhole,
+    ) -> Result<wgpu::Texture, GpuError> {
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let eye = camera.position().as_vec3();
+        let backs: Vec<(u32, [Vec3; 3])> = glass
+            .iter()
+            .filter(|f| {
+                let [a, b, c] = f.corners;
+                f.normal.dot((a + b + c) / 3.0 - eye) > 0.0
+            })
+            .map(|f| (f.leaf, f.corners))
+            .collect();
+        let visibility = visibility_texture(self.gpu, w, h);
+        let (vertices, count) = corner_buffer(self.gpu, &backs)?;
+        let pipeline = visibility_pipeline(self.gpu, false);
+        let draws = [(GpuRasterCamera::pinhole(camera), 0..count)];
+        draw_ranges_into_visibility(
+            self.gpu,
+            encoder,
+            (&pipeline, &vertices),
+            (&draws, None),
+            &visibility,
+            (w, h),
+        );
+        Ok(visibility)
     }
 }
 
@@ -689,25 +791,39 @@ pub(crate) fn raster_pipeline_of(
     gpu: &Gpu,
     triangles: &[[Vec3; 3]],
 ) -> Result<(wgpu::RenderPipeline, wgpu::Buffer, u32), GpuError> {
-    let corners: Vec<GpuCorner> = triangles
+    let numbered: Vec<(u32, [Vec3; 3])> = triangles
         .iter()
         .enumerate()
-        .flat_map(|(leaf, c)| {
+        .map(|(leaf, &c)| (leaf as u32, c))
+        .collect();
+    let (vertices, count) = corner_buffer(gpu, &numbered)?;
+    Ok((visibility_pipeline(gpu, false), vertices, count))
+}
+
+/// The visibility pass's vertices: the three corners of each triangle, each with its corner
+/// number and the triangle's number given beside it; and how many corners.
+fn corner_buffer(
+    gpu: &Gpu,
+    triangles: &[(u32, [Vec3; 3])],
+) -> Result<(wgpu::Buffer, u32), GpuError> {
+    let mut corners: Vec<GpuCorner> = triangles
+        .iter()
+        .flat_map(|&(leaf, c)| {
             (0..3u32).map(move |k| GpuCorner {
                 position: c[k as usize].to_array(),
                 corner: k,
-                leaf: leaf as u32,
+                leaf,
             })
         })
         .collect();
+    let count = corners.len() as u32;
+    // A buffer is never empty; nothing past `count` is drawn.
+    if corners.is_empty() {
+        corners.push(GpuCorner::zeroed());
+    }
     let bytes: &[u8] = bytemuck::cast_slice(&corners);
     gpu.check_storage("the triangles' corners", bytes.len() as u64)?;
-    let vertices = gpu.vertices_with("corners", bytes);
-    Ok((
-        visibility_pipeline(gpu, false),
-        vertices,
-        corners.len() as u32,
-    ))
+    Ok((gpu.vertices_with("corners", bytes), count))
 }
 
 /// The visibility pass's pipeline; `behind`: under a depth-peeling ceiling bound as group 1

@@ -61,6 +61,10 @@ fn main() {
             build::gpu_built_graph_impostors_match_the_cpu_built,
         ),
         on_gpu(
+            "trace::wymans_refraction_runs_on_the_gpu_as_on_the_cpu",
+            trace::wymans_refraction_runs_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
             "build::gpu_peeled_layers_match_the_cpu_peeled",
             build::gpu_peeled_layers_match_the_cpu_peeled,
         ),
