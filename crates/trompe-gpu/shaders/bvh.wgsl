@@ -165,6 +165,15 @@ fn query(ray: Ray, any_hit: bool) -> Hit {
 // `query` over the triangles in one of `classes` (bits; the first corner's w holds a
 // triangle's, and every triangle is in EVERY_TRIANGLE).
 fn query_classes(ray: Ray, any_hit: bool, classes: u32) -> Hit {
+    return query_selected(ray, any_hit, classes, NO_SELECTED_OBJECT);
+}
+
+// No object: the second corner's w (an object's id, as f32) never converts to it.
+const NO_SELECTED_OBJECT: u32 = 0xffffffffu;
+
+// `query` over the triangles in one of `classes` and those of object `object` (the second
+// corner's w holds a triangle's object).
+fn query_selected(ray: Ray, any_hit: bool, classes: u32, object: u32) -> Hit {
     var best = Hit(ray.t_max, MISS, 0.0, 0.0);
     // An empty hierarchy is bound as one padding word short of a node.
     if (arrayLength(&nodes) < NODE_QUADS) {
@@ -185,7 +194,8 @@ fn query_classes(ray: Ray, any_hit: bool, classes: u32) -> Hit {
             let local = firstLeadingBit(prims.y);
             prims.y = prims.y & ~(1u << local);
             let k = prims.x + local;
-            if ((bitcast<u32>(corners[3u * k].w) & classes) == 0u) {
+            if ((bitcast<u32>(corners[3u * k].w) & classes) == 0u
+                && u32(corners[3u * k + 1u].w) != object) {
                 continue;
             }
             let h = intersect_triangle(ray.origin, dir, k, best.t);

@@ -2,5 +2,5 @@
 // exact BVH, as every other ray (compiled after trace.wgsl, which calls it).
 
 fn secondary_hit(source: u32, ray: Ray) -> Answer {
-    return Answer(query(ray, false), vec4<f32>(0.0));
+    return Answer(query(ray, false), vec4<f32>(0.0), no_stored());
 }

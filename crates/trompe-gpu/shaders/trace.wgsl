@@ -198,12 +198,29 @@ struct Pending {
     weight: vec3<f32>,
 }
 
+// A surface an impostor stores (a mirror's, under `--mirrors impostor`), met by a ray: where,
+// its object, its shading normal, the object's material, its face normal; `found` 1 when met.
+struct Stored {
+    position: vec3<f32>,
+    object: u32,
+    normal: vec3<f32>,
+    material: u32,
+    face: vec3<f32>,
+    found: u32,
+}
+
+fn no_stored() -> Stored {
+    return Stored(vec3<f32>(0.0), 0u, vec3<f32>(0.0), 0u, vec3<f32>(0.0), 0u);
+}
+
 // The answer to a ray an object sends out into the open (`secondary_hit`, defined by the file
-// compiled after this one): a hit on the scene's triangles to shade, or (w = 1) the radiance
-// the ray carries (an impostor's texel).
+// compiled after this one): a hit on the scene's triangles to shade, (w = 1) the radiance
+// the ray carries (a diffuse object's impostor texel), or a surface an impostor stores, shaded
+// as the triangles are.
 struct Answer {
     hit: Hit,
     radiance: vec4<f32>,
+    stored: Stored,
 }
 
 // The rasterized primary hit at `pixel`: where it lies (the corners interpolated, as the CPU's
@@ -337,6 +354,7 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         primary = false;
         var hit: Hit;
         var position: vec3<f32>;
+        var stored = no_stored();
         if (is_primary && view.mode.x != 0u) {
             let v = visible_hit(id.xy, ray.origin, d);
             hit = v.hit;
@@ -348,33 +366,51 @@ fn trace_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
                 continue;
             }
             hit = answer.hit;
+            stored = answer.stored;
             position = ray.origin + d * hit.t;
         } else {
             hit = query(Ray(ray.origin, FAR, d, 0.0), false);
             position = ray.origin + d * hit.t;
         }
-        if (hit.triangle == MISS) {
+        if (hit.triangle == MISS && stored.found == 0u) {
             sum = sum + ray.weight * environment(d);
             continue;
         }
-        // The hit: interpolated shading normal (the face's where it cancels), turned to face
-        // the ray as src/geom/optics.rs's `facing` turns it.
-        let tri = triangles[hit.triangle];
-        let b0 = 1.0 - hit.b1 - hit.b2;
-        let interpolated = tri.n0.xyz * b0 + tri.n1.xyz * hit.b1 + tri.n2.xyz * hit.b2;
-        let rcp = 1.0 / length(interpolated);
-        var normal = tri.ng.xyz;
-        if (rcp > 0.0 && rcp <= FAR) {
-            normal = interpolated * rcp;
+        // The hit: its shading normal — on a triangle interpolated (the face's where it
+        // cancels), on a stored surface as stored — turned to face the ray as
+        // src/geom/optics.rs's `facing` turns it.
+        var tri: Triangle;
+        var b0 = 0.0;
+        var normal: vec3<f32>;
+        var face: vec3<f32>;
+        var object: u32;
+        var material_index: u32;
+        if (stored.found != 0u) {
+            position = stored.position;
+            normal = stored.normal;
+            face = stored.face;
+            object = stored.object;
+            material_index = stored.material;
+        } else {
+            tri = triangles[hit.triangle];
+            b0 = 1.0 - hit.b1 - hit.b2;
+            let interpolated = tri.n0.xyz * b0 + tri.n1.xyz * hit.b1 + tri.n2.xyz * hit.b2;
+            let rcp = 1.0 / length(interpolated);
+            normal = tri.ng.xyz;
+            if (rcp > 0.0 && rcp <= FAR) {
+                normal = interpolated * rcp;
+            }
+            face = tri.ng.xyz;
+            object = bitcast<u32>(tri.n1.w);
+            material_index = bitcast<u32>(tri.n0.w);
         }
-        let front = dot(d, tri.ng.xyz) < 0.0;
-        let ng = select(-tri.ng.xyz, tri.ng.xyz, front);
+        let front = dot(d, face) < 0.0;
+        let ng = select(-face, face, front);
         let n = select(normal, -normal, dot(normal, ng) < 0.0);
-        let object = bitcast<u32>(tri.n1.w);
         if (is_primary) {
             first = Surface(hit.t, object, n);
         }
-        let material = materials[bitcast<u32>(tri.n0.w)];
+        let material = materials[material_index];
         let kind = bitcast<u32>(material.color.w);
         let last = ray.depth + 1u >= max_depth;
         if (kind == DIFFUSE) {

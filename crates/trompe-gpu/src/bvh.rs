@@ -59,9 +59,13 @@ struct Params {
 /// and what the shader's `query` accepts.
 pub(crate) const EVERY_TRIANGLE: u32 = 1;
 
+/// The most objects the shader tells apart (`shaders/bvh.wgsl`'s `query_selected`: an object's
+/// id rides as an `f32`, exact below 2²⁴).
+pub(crate) const MAX_OBJECTS: u32 = 1 << 24;
+
 /// The node and triangle-corner buffers of `bvh`, bindings 0 and 1 of every shader that
 /// includes `shaders/bvh.wgsl`; each triangle in the classes `classes(object)` says (bits the
-/// shader's `query_classes` selects by; each holds [`EVERY_TRIANGLE`]).
+/// shader's `query_classes` selects by; each holds [`EVERY_TRIANGLE`]), and its object.
 pub(crate) fn upload(
     gpu: &Gpu,
     bvh: &Bvh,
@@ -76,9 +80,19 @@ pub(crate) fn upload(
             // Kept in the mantissa of a normal number (1.0 and up), so no device flushes it.
             let bits =
                 f32::from_bits(0x3f80_0000 | ((classes(object) | EVERY_TRIANGLE) & 0x7f_ffff));
-            [t[0].extend(bits), t[1].extend(0.0), t[2].extend(0.0)].map(|c| c.to_array())
+            [
+                t[0].extend(bits),
+                t[1].extend(object as f32),
+                t[2].extend(0.0),
+            ]
+            .map(|c| c.to_array())
         })
         .collect();
+    if let Some(&(object, _)) = bvh.leaf_sources().iter().find(|s| s.0 >= MAX_OBJECTS) {
+        return Err(GpuError::Unsupported {
+            what: format!("object {object} (the GPU tells {MAX_OBJECTS} objects apart)"),
+        });
+    }
     let corner_bytes: &[u8] = bytemuck::cast_slice(&corners);
     gpu.check_storage("the BVH's nodes", node_bytes.len() as u64)?;
     gpu.check_storage("the BVH's triangles", corner_bytes.len() as u64)?;

@@ -21,9 +21,7 @@ use std::sync::Arc;
 use trompe::camera::Pinhole;
 use trompe::methods::{MethodError, MethodFrame, MethodKind, MethodSettings, Renderer};
 use trompe::progress::{Progress, Timings};
-use trompe::render::{
-    Method, Mirrors, Primary, ReflectorImpostors, Refraction, RenderOptions, Sequence,
-};
+use trompe::render::{Method, Primary, ReflectorImpostors, Refraction, RenderOptions, Sequence};
 use trompe::scene::RenderSettings;
 use trompe::scene::Scene;
 
@@ -146,16 +144,6 @@ impl<'a> DeviceRenderer<'a> {
                     return Err(MethodError::Refused {
                         method: kind,
                         reason,
-                    }
-                    .into());
-                }
-                let impostor_method =
-                    matches!(kind, MethodKind::Impostor | MethodKind::PinholeImpostor);
-                if impostor_method && settings.mirrors != Mirrors::Exact {
-                    return Err(GpuError::Unsupported {
-                        what: "mirrors seen as impostors (--mirrors impostor); the GPU sees them \
-                               exactly"
-                            .into(),
                     }
                     .into());
                 }

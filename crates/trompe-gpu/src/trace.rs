@@ -47,6 +47,12 @@ pub fn impostor_shader_source() -> String {
 /// The class of the triangles of mirror and glass objects (`shaders/impostor_secondary.wgsl`'s
 /// `SPECULAR`).
 const SPECULAR: u32 = 2;
+/// The class of the triangles of glass objects (its `GLASS_CLASS`).
+const GLASS_CLASS: u32 = 4;
+/// In an object's row of the table of what it sees: it sees every mirror and glass object
+/// exactly (the shader's `SEES_EXACTLY`), or itself and the glass (`SEES_GLASS_AND_ITSELF`).
+const SEES_EXACTLY: u32 = 1 << 31;
+const SEES_GLASS_AND_ITSELF: u32 = 1 << 30;
 
 /// Storage buffers the impostor methods' shader reads and writes.
 const IMPOSTOR_STORAGE_BUFFERS: u32 = 15;
@@ -330,23 +336,6 @@ impl<'a> GpuTracer<'a> {
                 ),
             });
         }
-        let (impostors, built);
-        let bvh = match secondary {
-            Secondary::Exact => {
-                impostors = None;
-                built = Bvh::build(view.meshes.clone())?;
-                &built
-            }
-            Secondary::Impostors { answers, bvh } => {
-                impostors = Some(upload_impostors(gpu, view, answers)?);
-                bvh
-            }
-        };
-        let specular = |o: u32| match view.surfaces.get(o as usize) {
-            Some(Surface::Diffuse(_)) | None => crate::bvh::EVERY_TRIANGLE,
-            Some(_) => SPECULAR,
-        };
-        let (nodes, corners) = crate::bvh::upload(gpu, bvh, &specular)?;
         // Materials: one a (object, mesh material), the scene's surface deciding.
         let mut texels = Texels::default();
         let environment = &lighting.environment;
@@ -386,6 +375,24 @@ impl<'a> GpuTracer<'a> {
                 }
             }
         }
+        let (impostors, built);
+        let bvh = match secondary {
+            Secondary::Exact => {
+                impostors = None;
+                built = Bvh::build(view.meshes.clone())?;
+                &built
+            }
+            Secondary::Impostors { answers, bvh } => {
+                impostors = Some(upload_impostors(gpu, view, answers, &first_material)?);
+                bvh
+            }
+        };
+        let specular = |o: u32| match view.surfaces.get(o as usize) {
+            Some(Surface::Diffuse(_)) | None => crate::bvh::EVERY_TRIANGLE,
+            Some(Surface::Mirror { .. }) => SPECULAR,
+            Some(Surface::Glass { .. }) => SPECULAR | GLASS_CLASS,
+        };
+        let (nodes, corners) = crate::bvh::upload(gpu, bvh, &specular)?;
         let material_of = |object: usize, triangle: usize| -> u32 {
             let first = first_material[object];
             match &view.surfaces[object] {
@@ -879,11 +886,13 @@ pub(crate) fn visibility_pipeline(gpu: &Gpu, behind: bool) -> wgpu::RenderPipeli
 }
 
 /// The impostors every mirror and glass object of `view` sees, walked by the shader, and the
-/// table of which each sees (`shaders/impostor_secondary.wgsl`'s `reflectors`).
+/// table of which each sees (`shaders/impostor_secondary.wgsl`'s `reflectors`), with each
+/// object's first material (`first_material`: what a mirror's stored surface is shaded by).
 fn upload_impostors(
     gpu: &Gpu,
     view: &View,
     answers: &ReflectorImpostors,
+    first_material: &[u32],
 ) -> Result<(UploadedWalks, wgpu::Buffer), GpuError> {
     let storage = gpu.limits().max_storage_buffers_per_shader_stage;
     if storage < IMPOSTOR_STORAGE_BUFFERS {
@@ -898,38 +907,45 @@ fn upload_impostors(
     let specular: Vec<u32> = (0..objects)
         .filter(|&o| !matches!(view.surfaces[o as usize], Surface::Diffuse(_)))
         .collect();
+    let glass = |o: u32| matches!(view.surfaces[o as usize], Surface::Glass { .. });
     let mut set = WalkSet::new();
     // One upload of an impostor several objects see.
-    let mut placed: HashMap<*const trompe::impostor::Impostor, u32> = HashMap::new();
-    let mut table = vec![0u32; 2 * objects as usize];
+    let mut placed: HashMap<(*const trompe::impostor::Impostor, bool), u32> = HashMap::new();
+    let mut table = vec![0u32; 3 * objects as usize];
     for o in 0..objects {
         let mut seen = Vec::new();
         for s in answers.seen_by(o) {
-            if !s.radiance {
-                return Err(GpuError::Unsupported {
-                    what: "mirrors seen as impostors (--mirrors impostor); the GPU sees them \
-                           exactly"
-                        .into(),
-                });
-            }
-            let index = match placed.get(&std::ptr::from_ref(s.impostor)) {
+            let key = (std::ptr::from_ref(s.impostor), s.radiance);
+            let index = match placed.get(&key) {
                 Some(&i) => i,
                 None => {
-                    let i = set.push(s.impostor, s.now_from_built, true)?;
-                    placed.insert(std::ptr::from_ref(s.impostor), i);
+                    let i = set.push(s.impostor, s.now_from_built, s.radiance)?;
+                    placed.insert(key, i);
                     i
                 }
             };
             seen.push(index);
         }
         let exactly = answers.seen_exactly_by(o);
-        if !exactly.is_empty() && exactly != specular.as_slice() {
+        let glass_and_itself: Vec<u32> = (0..objects).filter(|&g| g == o || glass(g)).collect();
+        let flag = if exactly.is_empty() {
+            0
+        } else if exactly == specular.as_slice() {
+            SEES_EXACTLY
+        } else if exactly == glass_and_itself.as_slice() {
+            SEES_GLASS_AND_ITSELF
+        } else {
             return Err(GpuError::Unsupported {
-                what: "a mirror that sees only some of the mirrors and glass exactly".into(),
+                what: format!(
+                    "object {o} seeing the mirror and glass objects {exactly:?} exactly (the GPU \
+                     sees all of them, or itself and the glass)"
+                ),
             });
-        }
-        table[2 * o as usize] = table.len() as u32;
-        table[2 * o as usize + 1] = seen.len() as u32 | (u32::from(!exactly.is_empty()) << 31);
+        };
+        let row = 3 * o as usize;
+        table[row] = table.len() as u32;
+        table[row + 1] = seen.len() as u32 | flag;
+        table[row + 2] = first_material.get(o as usize).copied().unwrap_or(0);
         table.extend(seen);
     }
     let walks = set.upload(gpu)?;

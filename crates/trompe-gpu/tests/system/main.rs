@@ -65,6 +65,10 @@ fn main() {
             trace::wymans_refraction_runs_on_the_gpu_as_on_the_cpu,
         ),
         on_gpu(
+            "trace::mirrors_seen_as_impostors_run_on_the_gpu_as_on_the_cpu",
+            trace::mirrors_seen_as_impostors_run_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
             "build::gpu_peeled_layers_match_the_cpu_peeled",
             build::gpu_peeled_layers_match_the_cpu_peeled,
         ),
