@@ -66,6 +66,14 @@ pub enum GpuError {
         /// The adapter's name.
         adapter: String,
     },
+    /// A window's surface could not be made or shown on the adapter.
+    #[error("showing a window on {adapter}: {reason}")]
+    Surface {
+        /// The adapter's name.
+        adapter: String,
+        /// Why.
+        reason: String,
+    },
     /// Reading results back from the device failed.
     #[error("reading {what} back from {adapter} failed: {reason}")]
     Readback {
@@ -179,22 +187,22 @@ impl GpuRequest {
         let adapters = list_adapters(self.backends);
         let found: Vec<String> = adapters
             .iter()
-            .map(|a| {
+            .map(|(_, a)| {
                 let i = a.get_info();
                 format!("{} ({:?}, {:?})", i.name, i.backend, i.device_type)
             })
             .collect();
         let wanted = self.name.as_ref().map(|n| n.to_lowercase());
-        let adapter = adapters
+        let (instance, adapter) = adapters
             .into_iter()
-            .filter(|a| {
+            .filter(|(_, a)| {
                 let info = a.get_info();
                 let named = wanted
                     .as_ref()
                     .is_none_or(|n| info.name.to_lowercase().contains(n));
                 named && (self.software || !is_software(&info))
             })
-            .min_by_key(|a| rank(&a.get_info()))
+            .min_by_key(|(_, a)| rank(&a.get_info()))
             .ok_or_else(|| GpuError::NoAdapter {
                 looked_for: self.describe(),
                 found,
@@ -211,6 +219,8 @@ impl GpuRequest {
             reason: e.to_string(),
         })?;
         Ok(Gpu {
+            instance,
+            adapter,
             device,
             queue,
             info,
@@ -239,6 +249,10 @@ fn rank(info: &wgpu::AdapterInfo) -> u8 {
 
 /// An open GPU device and its queue.
 pub struct Gpu {
+    /// What found the adapter, and the adapter: a window's surface is made and configured
+    /// through them.
+    pub(crate) instance: wgpu::Instance,
+    pub(crate) adapter: wgpu::Adapter,
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
@@ -552,22 +566,25 @@ impl fmt::Display for AdapterReport {
 /// Every adapter the backends list, as reports (without opening a device), hardware first.
 pub fn adapters(backends: Backends) -> Vec<AdapterReport> {
     let mut list = list_adapters(backends);
-    list.sort_by_key(|a| rank(&a.get_info()));
+    list.sort_by_key(|(_, a)| rank(&a.get_info()));
     list.iter()
-        .map(|a| AdapterReport::of(&a.get_info(), &a.limits()))
+        .map(|(_, a)| AdapterReport::of(&a.get_info(), &a.limits()))
         .collect()
 }
 
-/// The adapters on `backends`. [`Backends::All`] asks GL only where Vulkan, Metal and DX12 list
-/// nothing: GL's adapter is the same device seen through an older API, and opening it probes the
-/// window system.
-fn list_adapters(backends: Backends) -> Vec<wgpu::Adapter> {
+/// The adapters on `backends`, each with the instance that found it. [`Backends::All`] asks GL
+/// only where Vulkan, Metal and DX12 list nothing: GL's adapter is the same device seen through
+/// an older API, and opening it probes the window system.
+fn list_adapters(backends: Backends) -> Vec<(wgpu::Instance, wgpu::Adapter)> {
     let on = |b: wgpu::Backends| {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: b,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
         pollster::block_on(instance.enumerate_adapters(b))
+            .into_iter()
+            .map(|a| (instance.clone(), a))
+            .collect::<Vec<_>>()
     };
     match backends {
         Backends::All => {

@@ -12,6 +12,7 @@
 //!   by walking impostors.
 //! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
+//! - [`present`]: the viewer's window shown through a wgpu surface on the same device.
 //!
 //! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
 //! uploads and runs, and answers come back as the library's types.
@@ -27,9 +28,11 @@ pub mod build;
 pub mod bvh;
 pub mod device;
 pub mod methods;
+pub mod present;
 pub mod trace;
 pub mod walk;
 
 pub use bvh::GpuBvh;
 pub use device::{AdapterReport, Backends, Gpu, GpuError, GpuRequest, adapters};
 pub use methods::{Device, DeviceError, DeviceRenderer, check_device, has_gpu_path, open_for};
+pub use present::WindowSurface;

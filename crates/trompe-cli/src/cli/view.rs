@@ -1,6 +1,7 @@
-//! `trompe view SCENE`: the interactive viewer. A window (winit for the window and input,
-//! softbuffer to show a CPU frame — no GPU) over `crate::viewer::Viewer`; or, with `--frames`,
-//! headless: a script's inputs replayed at fixed time steps and every frame written.
+//! `trompe view SCENE`: the interactive viewer. A window (winit for the window and input) over
+//! `crate::viewer::Viewer`, shown through a wgpu surface on the GPU the methods run on with
+//! `--device gpu` (`trompe_gpu::present`), else through softbuffer with no GPU; or, with
+//! `--frames`, headless: a script's inputs replayed at fixed time steps and every frame written.
 
 use super::check_plan;
 use super::render::DeviceArg;
@@ -9,11 +10,12 @@ use crate::viewer::{Input, Request, Viewer, hud};
 use anyhow::{Context, Result, bail};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
+use std::sync::Arc;
 use std::time::Instant;
 use trompe::files::{FolderKind, OutputPlan};
 use trompe::frame::io;
 use trompe::scene::Scene;
+use trompe_gpu::{Gpu, WindowSurface};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -94,7 +96,13 @@ impl ViewArgs {
         let viewer = Viewer::new(&scene, self.impostor_resolution, gpu.as_ref())?;
         match self.frames {
             Some(frames) => headless(viewer, &script, frames, self.fps, size, &out),
-            None => window(viewer.live(), script, size, out, self.quit_after),
+            None => window(
+                viewer.live(),
+                script,
+                (size, gpu.as_ref()),
+                out,
+                self.quit_after,
+            ),
         }
     }
 }
@@ -130,7 +138,7 @@ fn headless(
         let (from, to) = (i as f32 * dt, (i + 1) as f32 * dt);
         for input in script.between(from, to) {
             if let Some(request) = viewer.input(input) {
-                handle(request, &viewer, last.as_ref(), size, out, i)?;
+                handle(request, &viewer, (last.as_ref(), None), size, out, i)?;
             }
         }
         let frame = viewer.frame(size, 1.0)?;
@@ -144,22 +152,29 @@ fn headless(
     Ok(())
 }
 
-/// Saves a screenshot (the last frame, without the overlay) or the camera block.
+/// Saves a screenshot (the last frame, without the overlay; and where a GPU shows the window,
+/// the frame as its surface was given it, overlay included, read back from the device) or the
+/// camera block.
 fn handle(
     request: Request,
     viewer: &Viewer<'_>,
-    last: Option<&trompe::Image<trompe::Rgba>>,
+    (last, shown): (
+        Option<&trompe::Image<trompe::Rgba>>,
+        Option<&trompe::Image<trompe::Rgba>>,
+    ),
     size: (u32, u32),
     out: &Output,
     n: u32,
 ) -> Result<()> {
     match request {
         Request::Screenshot => {
-            if let Some(image) = last {
-                let path = out.write(&format!("screenshot_{n:04}.png"), |p| {
-                    Ok(io::write_png(p, image)?)
-                })?;
-                eprintln!("wrote {}", path.display());
+            for (name, image) in [("screenshot", last), ("shown", shown)] {
+                if let Some(image) = image {
+                    let path = out.write(&format!("{name}_{n:04}.png"), |p| {
+                        Ok(io::write_png(p, image)?)
+                    })?;
+                    eprintln!("wrote {}", path.display());
+                }
             }
         }
         Request::SaveCamera => {
@@ -204,17 +219,24 @@ fn key_of(code: KeyCode) -> Option<crate::viewer::Key> {
     script::key(name)
 }
 
-/// What the frame is drawn into.
-type Surface = softbuffer::Surface<Rc<Window>, Rc<Window>>;
+/// What shows the window's frames.
+enum Surface<'a> {
+    /// A CPU buffer (softbuffer): no GPU.
+    Cpu(softbuffer::Surface<Arc<Window>, Arc<Window>>),
+    /// A wgpu surface on the GPU the methods run on.
+    Gpu(Box<WindowSurface<'static>>, &'a Gpu),
+}
 
 /// The window's state.
 struct App<'a> {
     viewer: Viewer<'a>,
     script: Script,
     size: (u32, u32),
+    /// The GPU the methods run on, which shows the window too.
+    gpu: Option<&'a Gpu>,
     out: Output,
     quit_after: Option<f32>,
-    window: Option<(Rc<Window>, Surface)>,
+    window: Option<(Arc<Window>, Surface<'a>)>,
     start: Instant,
     last_step: Instant,
     /// Seconds of the script already fed.
@@ -237,16 +259,30 @@ impl App<'_> {
     fn input(&mut self, input: Input) {
         self.pending.get_or_insert_with(Instant::now);
         self.moving = true;
-        if let Some(request) = self.viewer.input(input)
-            && let Err(e) = handle(
-                request,
-                &self.viewer,
-                self.last.as_ref(),
-                self.size,
-                &self.out,
-                self.frames,
-            )
-        {
+        let Some(request) = self.viewer.input(input) else {
+            return;
+        };
+        // What the GPU's surface was given last, for a screenshot.
+        let shown = match (&request, &self.window) {
+            (Request::Screenshot, Some((_, Surface::Gpu(surface, gpu)))) => {
+                match surface.read_shown(gpu) {
+                    Ok(shown) => shown,
+                    Err(e) => {
+                        self.error = Some(e.into());
+                        return;
+                    }
+                }
+            }
+            _ => None,
+        };
+        if let Err(e) = handle(
+            request,
+            &self.viewer,
+            (self.last.as_ref(), shown.as_ref()),
+            self.size,
+            &self.out,
+            self.frames,
+        ) {
             self.error = Some(e);
         }
     }
@@ -275,26 +311,32 @@ impl App<'_> {
             self.scale = (self.scale * (33.0 / frame.ms.max(1.0)).sqrt() as f32).clamp(0.2, 1.0);
         }
         self.moving = false;
-        surface
-            .resize(
-                NonZeroU32::new(size.0).unwrap_or(NonZeroU32::MIN),
-                NonZeroU32::new(size.1).unwrap_or(NonZeroU32::MIN),
-            )
-            .map_err(|e| anyhow::anyhow!("resizing the window's buffer: {e}"))?;
-        let mut buffer = surface
-            .buffer_mut()
-            .map_err(|e| anyhow::anyhow!("the window's buffer: {e}"))?;
-        for (px, c) in buffer.iter_mut().zip(frame.image.pixels()) {
-            let [r, g, b] =
-                [c.x, c.y, c.z].map(|v| (trompe::frame::linear_to_srgb(v) * 255.0 + 0.5) as u32);
-            *px = (r.min(255) << 16) | (g.min(255) << 8) | b.min(255);
-        }
         let mut lines = frame.hud.clone();
         lines.insert(1, format!("input to screen {:.0} ms", self.latency_ms));
-        hud::draw(&mut buffer, size.0 as usize, &lines);
-        buffer
-            .present()
-            .map_err(|e| anyhow::anyhow!("presenting the frame: {e}"))?;
+        match surface {
+            Surface::Cpu(surface) => {
+                surface
+                    .resize(
+                        NonZeroU32::new(size.0).unwrap_or(NonZeroU32::MIN),
+                        NonZeroU32::new(size.1).unwrap_or(NonZeroU32::MIN),
+                    )
+                    .map_err(|e| anyhow::anyhow!("resizing the window's buffer: {e}"))?;
+                let mut buffer = surface
+                    .buffer_mut()
+                    .map_err(|e| anyhow::anyhow!("the window's buffer: {e}"))?;
+                compose(&mut buffer, &frame.image, size.0, &lines);
+                buffer
+                    .present()
+                    .map_err(|e| anyhow::anyhow!("presenting the frame: {e}"))?;
+            }
+            Surface::Gpu(surface, gpu) => {
+                let mut buffer = vec![0u32; size.0 as usize * size.1 as usize];
+                compose(&mut buffer, &frame.image, size.0, &lines);
+                surface
+                    .present(gpu, &buffer, size)
+                    .context("presenting the frame")?;
+            }
+        }
         if let Some(at) = self.pending.take() {
             self.latency_ms = at.elapsed().as_secs_f64() * 1e3;
         }
@@ -316,12 +358,27 @@ impl ApplicationHandler for App<'_> {
             .create_window(attributes)
             .map_err(|e| anyhow::anyhow!("opening a window: {e}"))
             .and_then(|w| {
-                let w = Rc::new(w);
+                let w = Arc::new(w);
+                if let Some(gpu) = self.gpu {
+                    match WindowSurface::new(gpu, w.clone(), self.size) {
+                        Ok(surface) => {
+                            eprintln!(
+                                "the window shows through a wgpu surface on {} ({:?})",
+                                gpu.name(),
+                                surface.format()
+                            );
+                            return Ok((w, Surface::Gpu(Box::new(surface), gpu)));
+                        }
+                        Err(e) => {
+                            eprintln!("warning: {e}; the window shows through a CPU buffer instead")
+                        }
+                    }
+                }
                 let context = softbuffer::Context::new(w.clone())
                     .map_err(|e| anyhow::anyhow!("the display: {e}"))?;
                 let surface = softbuffer::Surface::new(&context, w.clone())
                     .map_err(|e| anyhow::anyhow!("the window's surface: {e}"))?;
-                Ok((w, surface))
+                Ok((w, Surface::Cpu(surface)))
             });
         match made {
             Ok(made) => {
@@ -397,11 +454,23 @@ impl ApplicationHandler for App<'_> {
     }
 }
 
-/// Opens the window and runs until it closes (or --quit-after).
-fn window(
-    viewer: Viewer<'_>,
+/// `image` (linear colour) as a window's buffer shows it — each pixel `0x00RRGGBB`, sRGB-encoded
+/// — with the overlay's `lines` drawn over it; `width` pixels a row.
+fn compose(buffer: &mut [u32], image: &trompe::Image<trompe::Rgba>, width: u32, lines: &[String]) {
+    for (px, c) in buffer.iter_mut().zip(image.pixels()) {
+        let [r, g, b] =
+            [c.x, c.y, c.z].map(|v| (trompe::frame::linear_to_srgb(v) * 255.0 + 0.5) as u32);
+        *px = (r.min(255) << 16) | (g.min(255) << 8) | b.min(255);
+    }
+    hud::draw(buffer, width as usize, lines);
+}
+
+/// Opens the window and runs until it closes (or --quit-after); shown through a wgpu surface
+/// on `gpu` if given.
+fn window<'a>(
+    viewer: Viewer<'a>,
     script: Script,
-    size: (u32, u32),
+    (size, gpu): ((u32, u32), Option<&'a Gpu>),
     out: Output,
     quit_after: Option<f32>,
 ) -> Result<()> {
@@ -412,6 +481,7 @@ fn window(
         viewer,
         script,
         size,
+        gpu,
         out,
         quit_after,
         window: None,

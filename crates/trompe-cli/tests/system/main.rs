@@ -32,6 +32,13 @@ fn main() {
             "xvfb-run (package xvfb)",
         ),
         trial(
+            "viewer::the_gpu_window_shows_the_frame_through_a_wgpu_surface",
+            the_gpu_window_shows_the_frame_through_a_wgpu_surface,
+            common::has_command("xvfb-run") && adapter,
+            "xvfb-run (package xvfb) and a GPU adapter (without a GPU: lavapipe, package \
+             mesa-vulkan-drivers)",
+        ),
+        trial(
             "gpu::render_on_the_gpu_is_the_cpu_frame",
             render_on_the_gpu_is_the_cpu_frame,
             adapter,
@@ -107,6 +114,74 @@ pub fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
         "window against headless: FLIP {}",
         score.flip
     );
+}
+
+/// `view --device gpu` under Xvfb shows its window through a wgpu surface on the GPU: what the
+/// surface was given, read back from the device, is the frame the viewer rendered, byte for
+/// byte below the overlay.
+pub fn the_gpu_window_shows_the_frame_through_a_wgpu_surface() {
+    let dir = scratch("viewer-gpu-window");
+    let keys = dir.join("keys.txt");
+    std::fs::write(&keys, "0.5 tap F12\n").unwrap();
+    let window = dir.join("window");
+    let o = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_trompe"))
+        .args([
+            "view",
+            "scenes/teapot-in-bunny.toml",
+            "--device",
+            "gpu",
+            "--size",
+            "240x320",
+            "--quit-after",
+            "4",
+        ])
+        .arg("--script")
+        .arg(&keys)
+        .arg("-o")
+        .arg(&window)
+        .current_dir(common::root())
+        .output()
+        .expect("xvfb-run runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the window shows through a wgpu surface on"),
+        "{}",
+        stderr(&o)
+    );
+    let named = |prefix: &str| {
+        std::fs::read_dir(&window)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                p.file_name()
+                    .is_some_and(|n| n.to_string_lossy().starts_with(prefix))
+            })
+            .unwrap_or_else(|| panic!("no {prefix}: {}", stderr(&o)))
+    };
+    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
+    let (frame, shown) = (read(&named("screenshot")), read(&named("shown")));
+    assert_eq!(frame.size(), (240, 320));
+    assert_eq!(shown.size(), frame.size());
+    let level = |v: f32| (trompe::frame::linear_to_srgb(v) * 255.0).round() as i32;
+    // The overlay covers at most the top thirteen lines (18 pixels each, from 4).
+    let mut worst = 0;
+    for y in 240..320 {
+        for x in 0..240 {
+            let (a, b) = (frame.get(x, y), shown.get(x, y));
+            for c in 0..3 {
+                worst = worst.max((level(a[c]) - level(b[c])).abs());
+            }
+        }
+    }
+    assert!(worst <= 1, "shown differs from the frame by {worst} levels");
+    // And the overlay is drawn over the top: its first line's band darkens the frame.
+    let darker = (4..22)
+        .flat_map(|y| (0..240).map(move |x| (x, y)))
+        .filter(|&(x, y)| level(shown.get(x, y)[1]) < level(frame.get(x, y)[1]))
+        .count();
+    assert!(darker > 240, "{darker} pixels of the overlay's first line");
 }
 
 /// `render --device gpu` writes the frame `--device cpu` writes (the trace method), one frame
