@@ -7,6 +7,9 @@
 //! read through the encoding of the surface's format, so no colour is converted twice.
 
 use crate::device::{Gpu, GpuError};
+
+/// The window's shader.
+pub const SHADER: &str = include_str!("../shaders/present.wgsl");
 use trompe::frame::{Image, Rgba};
 
 /// A window's surface on a GPU, and the frame it showed last.
@@ -73,7 +76,7 @@ impl<'w> WindowSurface<'w> {
             view_formats: vec![],
         };
         surface.configure(&gpu.device, &config);
-        let module = gpu.module("present.wgsl", include_str!("../shaders/present.wgsl"));
+        let module = gpu.module("present.wgsl", SHADER);
         let pipeline = gpu
             .device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
