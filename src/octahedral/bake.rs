@@ -40,7 +40,7 @@ pub const DEFAULT_DILATION: u32 = 4;
 /// assert_eq!(settings.dilation, DEFAULT_DILATION);
 /// assert!(settings.with_dilation(65).is_err());
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BakeSettings {
     /// The frame grid.
     pub grid: Grid,

@@ -247,10 +247,19 @@ pub struct CheckArgs {
 #[derive(clap::Args, Debug)]
 pub struct BakeArgs {
     /// The object (.obj, .ply, .gltf, .glb), in its own coordinates; or a floor plan
-    /// (.maze) for --camera graph. With --octahedral, any number of meshes: a batch into the
-    /// folder -o names.
-    #[arg(required = true)]
+    /// (.maze) for --camera graph. With --octahedral, any number of meshes and folders (walked
+    /// for the meshes they hold): a batch into the folder -o names, the input folders mirrored.
+    #[arg(required_unless_present = "inputs_from")]
     inputs: Vec<PathBuf>,
+    /// With --octahedral: also bake the meshes this file lists, one path a line ("-": standard
+    /// input; blank lines and lines starting with # skipped).
+    #[arg(long)]
+    inputs_from: Option<PathBuf>,
+    /// With --octahedral and a batch: skip each input an earlier run into the same folder
+    /// finished — its input, its settings and its outputs still as its manifest or journal
+    /// recorded them — and bake the rest.
+    #[arg(long)]
+    skip_existing: bool,
     /// Impostor camera.
     #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
     camera: CameraArg,
@@ -286,9 +295,11 @@ pub struct BakeArgs {
     /// camera.
     #[arg(long)]
     glb: bool,
-    /// With --octahedral and a batch: bake only shard K of N of the sorted inputs ("K/N").
+    /// With --octahedral and a batch: bake only shard K of N of the sorted inputs ("K/N",
+    /// 1-based); "auto" reads it from a Slurm array job's variables, "auto/N" from a Kubernetes
+    /// Indexed Job's JOB_COMPLETION_INDEX (0-based) with N completions.
     #[arg(long)]
-    shard: Option<trompe::octahedral::batch::Shard>,
+    shard: Option<octahedral::ShardArg>,
     /// Depth layers peeled through the camera: a count from 1 to 8 (peeling stops early at a
     /// layer that would hold nothing), or auto (added while a new layer holds more than 1 % of
     /// the first layer's texels).

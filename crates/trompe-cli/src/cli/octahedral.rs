@@ -7,6 +7,43 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
+/// `--shard`: `K/N`, or read from a job scheduler's variables (`auto`; `auto/N` with the count,
+/// which Kubernetes does not give).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShardArg {
+    /// Shard K of N.
+    Given(trompe::octahedral::batch::Shard),
+    /// From Slurm's or Kubernetes' variables, with the count if given.
+    Auto(Option<u32>),
+}
+
+impl std::str::FromStr for ShardArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim().strip_prefix("auto") {
+            Some("") => Ok(ShardArg::Auto(None)),
+            Some(rest) => match rest.strip_prefix('/').map(str::parse::<u32>) {
+                Some(Ok(n)) if n > 0 => Ok(ShardArg::Auto(Some(n))),
+                _ => Err(format!("{s:?}: expected auto or auto/N with N ≥ 1")),
+            },
+            None => s.parse().map(ShardArg::Given),
+        }
+    }
+}
+
+impl ShardArg {
+    /// The shard, reading the scheduler's variables for `auto`.
+    fn resolve(self) -> Result<trompe::octahedral::batch::Shard> {
+        match self {
+            ShardArg::Given(s) => Ok(s),
+            ShardArg::Auto(count) => Ok(trompe::octahedral::batch::Shard::from_scheduler(
+                |name| std::env::var(name).ok(),
+                count,
+            )?),
+        }
+    }
+}
+
 /// `trompe impostor export`.
 #[derive(clap::Args, Debug)]
 pub struct ExportArgs {
@@ -117,33 +154,73 @@ impl BakeArgs {
         )
     }
 
-    /// Whether this is a batch: several inputs, or an output that is not a .json file.
+    /// Whether this is a batch: several inputs, a folder or a list of them, a shard, or an
+    /// output that is not a .json file.
     pub(super) fn is_batch(&self) -> bool {
-        self.inputs.len() > 1 || !has_extension(&self.output, "json") || self.shard.is_some()
+        self.inputs.len() > 1
+            || self.inputs.iter().any(|p| p.is_dir())
+            || self.inputs_from.is_some()
+            || !has_extension(&self.output, "json")
+            || self.shard.is_some()
     }
 
     /// A batch of octahedral bakes into the folder -o names: a shard of the sorted inputs,
-    /// each file baked or skipped with its error, a manifest; fails at the end if any failed.
+    /// each file baked (or, with --skip-existing, kept as an earlier run finished it) or skipped
+    /// with its error, a journal then a manifest; fails at the end if any failed.
     pub(super) fn bake_batch(&self, n: u32) -> Result<()> {
-        use trompe::octahedral::batch::{Shard, bake_all, outputs, shard_inputs};
-        let settings = self.octahedral_settings(n)?;
-        let shard = self.shard.unwrap_or(Shard { index: 1, count: 1 });
-        let mine = shard_inputs(&self.inputs, shard)?;
-        let manifest_path = self
-            .output
-            .join(format!("manifest-{}-of-{}.json", shard.index, shard.count));
+        use trompe::octahedral::batch::{
+            BatchSettings, Outcome, bake_all, gather, journal_path, listed, manifest_path, outputs,
+            shard_inputs,
+        };
+        let settings = BatchSettings {
+            bake: self.octahedral_settings(n)?,
+            glb: self.glb,
+            skip_existing: self.skip_existing,
+        };
+        let shard = match self.shard {
+            None => trompe::octahedral::batch::Shard::ALL,
+            Some(s) => s.resolve()?,
+        };
+        let list = match &self.inputs_from {
+            None => Vec::new(),
+            Some(p) if p.as_os_str() == "-" => {
+                let mut text = String::new();
+                std::io::Read::read_to_string(&mut std::io::stdin(), &mut text)
+                    .context("reading the list of inputs from standard input")?;
+                listed(&text)
+            }
+            Some(p) => listed(
+                &std::fs::read_to_string(p)
+                    .with_context(|| format!("reading the list of inputs {}", p.display()))?,
+            ),
+        };
+        let all = gather(&self.inputs, &list)?;
+        if all.is_empty() {
+            anyhow::bail!(
+                "no meshes to bake: the inputs name none (a folder's walk takes .{})",
+                trompe::octahedral::batch::MESH_EXTENSIONS.join(", .")
+            );
+        }
+        let mine = shard_inputs(&all, shard);
+        let manifest = manifest_path(&self.output, shard);
+        let journal = journal_path(&self.output, shard);
         let mut plan = OutputPlan::new();
-        plan.creating_folders().reads(self.inputs.iter());
+        plan.creating_folders()
+            .reads(all.iter().map(|i| i.path.clone()));
+        plan.reads(
+            self.inputs_from
+                .iter()
+                .filter(|p| p.as_os_str() != "-")
+                .cloned(),
+        );
         for o in outputs(&mine, &self.output, self.glb) {
             plan.writes(o, &["json", "png", "exr", "glb"]);
         }
-        plan.writes(&manifest_path, &["json"]);
+        plan.writes(&manifest, &["json"]);
+        plan.writes(&journal, &["jsonl"]);
         plan.check_overwrites()?;
         for input in &mine {
-            trompe::octahedral::file::check_replaceable(&trompe::octahedral::batch::output_for(
-                input,
-                &self.output,
-            ))?;
+            trompe::octahedral::file::check_replaceable(&input.sidecar(&self.output))?;
         }
         std::fs::create_dir_all(&self.output)
             .with_context(|| format!("creating {}", self.output.display()))?;
@@ -153,46 +230,40 @@ impl BakeArgs {
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> "),
         );
-        pb.set_message(format!("shard {}/{}", shard.index, shard.count));
-        let manifest = bake_all(
-            &mine,
-            &self.output,
-            settings,
-            self.glb,
-            shard,
-            &mut |e, secs| {
-                pb.suspend(|| match (&e.error, e.triangles) {
-                    (Some(err), _) => eprintln!("skipped {}: {err}", e.input.display()),
-                    (None, t) => eprintln!(
-                        "baked {} ({} triangles) in {secs:.2} s",
+        pb.set_message(format!("shard {shard}"));
+        let mut kept = 0;
+        let manifest_written =
+            bake_all(&mine, &self.output, settings, shard, &mut |e, outcome| {
+                pb.suspend(|| match (outcome, &e.error) {
+                    (Outcome::Failed, Some(err)) => {
+                        eprintln!("skipped {}: {err}", e.input.display())
+                    }
+                    (Outcome::UpToDate, _) => {
+                        kept += 1;
+                        eprintln!("up to date {}", e.input.display())
+                    }
+                    _ => eprintln!(
+                        "baked {} ({} triangles) in {:.2} s",
                         e.input.display(),
-                        t.unwrap_or(0)
+                        e.triangles.unwrap_or(0),
+                        e.seconds
                     ),
                 });
                 pb.inc(1);
-            },
-        );
+            })?;
         pb.finish_and_clear();
-        let text = serde_json::to_string_pretty(&manifest)?;
-        trompe::files::write_atomically(&manifest_path, text.as_bytes())
-            .with_context(|| format!("writing {}", manifest_path.display()))?;
-        let failed = manifest
-            .entries
-            .iter()
-            .filter(|e| e.error.is_some())
-            .count();
+        let entries = &manifest_written.entries;
+        let failed = entries.iter().filter(|e| e.error.is_some()).count();
         println!(
-            "shard {}/{}: {} of {} files baked; wrote {}",
-            shard.index,
-            shard.count,
-            manifest.entries.len() - failed,
-            manifest.entries.len(),
-            manifest_path.display()
+            "shard {shard}: {} of {} files baked ({kept} already up to date); wrote {}",
+            entries.len() - failed,
+            entries.len(),
+            manifest.display()
         );
         if failed > 0 {
             anyhow::bail!(
                 "{failed} of {} files could not be baked (named above)",
-                manifest.entries.len()
+                entries.len()
             );
         }
         Ok(())
