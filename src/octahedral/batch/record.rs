@@ -132,7 +132,7 @@ impl Journal {
         })
     }
 
-    /// Appends `entry` as one line, on disk before it returns.
+    /// Appends `entry` as one line, written (to the operating system) before it returns.
     ///
     /// # Errors
     /// When it cannot be written.
@@ -142,11 +142,12 @@ impl Journal {
             source: std::io::Error::other(e),
         })?;
         line.push(b'\n');
-        // A new line first: a line a kill cut short stays a line of its own, ignored.
+        // A new line first: a line a kill cut short stays a line of its own, ignored. Not
+        // synced to disk: a line a crash loses only means that input is baked again, and one
+        // that outlives its outputs is caught by their hashes (`up_to_date`).
         let write = |f: &mut std::fs::File| -> std::io::Result<()> {
             f.write_all(b"\n")?;
-            f.write_all(&line)?;
-            f.sync_data()
+            f.write_all(&line)
         };
         write(&mut self.file).map_err(|source| BatchError::Write {
             path: self.path.clone(),
