@@ -60,6 +60,34 @@ pub struct StagedFile {
     committed: bool,
 }
 
+/// Removes what writers that died left in `dir` (`.NAME.PID-N.tmp` of a process that is gone),
+/// once a process: a batch writing thousands of files into one folder reads it once, not once a
+/// file.
+fn remove_litter(dir: &Path) {
+    static CLEANED: std::sync::LazyLock<std::sync::Mutex<std::collections::HashSet<PathBuf>>> =
+        std::sync::LazyLock::new(Default::default);
+    let mut cleaned = CLEANED.lock().unwrap_or_else(|e| e.into_inner());
+    if cleaned.contains(dir) {
+        return;
+    }
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for entry in entries.flatten() {
+            let file_name = entry.file_name().to_string_lossy().into_owned();
+            let pid = file_name
+                .strip_prefix('.')
+                .and_then(|rest| rest.strip_suffix(".tmp"))
+                .and_then(|rest| rest.rsplit_once('.'))
+                .and_then(|(_, tag)| tag.split_once('-'))
+                .filter(|(_, n)| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+                .and_then(|(p, _)| p.parse::<u32>().ok());
+            if pid.is_some_and(|p| !alive(p)) {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+    cleaned.insert(dir.to_path_buf());
+}
+
 impl StagedFile {
     /// Writes `bytes` under a temporary name beside `path`, flushed to disk.
     pub fn write(path: &Path, bytes: &[u8]) -> std::io::Result<StagedFile> {
@@ -71,21 +99,8 @@ impl StagedFile {
         let name = path
             .file_name()
             .ok_or_else(|| std::io::Error::other("the path names no file"))?;
-        // What writers of this name that died left behind (their process is gone).
         let prefix = format!(".{}.", name.to_string_lossy());
-        if let Ok(entries) = std::fs::read_dir(dir) {
-            for entry in entries.flatten() {
-                let file_name = entry.file_name().to_string_lossy().into_owned();
-                let pid = file_name
-                    .strip_prefix(&prefix)
-                    .and_then(|rest| rest.strip_suffix(".tmp"))
-                    .and_then(|rest| rest.split('-').next())
-                    .and_then(|p| p.parse::<u32>().ok());
-                if pid.is_some_and(|p| !alive(p)) {
-                    let _ = std::fs::remove_file(entry.path());
-                }
-            }
-        }
+        remove_litter(dir);
         let staged = StagedFile {
             tmp: dir.join(format!(
                 "{prefix}{}-{}.tmp",
@@ -151,5 +166,27 @@ mod tests {
             .collect();
         assert!(left.is_empty(), "{left:?}");
         assert_eq!(std::fs::read(&f).unwrap(), b"new contents");
+    }
+
+    #[test]
+    fn what_dead_writers_left_is_removed_and_nothing_else() {
+        let d = crate::test_scratch::scratch("files_litter");
+        // A writer of another file that died (no process has that id), and files of the
+        // user's that only look alike.
+        let dead = d.join(".y.exr.4294967295-3.tmp");
+        let mine = [
+            ".notes.tmp",
+            ".y.exr.tmp",
+            ".y.exr.12-x.tmp",
+            "y.exr.4294967295-3.tmp",
+        ]
+        .map(|n| d.join(n));
+        std::fs::write(&dead, b"torn").unwrap();
+        for m in &mine {
+            std::fs::write(m, b"the user's").unwrap();
+        }
+        write_atomically(&d.join("x.png"), b"x").unwrap();
+        assert!(!dead.exists());
+        assert!(mine.iter().all(|m| m.exists()));
     }
 }
