@@ -560,6 +560,14 @@ impl CheckArgs {
             };
             return Ok(check_built(&subject, &settings)?);
         };
+        if trompe::sidecar::SidecarKind::of(path)? == trompe::sidecar::SidecarKind::Octahedral {
+            bail!(
+                "{}: an octahedral atlas's layout; `impostor check --impostor` walks depth-image \
+                 impostors (pinhole, orthographic, SPOC, graph camera). Octahedral atlases are \
+                 scored against the exact render by turntables: `trompe bench octahedral`",
+                path.display()
+            );
+        }
         let baked = trompe::impostor::file::load(path).context("loading the impostor")?;
         let settings = BakedCheckSettings {
             reflector,

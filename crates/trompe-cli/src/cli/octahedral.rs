@@ -158,6 +158,7 @@ impl BakeArgs {
     /// output that is not a .json file.
     pub(super) fn is_batch(&self) -> bool {
         self.inputs.len() > 1
+            || has_extension(&self.output, "glb")
             || self.inputs.iter().any(|p| p.is_dir())
             || self.inputs_from.is_some()
             || !has_extension(&self.output, "json")
@@ -168,6 +169,14 @@ impl BakeArgs {
     /// each file baked (or, with --skip-existing, kept as an earlier run finished it) or skipped
     /// with its error, a journal then a manifest; fails at the end if any failed.
     pub(super) fn bake_batch(&self, n: u32) -> Result<()> {
+        if has_extension(&self.output, "glb") {
+            anyhow::bail!(
+                "-o {}: an octahedral bake writes NAME.json and its maps (add --glb for \
+                 NAME.glb beside them), and a batch writes into a folder: give -o NAME.json or \
+                 -o FOLDER/",
+                self.output.display()
+            );
+        }
         use trompe::octahedral::batch::{
             BatchSettings, Outcome, bake_all, gather, journal_path, listed, manifest_path, outputs,
             shard_inputs,

@@ -177,3 +177,45 @@ fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
     ]);
     fails_cleanly(&o, "shards");
 }
+
+#[test]
+fn a_glb_output_or_an_atlas_checked_as_an_impostor_is_refused_by_name() {
+    let d = scratch("cli_octahedral_refusals");
+    // -o NAME.glb: neither the sidecar nor a folder; refused before anything is written.
+    let glb = d.join("eng.glb");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--octahedral",
+        "4",
+        "--resolution",
+        "64",
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "add --glb");
+    assert!(!glb.exists());
+    // An atlas's layout given to `impostor check --impostor` says what it is.
+    let json = d.join("duck.json");
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "--octahedral",
+        "4",
+        "--resolution",
+        "64",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = trompe(&[
+        "impostor",
+        "check",
+        "assets/gltf/Duck.glb",
+        "--impostor",
+        json.to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "octahedral atlas");
+}
