@@ -169,18 +169,28 @@ impl Impostor {
         color: &F,
         layers: Layers,
     ) -> Result<(), LayerError> {
-        let layers = layers.checked()?;
-        self.deeper.clear();
-        self.maps_changed();
-        if layers == Layers::ONE {
+        let Some(layers) = self.start_peeling(layers)? else {
             return Ok(());
-        }
+        };
         let camera = self.camera.clone();
         match &camera {
             ImpostorCamera::Pinhole(c) => self.peel_through(c, mesh, object, color, layers),
             ImpostorCamera::Orthographic(c) => self.peel_through(c, mesh, object, color, layers),
             ImpostorCamera::Spoc(c) => self.peel_through(c, mesh, object, color, layers),
             ImpostorCamera::Graph(_) => Err(LayerError::GraphCamera),
+        }
+    }
+
+    /// Drops the layers it held and checks `layers`: the layers to peel, or `None` for one
+    /// layer (nothing to peel).
+    fn start_peeling(&mut self, layers: Layers) -> Result<Option<Layers>, LayerError> {
+        let layers = layers.checked()?;
+        self.deeper.clear();
+        self.maps_changed();
+        match (layers, &self.camera) {
+            (Layers::ONE, _) => Ok(None),
+            (_, ImpostorCamera::Graph(_)) => Err(LayerError::GraphCamera),
+            _ => Ok(Some(layers)),
         }
     }
 
@@ -272,15 +282,9 @@ impl Impostor {
         layers: Layers,
         draw: &mut dyn FnMut(&Mesh) -> Result<DrawnImage, String>,
     ) -> Result<(), LayerError> {
-        let layers = layers.checked()?;
-        self.deeper.clear();
-        self.maps_changed();
-        if layers == Layers::ONE {
+        let Some(layers) = self.start_peeling(layers)? else {
             return Ok(());
-        }
-        if let ImpostorCamera::Graph(_) = self.camera {
-            return Err(LayerError::GraphCamera);
-        }
+        };
         let (facing, kept) = facing_camera(mesh, &self.camera);
         let first_covered = self.gd.pixels().iter().filter(|&&g| g > 0.0).count();
         while self.layer_count() < layers.most() {

@@ -20,7 +20,7 @@
 
 use crate::device::{Gpu, GpuError};
 use crate::trace::{
-    GpuRasterCamera, RasterDraw, draw_ranges_into_visibility, raster_pipeline_of, texture,
+    GpuRasterCamera, RasterDraw, draw_ranges_into_visibility, raster_pipeline_of,
     visibility_pipeline, visibility_texture,
 };
 use glam::{Vec2, Vec3};
@@ -301,7 +301,7 @@ fn ceiling_group(
         });
     }
     let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
-    let ceiling = texture(gpu, "ceiling", (w, h), wgpu::TextureFormat::R32Uint, usage);
+    let ceiling = gpu.texture("ceiling", (w, h), wgpu::TextureFormat::R32Uint, usage);
     gpu.queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture: &ceiling,
@@ -315,11 +315,7 @@ fn ceiling_group(
             bytes_per_row: Some(4 * w),
             rows_per_image: Some(h),
         },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
+        crate::device::extent((w, h)),
     );
     let view = ceiling.create_view(&Default::default());
     Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -351,17 +351,17 @@ impl Gpu {
         self.buffer_with(label, data, wgpu::BufferUsages::UNIFORM)
     }
 
-    /// Submits `encoder`, then copies `texture` (`w × h`, four 32-bit words a texel) back: its
-    /// texels, row-major.
-    pub(crate) fn read_texture(
+    /// The `w × h` texels of `texture` (its first level), each `texel` bytes, read back after
+    /// `encoder`'s work, row-major and unpadded.
+    pub(crate) fn read_texture_bytes(
         &self,
         mut encoder: wgpu::CommandEncoder,
         texture: &wgpu::Texture,
-        (w, h): (u32, u32),
+        ((w, h), texel): ((u32, u32), u32),
         what: &'static str,
-    ) -> Result<Vec<[u32; 4]>, GpuError> {
-        let row =
-            (u64::from(w) * 16).next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+    ) -> Result<Vec<u8>, GpuError> {
+        let tight = u64::from(w) * u64::from(texel);
+        let row = tight.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
         let buffer = self.buffer(
             "texture read back",
             row * u64::from(h),
@@ -382,18 +382,46 @@ impl Gpu {
                     rows_per_image: Some(h),
                 },
             },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
+            extent((w, h)),
         );
         let bytes = self.read_back(encoder, &[buffer], what)?;
         Ok(bytes[0]
             .chunks(row as usize)
             .take(h as usize)
-            .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(&r[..w as usize * 16]))
+            .flat_map(|r| r[..tight as usize].iter().copied())
             .collect())
+    }
+
+    /// [`Gpu::read_texture_bytes`] of a texture of four 32-bit channels a texel.
+    pub(crate) fn read_texture(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        size: (u32, u32),
+        what: &'static str,
+    ) -> Result<Vec<[u32; 4]>, GpuError> {
+        let bytes = self.read_texture_bytes(encoder, texture, (size, 16), what)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// A `w × h` 2-D texture of one level.
+    pub(crate) fn texture(
+        &self,
+        label: &str,
+        size: (u32, u32),
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: extent(size),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
     }
 
     /// Submits `encoder`, then copies each of `sources` back and waits for them (one
@@ -613,5 +641,14 @@ impl AdapterReport {
             max_workgroups_per_dimension: l.max_compute_workgroups_per_dimension,
             max_texture_2d: l.max_texture_dimension_2d,
         }
+    }
+}
+
+/// The extent of a `w × h` 2-D image.
+pub(crate) fn extent((w, h): (u32, u32)) -> wgpu::Extent3d {
+    wgpu::Extent3d {
+        width: w,
+        height: h,
+        depth_or_array_layers: 1,
     }
 }

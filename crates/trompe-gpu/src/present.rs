@@ -6,7 +6,7 @@
 //! Invariant: the bytes shown are the bytes sent — the frame is sRGB-encoded, and its texture is
 //! read through the encoding of the surface's format, so no colour is converted twice.
 
-use crate::device::{Gpu, GpuError};
+use crate::device::{Gpu, GpuError, extent};
 
 /// The window's shader.
 pub const SHADER: &str = include_str!("../shaders/present.wgsl");
@@ -160,8 +160,8 @@ impl<'w> WindowSurface<'w> {
         } else {
             wgpu::TextureFormat::Bgra8Unorm
         };
-        let frame = texture(
-            gpu,
+        let frame = gpu.texture(
+            "the window's frame",
             (w, h),
             sent,
             wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
@@ -181,8 +181,8 @@ impl<'w> WindowSurface<'w> {
             },
             extent((w, h)),
         );
-        let shown = texture(
-            gpu,
+        let shown = gpu.texture(
+            "the window's frame as shown",
             (w, h),
             self.config.format,
             wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
@@ -233,32 +233,8 @@ impl<'w> WindowSurface<'w> {
             return Ok(None);
         };
         let (w, h) = (*w, *h);
-        let row =
-            (u64::from(w) * 4).next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
-        let buffer = gpu.buffer(
-            "shown frame",
-            row * u64::from(h),
-            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        );
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: shown,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row as u32),
-                    rows_per_image: Some(h),
-                },
-            },
-            extent((w, h)),
-        );
-        let bytes = gpu.read_back(encoder, &[buffer], "the shown frame")?;
+        let encoder = gpu.device.create_command_encoder(&Default::default());
+        let bytes = gpu.read_texture_bytes(encoder, shown, ((w, h), 4), "the shown frame")?;
         let bgra = matches!(
             self.config.format.remove_srgb_suffix(),
             wgpu::TextureFormat::Bgra8Unorm
@@ -269,40 +245,13 @@ impl<'w> WindowSurface<'w> {
         })?;
         for y in 0..h {
             for x in 0..w {
-                let i = (u64::from(y) * row + u64::from(x) * 4) as usize;
-                let [a, g, b] = [bytes[0][i], bytes[0][i + 1], bytes[0][i + 2]];
+                let i = 4 * (y as usize * w as usize + x as usize);
+                let [a, g, b] = [bytes[i], bytes[i + 1], bytes[i + 2]];
                 let (r, b) = if bgra { (b, a) } else { (a, b) };
                 let linear = [r, g, b].map(|c| trompe::frame::srgb_to_linear(f32::from(c) / 255.0));
                 image.set(x, y, Rgba::new(linear[0], linear[1], linear[2], 1.0));
             }
         }
         Ok(Some(image))
-    }
-}
-
-/// A `w × h` 2-D texture of one level.
-fn texture(
-    gpu: &Gpu,
-    size: (u32, u32),
-    format: wgpu::TextureFormat,
-    usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("window"),
-        size: extent(size),
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
-}
-
-fn extent((w, h): (u32, u32)) -> wgpu::Extent3d {
-    wgpu::Extent3d {
-        width: w,
-        height: h,
-        depth_or_array_layers: 1,
     }
 }

@@ -708,8 +708,7 @@ pub(crate) fn draw_ranges_into_visibility(
             })
         })
         .collect();
-    let depth = texture(
-        gpu,
+    let depth = gpu.texture(
         "raster depth",
         (w, h),
         DEPTH,
@@ -757,31 +756,7 @@ pub(crate) fn visibility_texture(gpu: &Gpu, w: u32, h: u32) -> wgpu::Texture {
     let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
         | wgpu::TextureUsages::TEXTURE_BINDING
         | wgpu::TextureUsages::COPY_SRC;
-    texture(gpu, "visibility", (w, h), VISIBILITY, usage)
-}
-
-/// A `w × h` 2-D texture of one level.
-pub(crate) fn texture(
-    gpu: &Gpu,
-    label: &str,
-    (w, h): (u32, u32),
-    format: wgpu::TextureFormat,
-    usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
+    gpu.texture("visibility", (w, h), VISIBILITY, usage)
 }
 
 /// The primary pass's pipeline and vertices: every leaf-ordered triangle's three corners.

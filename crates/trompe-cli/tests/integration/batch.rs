@@ -133,6 +133,40 @@ fn a_folder_tree_is_walked_and_mirrored_and_a_list_adds_to_it() {
     );
 }
 
+/// `impostor bake LIB --shard SHARD` into `out` with a scheduler's variables `vars` and no
+/// other scheduler's.
+fn bake_as_scheduled(
+    lib: &Path,
+    (shard, vars): (&str, &[(&str, &str)]),
+    out: &Path,
+) -> std::process::Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_trompe"));
+    command.args(["impostor", "bake"]).arg(lib).args([
+        "--octahedral",
+        "4",
+        "--resolution",
+        "64",
+        "--shard",
+        shard,
+        "-o",
+    ]);
+    for name in [
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_MIN",
+        "SLURM_ARRAY_TASK_STEP",
+        "SLURM_ARRAY_TASK_COUNT",
+        "JOB_COMPLETION_INDEX",
+    ] {
+        command.env_remove(name);
+    }
+    command
+        .arg(out)
+        .envs(vars.iter().copied())
+        .current_dir(common::root())
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn shards_from_a_schedulers_variables_merge_into_the_whole_batch() {
     let d = scratch("cli_batch_scheduler");
@@ -161,24 +195,7 @@ fn shards_from_a_schedulers_variables_merge_into_the_whole_batch() {
             "auto",
         ),
     ] {
-        let o = Command::new(env!("CARGO_BIN_EXE_trompe"))
-            .args(["impostor", "bake"])
-            .arg(&lib)
-            .args([
-                "--octahedral",
-                "4",
-                "--resolution",
-                "64",
-                "--shard",
-                shard,
-                "-o",
-            ])
-            .arg(&sharded)
-            .envs(vars)
-            .env_remove("SLURM_ARRAY_TASK_STEP")
-            .current_dir(common::root())
-            .output()
-            .unwrap();
+        let o = bake_as_scheduled(&lib, (shard, &vars), &sharded);
         assert!(o.status.success(), "{}", stderr(&o));
         manifests.push(sharded.join(format!("manifest-{}-of-3.json", manifests.len() + 1)));
     }
@@ -209,24 +226,7 @@ fn shards_from_a_schedulers_variables_merge_into_the_whole_batch() {
         untimed(manifest(&whole.join("manifest-1-of-1.json")))
     );
     // Without a scheduler, auto says what it looked for.
-    let o = Command::new(env!("CARGO_BIN_EXE_trompe"))
-        .args(["impostor", "bake"])
-        .arg(&lib)
-        .args([
-            "--octahedral",
-            "4",
-            "--resolution",
-            "64",
-            "--shard",
-            "auto",
-            "-o",
-        ])
-        .arg(d.join("nowhere"))
-        .env_remove("SLURM_ARRAY_TASK_ID")
-        .env_remove("JOB_COMPLETION_INDEX")
-        .current_dir(common::root())
-        .output()
-        .unwrap();
+    let o = bake_as_scheduled(&lib, ("auto", &[]), &d.join("nowhere"));
     fails_cleanly(&o, "SLURM_ARRAY_TASK_ID");
 }
 

@@ -60,30 +60,30 @@ fn main() {
     libtest_mimic::run(&args, trials).exit();
 }
 
+/// `trompe view scenes/teapot-in-bunny.toml` with `args`, in a window under Xvfb, fed the
+/// script `keys`, writing into `out`.
+fn in_a_window(args: &[&str], keys: &Path, out: &Path) -> std::process::Output {
+    std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24"])
+        .arg(env!("CARGO_BIN_EXE_trompe"))
+        .args(["view", "scenes/teapot-in-bunny.toml"])
+        .args(args)
+        .arg("--script")
+        .arg(keys)
+        .arg("-o")
+        .arg(out)
+        .current_dir(common::root())
+        .output()
+        .expect("xvfb-run runs")
+}
+
 /// The viewer's window, driven by a script under Xvfb, shows what the headless viewer renders.
 pub fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
     let dir = scratch("viewer-window");
     let keys = dir.join("keys.txt");
     std::fs::write(&keys, "0.0 tap 4\n1.0 tap F12\n").unwrap();
     let (window, headless) = (dir.join("window"), dir.join("headless"));
-    let o = std::process::Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24"])
-        .arg(env!("CARGO_BIN_EXE_trompe"))
-        .args([
-            "view",
-            "scenes/teapot-in-bunny.toml",
-            "--size",
-            "160x120",
-            "--quit-after",
-            "2",
-        ])
-        .arg("--script")
-        .arg(&keys)
-        .arg("-o")
-        .arg(&window)
-        .current_dir(common::root())
-        .output()
-        .expect("xvfb-run runs");
+    let o = in_a_window(&["--size", "160x120", "--quit-after", "2"], &keys, &window);
     assert!(o.status.success(), "{}", stderr(&o));
     let shot = std::fs::read_dir(&window)
         .unwrap()
@@ -124,26 +124,11 @@ pub fn the_gpu_window_shows_the_frame_through_a_wgpu_surface() {
     let keys = dir.join("keys.txt");
     std::fs::write(&keys, "0.5 tap F12\n").unwrap();
     let window = dir.join("window");
-    let o = std::process::Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24"])
-        .arg(env!("CARGO_BIN_EXE_trompe"))
-        .args([
-            "view",
-            "scenes/teapot-in-bunny.toml",
-            "--device",
-            "gpu",
-            "--size",
-            "240x320",
-            "--quit-after",
-            "4",
-        ])
-        .arg("--script")
-        .arg(&keys)
-        .arg("-o")
-        .arg(&window)
-        .current_dir(common::root())
-        .output()
-        .expect("xvfb-run runs");
+    let o = in_a_window(
+        &["--device", "gpu", "--size", "240x320", "--quit-after", "4"],
+        &keys,
+        &window,
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("the window shows through a wgpu surface on"),
