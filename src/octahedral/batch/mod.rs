@@ -15,7 +15,7 @@ mod shard;
 
 pub use inputs::{BatchInput, MESH_EXTENSIONS, gather, is_mesh, listed};
 pub use record::{
-    Entry, Journal, Manifest, OutputFile, earlier, journal_path, manifest_path, sha256_of,
+    Entry, HashedFile, Journal, Manifest, earlier, journal_path, manifest_path, sha256_of,
     up_to_date,
 };
 pub use shard::Shard;
@@ -163,8 +163,21 @@ fn bake_one(
     input_sha256: Option<String>,
 ) -> Entry {
     let sidecar = input.sidecar(out);
-    let result = (|| -> Result<(usize, Vec<OutputFile>), String> {
+    let hashed = |path: PathBuf| -> Result<HashedFile, String> {
+        let sha256 = sha256_of(&path).map_err(|e| format!("hashing {}: {e}", path.display()))?;
+        Ok(HashedFile { path, sha256 })
+    };
+    let mut input_files = Vec::new();
+    let result = (|| -> Result<(usize, Vec<HashedFile>), String> {
         let loaded = crate::geom::io::load(&input.path).map_err(|e| e.to_string())?;
+        // What the mesh names beside it (its first file is the input itself).
+        input_files = loaded
+            .files
+            .iter()
+            .skip(1)
+            .filter(|p| p.is_file())
+            .map(|p| hashed(p.clone()))
+            .collect::<Result<_, String>>()?;
         let surface = crate::scene::Surface::Diffuse(None);
         let atlas = bake(&loaded.mesh, &surface, settings.bake).map_err(|e| e.to_string())?;
         if let Some(folder) = sidecar.parent() {
@@ -181,11 +194,7 @@ fn bake_one(
         let outputs = written
             .into_iter()
             .filter(|p| p.is_file())
-            .map(|path| {
-                let sha256 =
-                    sha256_of(&path).map_err(|e| format!("hashing {}: {e}", path.display()))?;
-                Ok(OutputFile { path, sha256 })
-            })
+            .map(hashed)
             .collect::<Result<_, String>>()?;
         Ok((loaded.mesh.triangle_count(), outputs))
     })();
@@ -196,6 +205,7 @@ fn bake_one(
     Entry {
         input: input.path.clone(),
         input_sha256,
+        input_files,
         output,
         outputs,
         triangles,
@@ -266,6 +276,7 @@ mod tests {
                     .map(|i| Entry {
                         input: i.path.clone(),
                         input_sha256: None,
+                        input_files: Vec::new(),
                         output: None,
                         outputs: Vec::new(),
                         triangles: None,

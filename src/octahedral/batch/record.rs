@@ -1,12 +1,14 @@
-//! What a batch records: a manifest a shard, one entry an input — its SHA-256, the settings and
-//! the trompe version that baked it, how long it took, and every output with its SHA-256 — and
+//! What a batch records: a manifest a shard, one entry an input — its SHA-256 and those of the
+//! files it names (a glTF's buffers and textures, an OBJ's materials), the settings and the
+//! trompe version that baked it, how long it took, and every output with its SHA-256 — and
 //! the journal a shard appends to as each input is done, so a shard killed midway (a pre-empted
 //! node) can be re-run and skip what is finished.
 //!
 //! Invariants: an entry reaches the journal only after every output it names is complete on disk
 //! (outputs are written atomically), so an output half-written when a run was killed is never
-//! taken for done; an entry is up to date only while its input, its settings and every output
-//! still hash as recorded; a line of the journal cut short by a kill is ignored.
+//! taken for done; an entry is up to date only while its input and the files it names, its
+//! settings and every output still hash as recorded; a line of the journal cut short by a kill
+//! is ignored.
 
 use super::{BakeSettings, BatchError, Shard};
 use sha2::{Digest, Sha256};
@@ -14,9 +16,9 @@ use std::collections::HashMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-/// One output file and its SHA-256.
+/// A file and its SHA-256.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct OutputFile {
+pub struct HashedFile {
     /// The file.
     pub path: PathBuf,
     /// Its SHA-256, hex.
@@ -31,11 +33,15 @@ pub struct Entry {
     /// Its SHA-256, hex (absent where it could not be read).
     #[serde(default)]
     pub input_sha256: Option<String>,
+    /// The files its loading read beside it (a glTF's buffers and textures, an OBJ's material
+    /// libraries and textures), each with its SHA-256.
+    #[serde(default)]
+    pub input_files: Vec<HashedFile>,
     /// The sidecar written (absent when the bake failed).
     pub output: Option<PathBuf>,
     /// Every file written, with its SHA-256.
     #[serde(default)]
-    pub outputs: Vec<OutputFile>,
+    pub outputs: Vec<HashedFile>,
     /// Triangles baked.
     pub triangles: Option<usize>,
     /// Why the file was skipped.
@@ -214,15 +220,18 @@ pub fn earlier(out: &Path) -> HashMap<PathBuf, Vec<Entry>> {
 }
 
 /// Whether `entry` still stands for baking `input` (of SHA-256 `input_sha256`) with `settings`:
-/// it baked, from the same bytes with the same settings, and every output it names is on disk
-/// with the bytes it recorded.
+/// it baked, from the same bytes (the input's, and those of every file its loading read beside
+/// it) with the same settings, and every output it names is on disk with the bytes it recorded.
 pub fn up_to_date(entry: &Entry, input_sha256: &str, settings: &BakeSettings) -> bool {
+    let unchanged = |files: &[HashedFile]| {
+        files
+            .iter()
+            .all(|f| sha256_of(&f.path).is_ok_and(|h| h == f.sha256))
+    };
     entry.error.is_none()
         && entry.input_sha256.as_deref() == Some(input_sha256)
         && entry.settings.as_ref() == Some(settings)
         && !entry.outputs.is_empty()
-        && entry
-            .outputs
-            .iter()
-            .all(|o| sha256_of(&o.path).is_ok_and(|h| h == o.sha256))
+        && unchanged(&entry.input_files)
+        && unchanged(&entry.outputs)
 }

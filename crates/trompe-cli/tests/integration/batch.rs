@@ -274,8 +274,13 @@ fn a_shard_killed_midway_is_finished_by_skip_existing_as_an_uninterrupted_run() 
         .unwrap();
     let start = Instant::now();
     loop {
+        // Whole lines only: one being written does not parse yet.
         let done = std::fs::read_to_string(&journal)
-            .map(|t| t.lines().filter(|l| !l.trim().is_empty()).count())
+            .map(|t| {
+                t.lines()
+                    .filter(|l| serde_json::from_str::<trompe::octahedral::batch::Entry>(l).is_ok())
+                    .count()
+            })
             .unwrap_or(0);
         if done >= 3 || start.elapsed() > Duration::from_secs(120) {
             break;
@@ -323,4 +328,51 @@ fn a_shard_killed_midway_is_finished_by_skip_existing_as_an_uninterrupted_run() 
             .entries
             .len()
     );
+}
+
+#[test]
+fn an_asset_whose_texture_changed_is_baked_again_by_skip_existing() {
+    let d = scratch("cli_batch_texture");
+    let lib = d.join("lib");
+    let truck = lib.join("truck");
+    std::fs::create_dir_all(&truck).unwrap();
+    for f in [
+        "CesiumMilkTruck.gltf",
+        "CesiumMilkTruck.bin",
+        "CesiumMilkTruck.png",
+    ] {
+        std::fs::copy(
+            common::asset(&format!("gltf/CesiumMilkTruck/{f}")),
+            truck.join(f),
+        )
+        .unwrap();
+    }
+    let out = d.join("out");
+    let again = |out: &Path| bake(&[lib.to_str().unwrap(), "--skip-existing"], out);
+    let o = again(&out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = manifest(&out.join("manifest-1-of-1.json"));
+    // The buffer and the texture the glTF names are recorded with their hashes.
+    let named: Vec<String> = m.entries[0]
+        .input_files
+        .iter()
+        .map(|f| f.path.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        named.contains(&"CesiumMilkTruck.bin".to_string())
+            && named.contains(&"CesiumMilkTruck.png".to_string()),
+        "{named:?}"
+    );
+    let o = again(&out);
+    assert!(stderr(&o).contains("up to date"), "{}", stderr(&o));
+    // Another texture, the .gltf untouched: baked again, not taken for done.
+    std::fs::copy(
+        out.join("truck/CesiumMilkTruck.png"),
+        truck.join("CesiumMilkTruck.png"),
+    )
+    .unwrap();
+    let o = again(&out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("up to date"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("baked "), "{}", stderr(&o));
 }
