@@ -123,10 +123,19 @@ pub fn bake_all(
     for input in inputs {
         let start = std::time::Instant::now();
         let input_sha256 = sha256_of(&input.path).ok();
+        // An earlier entry stands for this run only if it wrote where this run writes, every
+        // file this run writes (the .glb too, with `glb`), and is up to date.
+        let sidecar = input.sidecar(out);
+        let glb = sidecar.with_extension("glb");
+        let here = |e: &Entry| {
+            e.output.as_ref() == Some(&sidecar)
+                && (!settings.glb || e.outputs.iter().any(|o| o.path == glb))
+        };
         let kept = input_sha256.as_deref().and_then(|h| {
-            earlier
-                .get(&input.path)
-                .and_then(|es| es.iter().find(|e| up_to_date(e, h, &settings.bake)))
+            earlier.get(&input.path).and_then(|es| {
+                es.iter()
+                    .find(|e| here(e) && up_to_date(e, h, &settings.bake))
+            })
         });
         let (entry, outcome) = match kept {
             Some(e) => (e.clone(), Outcome::UpToDate),

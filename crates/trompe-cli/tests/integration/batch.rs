@@ -365,6 +365,15 @@ fn an_asset_whose_texture_changed_is_baked_again_by_skip_existing() {
     );
     let o = again(&out);
     assert!(stderr(&o).contains("up to date"), "{}", stderr(&o));
+    // Asked for a .glb the earlier run did not write: baked again.
+    let with_glb = bake(&[lib.to_str().unwrap(), "--skip-existing", "--glb"], &out);
+    assert!(with_glb.status.success(), "{}", stderr(&with_glb));
+    assert!(
+        !stderr(&with_glb).contains("up to date"),
+        "{}",
+        stderr(&with_glb)
+    );
+    assert!(out.join("truck/CesiumMilkTruck.glb").is_file());
     // Another texture, the .gltf untouched: baked again, not taken for done.
     std::fs::copy(
         out.join("truck/CesiumMilkTruck.png"),
