@@ -243,9 +243,9 @@ fn visible_hit(pixel: vec2<u32>, origin: vec3<f32>, d: vec3<f32>) -> Visible {
     return Visible(Hit(dot(position - origin, d), k, b1, b2), position);
 }
 
-// The back face of glass object `object` drawn at `pixel` in Wyman's first pass: found (w = 1),
-// its distance from the eye (z) and its outward normal — as src/render/wyman.rs's `BackFaces`
-// holds it.
+// The back face of glass object `object` drawn at `pixel` in Wyman's first pass: its outward
+// normal, its distance from the eye, and whether one was found — as src/render/wyman.rs's
+// `BackFaces` holds it.
 struct Back {
     normal: vec3<f32>,
     t: f32,
