@@ -19,7 +19,7 @@
 //! (`tests/system/build.rs` states the bound).
 
 use crate::device::{Gpu, GpuError};
-use crate::trace::{
+use crate::raster::{
     GpuRasterCamera, RasterDraw, draw_ranges_into_visibility, raster_pipeline_of,
     visibility_pipeline, visibility_texture,
 };

@@ -11,6 +11,8 @@
 //!   and the impostor methods: the same tracer with what mirrors and glass send out answered
 //!   by walking impostors.
 //! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
+//! - [`raster`]: the visibility pass — triangles drawn by the GPU rasterizer through any
+//!   impostor camera or the eye, under a depth-peeling ceiling if asked.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
 //! - [`present`]: the viewer's window shown through a wgpu surface on the same device.
 //!
@@ -29,6 +31,7 @@ pub mod bvh;
 pub mod device;
 pub mod methods;
 pub mod present;
+pub mod raster;
 pub mod trace;
 pub mod walk;
 

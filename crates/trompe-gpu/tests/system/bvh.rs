@@ -10,7 +10,7 @@ use trompe_gpu::{Gpu, GpuBvh};
 pub fn the_shaders_parse_and_validate() {
     validate(trompe_gpu::bvh::SHADER);
     validate(&trompe_gpu::trace::shader_source());
-    validate(trompe_gpu::trace::RASTER_SHADER);
+    validate(trompe_gpu::raster::RASTER_SHADER);
     validate(&trompe_gpu::walk::shader_source());
     validate(&trompe_gpu::trace::impostor_shader_source());
     validate(trompe_gpu::present::SHADER);
