@@ -502,11 +502,7 @@ impl<'a> Renderer<'a> {
                     atlases.render_through(&camera, &scene.lighting, progress)
                 })?;
                 let n = self.settings.octahedral_frames;
-                let report = if rebake {
-                    format!("baked {} atlases of {n} × {n} frames", scene.objects.len())
-                } else {
-                    format!("kept {} atlases", scene.objects.len())
-                };
+                let report = atlases.report(n, rebake);
                 (frame, report)
             }
             State::Layered(kept) => {

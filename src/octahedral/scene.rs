@@ -1,14 +1,17 @@
 //! A scene drawn the way an engine draws objects far enough away (beyond the papers): every
-//! object replaced by its octahedral atlas, baked on first use, each pixel's ray looked up in
-//! every atlas it passes through ([`OctahedralAtlas::blend`]: the three frames around the
-//! direction toward the eye, parallax-corrected) and the surfaces found composited front to back
-//! by their coverage. Each surface is shaded by the one shading path of every method
-//! ([`crate::render::shading::surface_radiance`]) with the blended normal: diffuse surfaces
-//! relit unshadowed, as an engine's impostor shader does; mirrors and glass reflecting and
-//! refracting the environment (environment mapping — an atlas holds no other object).
+//! object replaced by its octahedral atlas, baked on first use — one atlas for every copy of a
+//! field of instances, placed once a copy — each pixel's ray looked up in every atlas it passes
+//! through ([`OctahedralAtlas::blend`]: the three frames around the direction toward the eye,
+//! parallax-corrected), and the nearest surface found with coverage ≥ ½ drawn: the alpha test
+//! of an engine's impostor material (and of `shaders/octahedral_impostor.wgsl`). It is shaded by
+//! the one shading path of every method ([`crate::render::shading::surface_radiance`]) with
+//! the blended normal: diffuse surfaces relit unshadowed, as an engine's impostor shader does;
+//! mirrors and glass reflecting and refracting the environment (environment mapping — an atlas
+//! holds no other object).
 //!
-//! Invariants: the atlases are baked in world space from the scene at the frame's time; a
-//! pixel's result depends only on its ray (the same pixels for any thread count).
+//! Invariants: the atlases are baked in world space from the scene at the frame's time, a
+//! field's from its first copy; a pixel's result depends only on its ray (the same pixels for
+//! any thread count).
 
 use super::bake::{BakeError, BakeSettings, OctahedralAtlas, bake};
 use super::render::PARALLAX_STEPS;
@@ -43,14 +46,29 @@ pub enum SceneAtlasError {
     Frame(#[from] FrameError),
 }
 
+/// The coverage from which a blended lookup is a surface: an engine's alpha test.
+pub const ALPHA_TEST: f32 = 0.5;
+
 /// The scene's objects as octahedral atlases, in world space.
 pub struct SceneAtlases {
+    /// One atlas an object, or a field of copies, with its surface.
     atlases: Vec<(OctahedralAtlas, Surface)>,
+    /// Every object (object id = index): its atlas and where that atlas is moved to.
+    placed: Vec<Placed>,
+}
+
+/// An object drawn from an atlas.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placed {
+    /// The atlas (see [`SceneAtlases::atlases`]).
+    pub atlas: usize,
+    /// Its translation from where it was baked (world units; zero but for a field's copies).
+    pub offset: Vec3,
 }
 
 impl SceneAtlases {
-    /// Bakes every object of `scene` as it stands at time `t` (`progress` advances an object at
-    /// a time).
+    /// Bakes every object of `scene` as it stands at time `t`, a field of instances once from
+    /// its first copy (`progress` advances an atlas at a time).
     pub fn bake(
         scene: &Scene,
         t: f32,
@@ -58,24 +76,56 @@ impl SceneAtlases {
         progress: &dyn Progress,
     ) -> Result<Self, SceneAtlasError> {
         let view = scene.view(t)?;
-        let atlases = view
-            .meshes
-            .iter()
-            .zip(&view.surfaces)
-            .enumerate()
-            .map(|(object, (mesh, surface))| {
-                let atlas = bake(mesh, surface, settings)
-                    .map_err(|source| SceneAtlasError::Bake { object, source })?;
-                progress.advance(1);
-                Ok((atlas, surface.clone()))
-            })
-            .collect::<Result<_, SceneAtlasError>>()?;
-        Ok(Self { atlases })
+        let mut atlases: Vec<(OctahedralAtlas, Surface)> = Vec::new();
+        let mut placed: Vec<Placed> = Vec::with_capacity(view.meshes.len());
+        for (object, (mesh, surface)) in view.meshes.iter().zip(&view.surfaces).enumerate() {
+            let copy = scene.objects.get(object).and_then(|o| o.field);
+            if let Some(field) = copy.filter(|f| f.first < object) {
+                placed.push(Placed {
+                    atlas: placed[field.first].atlas,
+                    offset: field.offset,
+                });
+                continue;
+            }
+            let atlas = bake(mesh, surface, settings)
+                .map_err(|source| SceneAtlasError::Bake { object, source })?;
+            progress.advance(1);
+            placed.push(Placed {
+                atlas: atlases.len(),
+                offset: Vec3::ZERO,
+            });
+            atlases.push((atlas, surface.clone()));
+        }
+        Ok(Self { atlases, placed })
     }
 
-    /// The atlases, in the scene's object order.
+    /// The atlases baked (one an object, or a field of copies).
     pub fn atlases(&self) -> impl Iterator<Item = &OctahedralAtlas> {
         self.atlases.iter().map(|(a, _)| a)
+    }
+
+    /// Each atlas's surface, in the order of [`SceneAtlases::atlases`].
+    pub fn surfaces(&self) -> impl Iterator<Item = &Surface> {
+        self.atlases.iter().map(|(_, s)| s)
+    }
+
+    /// Every object, by object id: which atlas draws it, moved how far.
+    pub fn placed(&self) -> &[Placed] {
+        &self.placed
+    }
+
+    /// What a frame says of its atlases: baked (`n × n` frames each) or kept, and the objects
+    /// they draw where fields of instances share them.
+    pub fn report(&self, n: u32, baked: bool) -> String {
+        let atlases = self.atlases.len();
+        let done = match baked {
+            true => format!("baked {atlases} atlases of {n} × {n} frames"),
+            false => format!("kept {atlases} atlases"),
+        };
+        match self.placed.len() {
+            objects if objects > atlases => format!("{done}, drawing {objects} objects"),
+            _ => done,
+        }
     }
 
     /// Bytes the atlases hold in memory (colour, normal, depth, ORM).
@@ -108,12 +158,14 @@ impl SceneAtlases {
         let (w, h) = crate::camera::Projection::resolution(camera);
         let mut frame = Frame::new(w, h)?;
         let eye = camera.position();
-        // Each atlas's three frames, chosen by its direction toward the eye.
+        // Each placed atlas's three frames, chosen by its direction toward the eye.
         let frames: Vec<_> = self
-            .atlases
+            .placed
             .iter()
-            .map(|(a, _)| {
-                let toward = (eye - a.centre.as_dvec3()).normalize_or(glam::DVec3::Y);
+            .map(|p| {
+                let a = &self.atlases[p.atlas].0;
+                let centre = (a.centre + p.offset).as_dvec3();
+                let toward = (eye - centre).normalize_or(glam::DVec3::Y);
                 a.settings.grid.frames_around(toward)
             })
             .collect();
@@ -124,46 +176,40 @@ impl SceneAtlases {
                     .map(|x| {
                         let ray =
                             camera.ray(crate::frame::pixel_centre(f64::from(x), f64::from(y)));
-                        let mut found: Vec<(f64, usize, super::render::Blended)> = self
-                            .atlases
+                        // The nearest surface the alpha test keeps, ties to the lower id.
+                        let nearest = self
+                            .placed
                             .iter()
                             .zip(&frames)
                             .enumerate()
-                            .filter_map(|(i, ((a, _), f))| {
-                                a.blend(f, ray, PARALLAX_STEPS)
-                                    .filter(|b| b.t > 0.0)
+                            .filter_map(|(i, (p, f))| {
+                                // The atlas where it was baked sees the ray moved back.
+                                let moved = crate::geom::Ray::new(ray.origin - p.offset, ray.dir);
+                                self.atlases[p.atlas]
+                                    .0
+                                    .blend(f, moved, PARALLAX_STEPS)
+                                    .filter(|b| b.t > 0.0 && b.alpha >= ALPHA_TEST)
                                     .map(|b| (b.t, i, b))
                             })
-                            .collect();
-                        found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                        // Front to back: each surface over what is behind it, by coverage.
-                        let (mut color, mut left) = (Vec3::ZERO, 1.0f32);
-                        let mut id = crate::geom::NO_OBJECT;
-                        for (_, i, b) in &found {
-                            let surface = &self.atlases[*i].1;
-                            // The one shading path, the blended normal both shading and
-                            // geometric, unshadowed, every bounce the environment's.
-                            let (n, _, front) = facing(ray.dir, b.normal, b.normal);
-                            let c = surface_radiance(
-                                surface,
-                                ray.dir,
-                                (n, front),
-                                || b.albedo,
-                                lighting,
-                                |_| true,
-                                |bounce| lighting.environment.radiance(bounce.dir),
-                            );
-                            if id == crate::geom::NO_OBJECT && b.alpha >= 0.5 {
-                                id = *i as u32;
-                            }
-                            color += c * b.alpha * left;
-                            left *= 1.0 - b.alpha;
-                            if left <= 1e-4 {
-                                break;
-                            }
-                        }
-                        color += lighting.environment.radiance(ray.dir) * left;
-                        (color.extend(1.0), id)
+                            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                        let Some((_, i, b)) = nearest else {
+                            let background = lighting.environment.radiance(ray.dir);
+                            return (background.extend(1.0), crate::geom::NO_OBJECT);
+                        };
+                        let surface = &self.atlases[self.placed[i].atlas].1;
+                        // The one shading path, the blended normal both shading and geometric,
+                        // unshadowed, every bounce the environment's.
+                        let (n, _, front) = facing(ray.dir, b.normal, b.normal);
+                        let color = surface_radiance(
+                            surface,
+                            ray.dir,
+                            (n, front),
+                            || b.albedo,
+                            lighting,
+                            |_| true,
+                            |bounce| lighting.environment.radiance(bounce.dir),
+                        );
+                        (color.extend(1.0), i as u32)
                     })
                     .collect();
                 progress.advance(1);

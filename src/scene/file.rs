@@ -159,6 +159,10 @@ pub struct ObjectFile {
     /// A baked impostor (its JSON sidecar, relative to the scene file) that stands in for this
     /// diffuse object in what mirrors and glass see, instead of one built for each of them.
     pub impostor: Option<String>,
+    /// A field of copies: one object a translation (world units, applied after every other
+    /// key), named `NAME#0`, `NAME#1` …; none or empty: the object itself.
+    #[serde(default)]
+    pub instances: Vec<[f32; 3]>,
 }
 
 /// A uniform or per-axis scale.

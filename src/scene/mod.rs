@@ -166,7 +166,24 @@ pub struct SceneObject {
     /// (`render --method impostor`); it must have been baked from the object as the scene
     /// places it.
     pub impostor: Option<PathBuf>,
+    /// Where the object is one copy of a field (the scene file's `instances`): every method
+    /// draws it as an object of its own, and the octahedral method bakes one atlas a field.
+    pub field: Option<FieldCopy>,
 }
+
+/// One copy of a field of instances: the same mesh, surface, motion and deformation as the
+/// field's first copy, moved by a translation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldCopy {
+    /// The object id of the field's first copy.
+    pub first: usize,
+    /// This copy's translation from the first (world units): its pose at every time is the
+    /// first's, moved by it.
+    pub offset: Vec3,
+}
+
+/// Most copies one object's `instances` may ask for.
+pub const MAX_INSTANCES: usize = 4096;
 
 /// A maze an object is made from: the plan and its file (named in errors).
 #[derive(Clone, Debug)]
@@ -357,7 +374,39 @@ impl Scene {
         let mut objects = Vec::new();
         let mut files = vec![path.to_path_buf()];
         for (i, o) in file.objects.iter().enumerate() {
-            objects.push(load_object(path, dir, i, o, &mut warnings, &mut files)?);
+            let object = load_object(path, dir, i, o, &mut warnings, &mut files)?;
+            if o.instances.is_empty() {
+                objects.push(object);
+                continue;
+            }
+            let key = format!("object[{i}].instances");
+            if o.instances.len() > MAX_INSTANCES {
+                return Err(invalid(
+                    &key,
+                    format!("{} copies is more than {MAX_INSTANCES}", o.instances.len()),
+                ));
+            }
+            finite(&key, o.instances.as_flattened())?;
+            if object.impostor.is_some() || object.maze.is_some() {
+                return Err(invalid(
+                    &key,
+                    "a maze or an object with a baked impostor stands where it was made: it has                      no copies"
+                        .into(),
+                ));
+            }
+            let first = objects.len();
+            let origin = vec3(o.instances[0]);
+            for (k, at) in o.instances.iter().enumerate() {
+                let mut copy = object.clone();
+                copy.name = format!("{}#{k}", object.name);
+                copy.world_from_object =
+                    Mat4::from_translation(vec3(*at)) * object.world_from_object;
+                copy.field = Some(FieldCopy {
+                    first,
+                    offset: vec3(*at) - origin,
+                });
+                objects.push(copy);
+            }
         }
         let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
             b.union(o.mesh.bounds().transformed(&o.world_from_object))
@@ -853,6 +902,7 @@ fn load_object(
             files.push(sidecar.clone());
             sidecar
         }),
+        field: None,
     })
 }
 

@@ -268,3 +268,110 @@ fn a_scene_drawn_from_octahedral_atlases_comes_close_to_tracing_on_any_thread_co
     eprintln!("object ids agree on {share}, FLIP {}", score.flip);
     assert!(score.flip < 0.15, "FLIP {}", score.flip);
 }
+
+/// A scene of teapots (and a mirror ball), the teapots written as one object with `instances`
+/// or as objects of their own.
+fn teapots(as_field: bool) -> trompe::scene::Scene {
+    let at = [[-0.9, 0.0, 0.0], [0.0, 0.0, -0.6], [0.9, 0.0, 0.2]];
+    let mut text = String::from(
+        "[camera]\nposition = [0.0, 1.2, 3.0]\nlook_at = [0.0, 0.3, 0.0]\nfov_y = 40.0\n\
+         resolution = [96, 64]\n[light]\ndirection = [0.4, 1.0, 0.6]\nintensity = 2.5\n",
+    );
+    let teapot = "[[object]]\nname = \"teapot\"\nmesh = \"../assets/meshes/teapot.obj\"\n\
+                  fit = 0.6\nrotate = [0.0, 30.0, 0.0]\n";
+    if as_field {
+        text += teapot;
+        text += &format!("instances = {at:?}\n");
+    } else {
+        for (k, a) in at.iter().enumerate() {
+            text += &teapot.replace("\"teapot\"", &format!("\"teapot#{k}\""));
+            text += &format!("translate = {a:?}\n");
+        }
+    }
+    text += "[[object]]\nshape = \"sphere\"\nscale = 0.5\ntranslate = [0.0, 0.25, 0.8]\n\
+             material = { type = \"mirror\" }\n";
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/teapot-field.toml");
+    trompe::scene::Scene::from_toml(&text, &path).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+#[test]
+fn a_field_of_instances_is_one_atlas_drawn_as_its_copies_would_be_one_by_one() {
+    use trompe::octahedral::scene::SceneAtlases;
+    let (field, apart) = (teapots(true), teapots(false));
+    let names: Vec<&str> = field.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["teapot#0", "teapot#1", "teapot#2", "sphere"]);
+    let copy = field.objects[2].field.unwrap();
+    assert_eq!((copy.first, copy.offset), (0, Vec3::new(1.8, 0.0, 0.2)));
+    let t = field.render.time;
+    let small = settings(8, 48, 4);
+    let baked = SceneAtlases::bake(&field, t, small, &()).unwrap();
+    let one_by_one = SceneAtlases::bake(&apart, t, small, &()).unwrap();
+    assert_eq!((baked.atlases().count(), baked.placed().len()), (2, 4));
+    assert_eq!(one_by_one.atlases().count(), 4);
+    assert!(baked.report(8, true).contains("drawing 4 objects"));
+    // Each method sees the copies as objects: traced, the two scenes are one picture.
+    let (traced_field, _) =
+        trompe::render::render(&field, trompe::render::Method::Trace, &()).unwrap();
+    let (traced_apart, _) =
+        trompe::render::render(&apart, trompe::render::Method::Trace, &()).unwrap();
+    let same = |a: &trompe::frame::Frame, b: &trompe::frame::Frame| {
+        let n = a.object_id.pixels().len() as f64;
+        let same = (a.object_id.pixels().iter())
+            .zip(b.object_id.pixels())
+            .filter(|(x, y)| x == y)
+            .count();
+        (
+            same as f64 / n,
+            metrics::compare(&a.color, &b.color, None).unwrap().flip,
+        )
+    };
+    let (ids, flip) = same(&traced_field, &traced_apart);
+    assert!(
+        ids >= 0.999 && flip < 1e-3,
+        "traced: ids {ids}, FLIP {flip}"
+    );
+    for copy in 0..3 {
+        assert!(
+            traced_field.object_id.pixels().contains(&copy),
+            "copy {copy} unseen"
+        );
+    }
+    // Drawn from atlases: one atlas moved to each copy draws what three bakes draw.
+    let camera = field.camera.at(t).unwrap();
+    let drawn = baked.render_through(&camera, &field.lighting, &()).unwrap();
+    let drawn_apart = one_by_one
+        .render_through(&camera, &apart.lighting, &())
+        .unwrap();
+    let (ids, flip) = same(&drawn, &drawn_apart);
+    eprintln!("a field drawn from one atlas against three bakes: ids {ids}, FLIP {flip}");
+    assert!(ids >= 0.995 && flip < 0.01, "drawn: ids {ids}, FLIP {flip}");
+}
+
+#[test]
+fn a_field_that_cannot_be_is_refused_by_its_key() {
+    let base = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_y = 40.0\n\
+                resolution = [32, 32]\n[[object]]\nshape = \"cube\"\n";
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bad-field.toml");
+    let error = |extra: &str| {
+        trompe::scene::Scene::from_toml(&format!("{base}{extra}"), &path)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    let many = format!("instances = [{}]\n", vec!["[0, 0, 0]"; 4097].join(", "));
+    let e = error(&many);
+    assert!(
+        e.contains("object[0].instances") && e.contains("4096"),
+        "{e}"
+    );
+    let e = error("instances = [[0, 0, 0], [nan, 0, 0]]\n");
+    assert!(
+        e.contains("object[0].instances") && e.contains("finite"),
+        "{e}"
+    );
+    let e = error("impostor = \"cube.json\"\ninstances = [[0, 0, 0], [1, 0, 0]]\n");
+    assert!(
+        e.contains("object[0].instances") && e.contains("no copies"),
+        "{e}"
+    );
+}

@@ -47,6 +47,13 @@ pub fn the_shader_constants_are_the_rust_codes() {
     assert_eq!(names, ["\"sphere\"", "\"hemisphere\""]);
     assert!(src.contains("const COVERAGE_SPHERE: u32 = 0u;"));
     assert!(src.contains("const COVERAGE_HEMISPHERE: u32 = 1u;"));
+    assert!(
+        src.contains(&format!(
+            "const ALPHA_TEST: f32 = {:?};",
+            trompe::octahedral::scene::ALPHA_TEST
+        )),
+        "ALPHA_TEST"
+    );
 }
 
 /// A compute entry over the shader's own `frames_around`: each direction in, its three frames
@@ -211,7 +218,7 @@ fn run(@builtin(global_invocation_id) id: vec3<u32>) {
     let d = frame_direction(frame);
     let right = frame_right(d);
     let up = cross(d, right);
-    let t = frame_texel(inputs[k].xyz, d, right, up);
+    let t = frame_texel(inputs[k].xyz, impostor.centre, d, right, up);
     outputs[k * 2u] = t.x;
     outputs[k * 2u + 1u] = t.y;
 }

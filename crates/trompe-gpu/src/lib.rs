@@ -14,6 +14,7 @@
 //! - [`raster`]: the visibility pass — triangles drawn by the GPU rasterizer through any
 //!   impostor camera or the eye, under a depth-peeling ceiling if asked.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
+//! - [`octahedral`]: engines' octahedral impostors drawn by their shader, instanced, and shaded.
 //! - [`present`]: the viewer's window shown through a wgpu surface on the same device.
 //!
 //! Data flows one way, as in the library: the library builds (meshes, BVH, cameras), this crate
@@ -30,6 +31,7 @@ pub mod build;
 pub mod bvh;
 pub mod device;
 pub mod methods;
+pub mod octahedral;
 pub mod present;
 pub mod raster;
 pub mod trace;

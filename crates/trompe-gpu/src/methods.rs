@@ -8,6 +8,7 @@
 //! | `trace` | Whitted ray tracing through the exact BVH, one compute invocation a pixel ([`crate::trace`]); `--primary rasterized` draws the eye's hits with the GPU rasterizer |
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
 //! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), graph cameras' frustum by frustum; all kept across frames, placed and lit by the library's [`Sequence`] |
+//! | `octahedral` | the atlases the library bakes drawn by the engines' shader (`shaders/octahedral_impostor.wgsl`), one instanced draw an atlas, then shaded ([`crate::octahedral`]); kept while nothing moves |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -42,7 +43,11 @@ pub enum Device {
 pub fn has_gpu_path(kind: MethodKind) -> bool {
     matches!(
         kind,
-        MethodKind::Trace | MethodKind::Raster | MethodKind::Impostor | MethodKind::PinholeImpostor
+        MethodKind::Trace
+            | MethodKind::Raster
+            | MethodKind::Impostor
+            | MethodKind::PinholeImpostor
+            | MethodKind::Octahedral
     )
 }
 
@@ -106,6 +111,19 @@ pub enum DeviceRenderer<'a> {
     Cpu(Box<Renderer<'a>>),
     /// A GPU path.
     Gpu(Box<GpuMethod<'a>>),
+    /// The octahedral method on the GPU.
+    Octahedral(Box<GpuOctahedral<'a>>),
+}
+
+/// The octahedral method on the GPU, over one scene.
+pub struct GpuOctahedral<'a> {
+    gpu: &'a Gpu,
+    scene: &'a Scene,
+    settings: MethodSettings,
+    /// The atlases on the device and the objects' poses they were baked at: kept while nothing
+    /// moves or deforms, as the CPU keeps its atlases.
+    /// With what a frame that keeps them reports.
+    kept: Option<(Vec<Mat4>, crate::octahedral::GpuAtlases<'a>, String)>,
 }
 
 /// A method on the GPU, over one scene.
@@ -139,6 +157,16 @@ impl<'a> DeviceRenderer<'a> {
                 scene, kind, settings,
             )?))),
             Some(_) if !has_gpu_path(kind) => Err(no_gpu_path(kind).into()),
+            Some(gpu) if kind == MethodKind::Octahedral => {
+                // The CPU renderer's checks of the settings, before any work.
+                Renderer::new(scene, kind, settings.clone())?;
+                Ok(DeviceRenderer::Octahedral(Box::new(GpuOctahedral {
+                    gpu,
+                    scene,
+                    settings,
+                    kept: None,
+                })))
+            }
             Some(gpu) => {
                 if let Some(reason) = kind.refusal() {
                     return Err(MethodError::Refused {
@@ -186,6 +214,7 @@ impl<'a> DeviceRenderer<'a> {
         match self {
             DeviceRenderer::Cpu(r) => r.kind(),
             DeviceRenderer::Gpu(m) => m.kind,
+            DeviceRenderer::Octahedral(_) => MethodKind::Octahedral,
         }
     }
 
@@ -194,6 +223,7 @@ impl<'a> DeviceRenderer<'a> {
         match self {
             DeviceRenderer::Cpu(_) => "CPU",
             DeviceRenderer::Gpu(m) => m.gpu.name(),
+            DeviceRenderer::Octahedral(m) => m.gpu.name(),
         }
     }
 
@@ -206,6 +236,7 @@ impl<'a> DeviceRenderer<'a> {
     ) -> Result<MethodFrame, DeviceError> {
         match self {
             DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
+            DeviceRenderer::Octahedral(m) => m.frame(t, camera, progress),
             DeviceRenderer::Gpu(m) => {
                 let GpuMethod {
                     gpu,
@@ -305,5 +336,60 @@ impl<'a> DeviceRenderer<'a> {
                 })
             }
         }
+    }
+}
+
+impl GpuOctahedral<'_> {
+    /// The frame at time `t` through `camera`, or the scene's camera at `t`: the atlases baked
+    /// by the library (kept while nothing moves), drawn and shaded on the GPU.
+    fn frame(
+        &mut self,
+        t: f32,
+        camera: Option<Pinhole>,
+        progress: &dyn Progress,
+    ) -> Result<MethodFrame, DeviceError> {
+        if !t.is_finite() {
+            return Err(MethodError::from(trompe::render::RenderError::Time(t)).into());
+        }
+        let scene = self.scene;
+        let mut timings = Timings::default();
+        let poses = scene.poses_at(t);
+        let still = !scene.deforms();
+        let rebake = !matches!(&self.kept, Some((at, _, _)) if still && *at == poses);
+        let n = self.settings.octahedral_frames;
+        let (atlases, report) = match (rebake, &self.kept) {
+            (false, Some((_, atlases, kept))) => (atlases, kept.clone()),
+            _ => {
+                let bake = self.settings.octahedral_bake();
+                let baked = timings
+                    .time("bake atlases", || {
+                        trompe::octahedral::scene::SceneAtlases::bake(scene, t, bake, &())
+                    })
+                    .map_err(MethodError::from)?;
+                let uploaded = timings.time("upload atlases", || {
+                    crate::octahedral::GpuAtlases::new(
+                        self.gpu,
+                        &baked,
+                        &scene.lighting,
+                        &scene.render,
+                    )
+                })?;
+                let kept = (poses, uploaded, baked.report(n, false));
+                (&self.kept.insert(kept).1, baked.report(n, true))
+            }
+        };
+        let camera = match camera {
+            Some(c) => c,
+            None => scene.camera.at(t).map_err(MethodError::from)?,
+        };
+        let frame = timings.time("GPU frame", || atlases.frame(&camera))?;
+        trompe::render::check_radiance(&frame).map_err(MethodError::from)?;
+        progress.advance(u64::from(frame.color.height()));
+        Ok(MethodFrame {
+            frame,
+            timings,
+            report: format!("on {}: {report}", self.gpu.name()),
+            state: Vec::new(),
+        })
     }
 }

@@ -63,9 +63,9 @@ const IMPOSTOR_STORAGE_BUFFERS: u32 = 15;
 pub const MAX_DEPTH: u32 = 23;
 
 /// The shader's material kinds.
-const DIFFUSE: u32 = 0;
-const MIRROR: u32 = 1;
-const GLASS: u32 = 2;
+pub(crate) const DIFFUSE: u32 = 0;
+pub(crate) const MIRROR: u32 = 1;
+pub(crate) const GLASS: u32 = 2;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -78,17 +78,36 @@ struct GpuTriangle {
     uv2: [f32; 4],
 }
 
+/// A material as the shader reads it (`trace.wgsl`'s `Material`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuMaterial {
-    color: [f32; 4],
-    ior: [f32; 4],
-    texture: [u32; 4],
+pub(crate) struct GpuMaterial {
+    pub(crate) color: [f32; 4],
+    pub(crate) ior: [f32; 4],
+    pub(crate) texture: [u32; 4],
 }
 
+impl GpuMaterial {
+    /// A mirror's or glass's (what `surface` is; a diffuse surface's colour comes from
+    /// elsewhere: white, untextured).
+    pub(crate) fn specular(surface: &Surface) -> Self {
+        let (color, ior) = match surface {
+            Surface::Mirror { tint } => (v4(*tint, f32::from_bits(MIRROR)), 1.0),
+            Surface::Glass { ior, tint } => (v4(*tint, f32::from_bits(GLASS)), *ior),
+            Surface::Diffuse(_) => (v4(Vec3::ONE, f32::from_bits(DIFFUSE)), 1.0),
+        };
+        GpuMaterial {
+            color,
+            ior: [ior, 0.0, 0.0, 0.0],
+            texture: [0; 4],
+        }
+    }
+}
+
+/// The view uniform (`trace.wgsl`'s `View`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuView {
+pub(crate) struct GpuView {
     eye: [f32; 4],
     a: [f32; 4],
     b: [f32; 4],
@@ -102,14 +121,66 @@ struct GpuView {
     rows: [[f32; 4]; 3],
 }
 
+impl GpuView {
+    /// The uniform of `lighting` and `settings` (the panorama's two images placed in
+    /// `texels`), `mode` as the shader reads it; the camera's fields are
+    /// [`GpuView::through`]'s.
+    pub(crate) fn lit(
+        lighting: &Lighting,
+        settings: &RenderSettings,
+        mode: [u32; 4],
+        texels: &mut Texels,
+    ) -> Self {
+        let environment = &lighting.environment;
+        let radiance = texels.colour(environment.image());
+        let irradiance = texels.colour(environment.irradiance_image());
+        let sun = lighting.light.as_ref();
+        GpuView {
+            eye: [0.0, 0.0, 0.0, settings.ray_epsilon],
+            a: [0.0; 4],
+            b: [0.0; 4],
+            c: [0.0; 4],
+            size: [0, 0, settings.max_depth, u32::from(sun.is_some())],
+            sun_dir: v4(sun.map_or(Vec3::Y, |s| s.direction), environment.rotation()),
+            sun: v4(
+                sun.map_or(Vec3::ZERO, |s| s.irradiance),
+                environment.intensity(),
+            ),
+            radiance,
+            irradiance,
+            mode,
+            rows: [[0.0; 4]; 3],
+        }
+    }
+
+    /// This uniform through `camera`: its eye, pixel steps, rows and size.
+    pub(crate) fn through(mut self, camera: &Pinhole) -> Self {
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let (a, b, c) = camera.mcmillan();
+        self.eye = v4(camera.position().as_vec3(), self.eye[3]);
+        self.a = v4(a.as_vec3(), 0.0);
+        self.b = v4(b.as_vec3(), 0.0);
+        self.c = v4(c.as_vec3(), 0.0);
+        self.rows = GpuRasterCamera::pinhole(camera).rows();
+        self.size[0] = w;
+        self.size[1] = h;
+        self
+    }
+}
+
 /// Every image the shader reads, one after another, as `(first texel, width, height)`.
 #[derive(Default)]
-struct Texels {
+pub(crate) struct Texels {
     data: Vec<[f32; 4]>,
     placed: HashMap<*const Image<Rgba>, [u32; 4]>,
 }
 
 impl Texels {
+    /// The texels, as the storage buffer holds them.
+    pub(crate) fn bytes(&self) -> &[u8] {
+        bytemuck::cast_slice(&self.data)
+    }
+
     fn push(&mut self, width: u32, height: u32, texels: impl Iterator<Item = Vec4>) -> [u32; 4] {
         let first = self.data.len() as u32;
         self.data.extend(texels.map(|t| t.to_array()));
@@ -227,10 +298,15 @@ impl<'a> GpuTracer<'a> {
             });
         }
         // Materials: one a (object, mesh material), the scene's surface deciding.
+        let wyman = refraction == Refraction::Wyman;
+        let mode = [
+            u32::from(primary == Primary::Rasterized),
+            u32::from(wyman),
+            0,
+            0,
+        ];
         let mut texels = Texels::default();
-        let environment = &lighting.environment;
-        let radiance = texels.colour(environment.image());
-        let irradiance = texels.colour(environment.irradiance_image());
+        let uniform = GpuView::lit(lighting, settings, mode, &mut texels);
         let mut materials = Vec::new();
         let mut first_material = Vec::with_capacity(view.meshes.len());
         for (mesh, surface) in view.meshes.iter().zip(&view.surfaces) {
@@ -243,16 +319,9 @@ impl<'a> GpuTracer<'a> {
                 }
             };
             match surface {
-                Surface::Mirror { tint } => materials.push(GpuMaterial {
-                    color: v4(*tint, f32::from_bits(MIRROR)),
-                    ior: [1.0, 0.0, 0.0, 0.0],
-                    texture: [0; 4],
-                }),
-                Surface::Glass { ior, tint } => materials.push(GpuMaterial {
-                    color: v4(*tint, f32::from_bits(GLASS)),
-                    ior: [*ior, 0.0, 0.0, 0.0],
-                    texture: [0; 4],
-                }),
+                Surface::Mirror { .. } | Surface::Glass { .. } => {
+                    materials.push(GpuMaterial::specular(surface))
+                }
                 Surface::Diffuse(Some(o)) => {
                     materials.push(diffuse(o.color, o.texture.as_ref(), &mut texels))
                 }
@@ -296,7 +365,6 @@ impl<'a> GpuTracer<'a> {
         };
         // Under Wyman's refraction, d_N at each glass vertex (one ray each, on the CPU as the
         // paper precomputes it), and the glass triangles whose back faces each frame draws.
-        let wyman = refraction == Refraction::Wyman;
         let d_n = match wyman {
             true => trompe::render::wyman::vertex_distances(view)?,
             false => Vec::new(),
@@ -341,35 +409,12 @@ impl<'a> GpuTracer<'a> {
                 .collect()
         });
 
-        let environment_rotation = environment.rotation();
-        let sun = lighting.light.as_ref();
-        let uniform = GpuView {
-            eye: [0.0, 0.0, 0.0, settings.ray_epsilon],
-            a: [0.0; 4],
-            b: [0.0; 4],
-            c: [0.0; 4],
-            size: [0, 0, settings.max_depth, u32::from(sun.is_some())],
-            sun_dir: v4(sun.map_or(Vec3::Y, |s| s.direction), environment_rotation),
-            sun: v4(
-                sun.map_or(Vec3::ZERO, |s| s.irradiance),
-                environment.intensity(),
-            ),
-            radiance,
-            irradiance,
-            mode: [
-                u32::from(primary == Primary::Rasterized),
-                u32::from(wyman),
-                0,
-                0,
-            ],
-            rows: [[0.0; 4]; 3],
-        };
         let raster = match primary {
             Primary::Traced => None,
             Primary::Rasterized => Some(raster_pipeline(gpu, bvh)?),
         };
         let triangle_bytes: &[u8] = bytemuck::cast_slice(&triangles);
-        let texel_bytes: &[u8] = bytemuck::cast_slice(&texels.data);
+        let texel_bytes = texels.bytes();
         gpu.check_storage("the triangles' shading data", triangle_bytes.len() as u64)?;
         gpu.check_storage("the textures and the panorama", texel_bytes.len() as u64)?;
         let scene = [
@@ -402,15 +447,7 @@ impl<'a> GpuTracer<'a> {
     pub fn frame(&self, camera: &Pinhole) -> Result<Frame, GpuError> {
         let gpu = self.gpu;
         let (w, h) = trompe::camera::Projection::resolution(camera);
-        let (a, b, c) = camera.mcmillan();
-        let mut uniform = self.uniform;
-        uniform.eye = v4(camera.position().as_vec3(), uniform.eye[3]);
-        uniform.a = v4(a.as_vec3(), 0.0);
-        uniform.b = v4(b.as_vec3(), 0.0);
-        uniform.c = v4(c.as_vec3(), 0.0);
-        uniform.rows = GpuRasterCamera::pinhole(camera).rows();
-        uniform.size[0] = w;
-        uniform.size[1] = h;
+        let uniform = self.uniform.through(camera);
         let pixels = u64::from(w) * u64::from(h);
         let out_bytes = pixels * 16;
         gpu.check_storage("the frame", out_bytes)?;

@@ -5,6 +5,7 @@
 
 mod build;
 mod bvh;
+mod octahedral;
 mod trace;
 mod walk;
 
@@ -83,6 +84,14 @@ fn main() {
         on_gpu(
             "walk::the_same_walks_give_the_same_bits_on_repeated_runs",
             walk::the_same_walks_give_the_same_bits_on_repeated_runs,
+        ),
+        on_gpu(
+            "octahedral::every_shipped_scene_draws_octahedral_impostors_on_the_gpu_as_on_the_cpu",
+            octahedral::every_shipped_scene_draws_octahedral_impostors_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
+            "octahedral::a_field_of_instances_is_one_atlas_drawn_once_a_copy_on_the_gpu",
+            octahedral::a_field_of_instances_is_one_atlas_drawn_once_a_copy_on_the_gpu,
         ),
         on_gpu(
             "trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu",

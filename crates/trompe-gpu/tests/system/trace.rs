@@ -6,7 +6,7 @@ use trompe::scene::Scene;
 use trompe_gpu::{DeviceRenderer, Gpu};
 
 /// Every shipped scene file, at 320 × 240.
-fn shipped_scenes() -> Vec<(PathBuf, Scene)> {
+pub fn shipped_scenes() -> Vec<(PathBuf, Scene)> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
     let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
@@ -103,7 +103,7 @@ fn agrees_on_every_scene(gpu: &Gpu, kind: MethodKind, ids: f64) {
 
 /// [`agrees_on_every_scene`] with `settings`, on the shipped scenes `which` picks; how many
 /// were compared.
-fn agrees_on_scenes(
+pub fn agrees_on_scenes(
     gpu: &Gpu,
     (kind, settings): (MethodKind, &MethodSettings),
     ids: f64,
