@@ -17,6 +17,23 @@ impl Progress for () {
 #[derive(Clone, Debug, Default)]
 pub struct Timings(pub Vec<(&'static str, Duration)>);
 
+/// A duration as JSON: its seconds (for `#[serde(serialize_with)]`).
+pub fn serialize_seconds<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(d.as_secs_f64())
+}
+
+/// As JSON: each step's milliseconds, in order (`{"bake": 12.5, …}`).
+impl serde::Serialize for Timings {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (name, d) in &self.0 {
+            map.serialize_entry(name, &(d.as_secs_f64() * 1e3))?;
+        }
+        map.end()
+    }
+}
+
 impl Timings {
     /// Runs `f`, recording its duration under `name`.
     pub fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {

@@ -417,6 +417,51 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
     })
 }
 
+/// As JSON: every figure the text shows (the impostor by its camera, size, coverage, layers and
+/// bytes; each ray report with its agreement shares; the timings in milliseconds).
+impl serde::Serialize for CheckReport {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde_json::json;
+        let fidelity = |r: &FidelityReport| {
+            let mut v = json!(r);
+            v["agreement"] = r.agreement().into();
+            v["hit_agreement"] = r.hit_agreement().into();
+            v
+        };
+        let imp = &self.impostor;
+        let (w, h) = imp.gd().size();
+        let mut impostor = json!({
+            "camera": imp.camera().kind(),
+            "size": [w, h],
+            "coverage": imp.coverage(),
+            "layers": imp.layer_count(),
+            "map_bytes": imp.map_bytes(),
+        });
+        match &imp.camera() {
+            ImpostorCamera::Spoc(c) => impostor["spoc_strength"] = c.strength().into(),
+            ImpostorCamera::Graph(g) => impostor["frusta"] = g.frusta().len().into(),
+            _ => {}
+        }
+        json!({
+            "impostor": impostor,
+            "fidelity": fidelity(&self.fidelity),
+            "captured": self.captured,
+            "pinhole_beside": self.pinhole_beside.as_ref().map(|(r, c)| {
+                json!({ "fidelity": fidelity(r), "captured": c })
+            }),
+            "algorithm_1": self.algorithm_1.as_ref().map(fidelity),
+            "layers_beside": self.layers_beside.iter().map(|row| json!({
+                "asked": row.asked.to_string(),
+                "layers": row.layers,
+                "fidelity": fidelity(&row.fidelity),
+                "map_bytes": row.map_bytes,
+            })).collect::<Vec<_>>(),
+            "timings_ms": self.timings,
+        })
+        .serialize(s)
+    }
+}
+
 impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let imp = &self.impostor;

@@ -20,7 +20,7 @@ use std::sync::Arc;
 pub const AGREEMENT_FOOTPRINTS: f64 = 1.5;
 
 /// What [`check`] measured.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FidelityReport {
     /// Rays fired.
     pub rays: usize,
@@ -215,7 +215,7 @@ pub fn viewpoint_rays(
 }
 
 /// How much of a mesh's surface an impostor stores (fractions of area-weighted samples).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct SurfaceCapture {
     /// Samples whose texel holds a point within 1.5 footprints of them (the footprint measured
     /// across the line of sight, as in the ray agreement test).

@@ -12,7 +12,7 @@ use super::{FrameError, Image, Rgba, io::to_srgb8, linear_to_srgb};
 use glam::Vec4;
 
 /// The three scores of one comparison.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Scores {
     /// Peak signal-to-noise ratio in dB (∞ for identical images).
     pub psnr: f64,

@@ -29,7 +29,7 @@ pub const BYTES_PER_PIXEL: u64 = 128;
 const DEPTH_SLACK: f32 = 0.02;
 
 /// What one frame did (paper 2 Table 2's columns, and more).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     /// C3RCs built: reflector triangles the eye sees.
     pub c3rcs: u64,
@@ -53,14 +53,19 @@ pub struct FrameStats {
     /// Pixels where the eye sees a reflector.
     pub reflector_pixels: u64,
     /// Wall time of the G-buffer (primary rays).
+    #[serde(serialize_with = "crate::progress::serialize_seconds")]
     pub gbuffer: Duration,
     /// Wall time of the culling.
+    #[serde(serialize_with = "crate::progress::serialize_seconds")]
     pub cull: Duration,
     /// Wall time of the projection and splatting.
+    #[serde(serialize_with = "crate::progress::serialize_seconds")]
     pub project: Duration,
     /// Wall time of shading.
+    #[serde(serialize_with = "crate::progress::serialize_seconds")]
     pub shade: Duration,
     /// Wall time of the BVH build.
+    #[serde(serialize_with = "crate::progress::serialize_seconds")]
     pub bvh: Duration,
 }
 

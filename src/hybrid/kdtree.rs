@@ -57,7 +57,7 @@ pub struct KdTree {
 }
 
 /// What a tree looks like (paper 2 Table 1's columns).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct TreeStats {
     /// Nodes.
     pub nodes: usize,

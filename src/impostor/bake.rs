@@ -76,7 +76,8 @@ pub enum BakeError {
     Preview(FrameError),
 }
 
-/// What a bake made.
+/// What a bake made (as JSON, every field; the timings in milliseconds).
+#[derive(serde::Serialize)]
 pub struct BakeReport {
     /// The impostor's camera kind.
     pub kind: &'static str,

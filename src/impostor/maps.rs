@@ -405,6 +405,36 @@ impl Impostor {
     }
 }
 
+/// As JSON: every figure the text shows.
+impl serde::Serialize for ImpostorSummary<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let imp = self.impostor;
+        let (w, h) = imp.gd.size();
+        let b = imp.bounds;
+        let mut doc = serde_json::json!({
+            "kind": "impostor",
+            "path": self.path,
+            "camera": imp.camera.kind(),
+            "size": [w, h],
+            "viewpoint": imp.camera.viewpoint().to_array(),
+            "coverage": imp.coverage(),
+            "layers": imp.layers().map(|l| l.coverage()).collect::<Vec<_>>(),
+            "map_bytes": imp.map_bytes(),
+            "bounds": { "min": b.min.to_array(), "max": b.max.to_array() },
+        });
+        match &imp.camera {
+            ImpostorCamera::Spoc(c) => {
+                let (near, far) = c.depth_range();
+                doc["spoc"] =
+                    serde_json::json!({ "strength": c.strength(), "depth_range": [near, far] });
+            }
+            ImpostorCamera::Graph(g) => doc["frusta"] = g.frusta().len().into(),
+            ImpostorCamera::Pinhole(_) | ImpostorCamera::Orthographic(_) => {}
+        }
+        doc.serialize(s)
+    }
+}
+
 impl std::fmt::Display for ImpostorSummary<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let imp = self.impostor;

@@ -14,7 +14,8 @@ use crate::texturing::{Blend, BlendSettings};
 use crate::views::visibility::DepthMap;
 use std::path::{Path, PathBuf};
 
-/// What an encoding stored, against storing the exemplars (paper 5 Table 1).
+/// What an encoding stored, against storing the exemplars (paper 5 Table 1). As JSON, every
+/// field and the compression ratio.
 #[derive(Clone, Debug)]
 pub struct EncodeSummary {
     /// Views encoded.
@@ -42,6 +43,23 @@ impl EncodeSummary {
         let e = self.exemplar_bytes.0 + self.exemplar_bytes.1;
         let m = self.master_bytes.0 + self.master_bytes.1;
         e as f64 / m.max(1) as f64
+    }
+}
+
+impl serde::Serialize for EncodeSummary {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        serde_json::json!({
+            "views": self.views,
+            "faces": self.faces,
+            "atlas": [self.atlas.0, self.atlas.1],
+            "used_texels": self.used,
+            "exemplar_bytes": { "images": self.exemplar_bytes.0, "uvs": self.exemplar_bytes.1 },
+            "master_bytes": { "textures": self.master_bytes.0, "uvs": self.master_bytes.1 },
+            "compression": self.compression(),
+            "baked_whole": self.baked_whole,
+            "files": self.files,
+        })
+        .serialize(s)
     }
 }
 

@@ -339,6 +339,23 @@ impl OctahedralReport {
     }
 }
 
+/// As JSON: the sidecar, the files and their bytes, the bake's seconds, the switch distance.
+impl serde::Serialize for OctahedralReport {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let files: Vec<_> = (self.files.iter().zip(self.bytes))
+            .map(|(path, bytes)| serde_json::json!({ "path": path, "bytes": bytes }))
+            .collect();
+        serde_json::json!({
+            "sidecar": self.sidecar,
+            "atlas_side": self.sidecar.grid.n * self.sidecar.frame_size,
+            "files": files,
+            "bake_seconds": self.bake_time.as_secs_f64(),
+            "switch_distance": self.switch_distance,
+        })
+        .serialize(s)
+    }
+}
+
 impl std::fmt::Display for OctahedralReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let s = &self.sidecar;

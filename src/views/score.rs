@@ -48,6 +48,22 @@ impl LeaveOneOut {
     }
 }
 
+/// As JSON: the weighting, the means the text shows, and every view's scores.
+impl serde::Serialize for LeaveOneOut {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let (psnr, ssim, flip, holes) = self.mean();
+        let views: Vec<_> = (self.views.iter())
+            .map(|v| serde_json::json!({ "name": v.name, "scores": v.scores, "holes": v.holes }))
+            .collect();
+        serde_json::json!({
+            "weighting": name(self.weighting),
+            "mean": { "psnr": psnr, "ssim": ssim, "flip": flip, "holes": holes },
+            "views": views,
+        })
+        .serialize(s)
+    }
+}
+
 impl std::fmt::Display for LeaveOneOut {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (psnr, ssim, flip, holes) = self.mean();

@@ -25,7 +25,7 @@ fn scene() -> Scene {
 fn settings() -> MethodSettings {
     let mut s = MethodSettings {
         impostor_resolution: 64,
-        octahedral_frames: 4,
+        octahedral_frames: 8,
         octahedral_frame_size: 24,
         ..Default::default()
     };

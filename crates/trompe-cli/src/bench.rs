@@ -239,6 +239,21 @@ pub struct Figure {
     pub versus: Option<(f64, String)>,
 }
 
+/// As JSON: `{"name", "value", "unit", "versus": {"ratio", "peer"} or null}`.
+impl serde::Serialize for Figure {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let versus = (self.versus.as_ref())
+            .map(|(ratio, peer)| serde_json::json!({ "ratio": ratio, "peer": peer }));
+        serde_json::json!({
+            "name": self.name,
+            "value": self.value,
+            "unit": self.unit,
+            "versus": versus,
+        })
+        .serialize(s)
+    }
+}
+
 impl Figure {
     /// A duration, in milliseconds, with no peer.
     fn millis(name: impl Into<String>, t: Duration) -> Figure {
@@ -648,7 +663,8 @@ pub fn graph_impostors(
     ])
 }
 
-/// What `trompe bench` measured: a heading and its rows.
+/// What `trompe bench` measured: a heading and its rows (as JSON, the same).
+#[derive(serde::Serialize)]
 pub struct BenchReport {
     /// The mesh and thread count.
     pub heading: String,
@@ -789,6 +805,22 @@ pub fn goal(path: &std::path::Path, mesh: &Mesh, runs: u32) -> Result<GoalReport
             .map(|_| goal_pair(mesh, Duration::from_secs(3)))
             .collect::<Result<_, _>>()?,
     })
+}
+
+/// As JSON: the heading and each run's build and peer milliseconds and their ratio.
+impl serde::Serialize for GoalReport {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let runs: Vec<_> = (self.runs.iter())
+            .map(|(build, peer)| {
+                serde_json::json!({
+                    "build_ms": build.as_secs_f64() * 1e3,
+                    "peer_ms": peer.as_secs_f64() * 1e3,
+                    "ratio": build.as_secs_f64() / peer.as_secs_f64(),
+                })
+            })
+            .collect();
+        serde_json::json!({ "heading": self.heading, "runs": runs }).serialize(s)
+    }
 }
 
 impl std::fmt::Display for GoalReport {

@@ -47,6 +47,14 @@ pub struct Cli {
     /// Print per-step timings and loader warnings.
     #[arg(short, long, global = true)]
     pub verbose: bool,
+    /// Print the result as one JSON document on stdout (errors too): `info`, `compare`,
+    /// `impostor bake`, `impostor check`, `views score`, `master encode`, `layers build`,
+    /// `bench` (schema: docs/json.md).
+    #[arg(long, global = true)]
+    pub json: bool,
+    /// No progress bars, spinners or notes of the files written.
+    #[arg(short, long, global = true)]
+    pub quiet: bool,
     // (No doc comment: clap would take it for the subcommands' help.)
     #[allow(missing_docs)]
     #[command(subcommand)]
@@ -396,7 +404,10 @@ impl Progress for Bar {
 }
 
 fn bar(label: &str, total: u64) -> Box<dyn Progress> {
-    let pb = ProgressBar::new(total);
+    let pb = match crate::output::quiet() {
+        true => ProgressBar::hidden(),
+        false => ProgressBar::new(total),
+    };
     pb.set_style(
         ProgressStyle::with_template("{msg:>28} [{bar:30}] {percent:>3}% {elapsed}")
             .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -409,6 +420,9 @@ fn bar(label: &str, total: u64) -> Box<dyn Progress> {
 /// Runs `work` under a spinner labelled `label` (for steps that report no progress of their
 /// own, such as writing a large file); the spinner is cleared when it ends.
 fn with_spinner<T>(label: &str, work: impl FnOnce() -> T) -> T {
+    if crate::output::quiet() {
+        return work();
+    }
     let pb = ProgressBar::new_spinner();
     pb.set_style(
         ProgressStyle::with_template("{spinner} {msg} {elapsed}")
@@ -527,7 +541,7 @@ impl BakeArgs {
         if self.glb {
             trompe::impostor::gltf::export(&self.output, &glb)
                 .with_context(|| format!("writing {}", glb.display()))?;
-            eprintln!("wrote {}", glb.display());
+            crate::output::note(format_args!("wrote {}", glb.display()));
         }
         Ok(report)
     }
@@ -594,6 +608,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             .context("setting up the thread pool")?;
     }
     let verbose = cli.verbose;
+    crate::output::set(cli.json, cli.quiet);
     match cli.command {
         Command::Render(args) => args.render(verbose)?,
         Command::Compare {
@@ -622,28 +637,62 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                     test.display()
                 )
             })?;
-            println!(
+            if let Some(h) = &heatmap {
+                io::write_png(h, &metrics::heat_map(&metrics::flip_map(&a, &b)?))?;
+                crate::output::note(format_args!("wrote {}", h.display()));
+            }
+            let text = format!(
                 "PSNR {:.3} dB\nSSIM {:.5}\nFLIP {:.5}",
                 s.psnr, s.ssim, s.flip
             );
-            if let Some(h) = heatmap {
-                io::write_png(&h, &metrics::heat_map(&metrics::flip_map(&a, &b)?))?;
-                eprintln!("wrote {}", h.display());
-            }
+            let result = serde_json::json!({
+                "reference": reference,
+                "test": test,
+                "psnr_db": s.psnr,
+                "ssim": s.ssim,
+                "flip": s.flip,
+                "heatmap": heatmap,
+            });
+            crate::output::report("compare", text, &result)?;
         }
         Command::Info { gpu: true, .. } => {
             let adapters = trompe_gpu::adapters(trompe_gpu::Backends::All);
-            println!("{} adapter(s):", adapters.len());
+            let mut text = format!("{} adapter(s):", adapters.len());
             for a in &adapters {
-                println!(
-                    "  {} ({}, {}): {} {}",
+                text += &format!(
+                    "\n  {} ({}, {}): {} {}",
                     a.name, a.backend, a.kind, a.driver, a.driver_info
                 );
             }
             let gpu = trompe_gpu::GpuRequest::new()
                 .open()
                 .context("opening a GPU")?;
-            println!("opens:\n{}", gpu.report());
+            let opens = gpu.report();
+            text += &format!("\nopens:\n{opens}");
+            let adapter = |a: &trompe_gpu::AdapterReport| {
+                serde_json::json!({
+                    "name": a.name,
+                    "backend": a.backend,
+                    "kind": a.kind,
+                    "software": a.software,
+                    "driver": a.driver,
+                    "driver_info": a.driver_info,
+                })
+            };
+            let mut opened = adapter(&opens);
+            opened["limits"] = serde_json::json!({
+                "max_texture_dimension_2d": gpu.limits().max_texture_dimension_2d,
+                "max_storage_buffer_binding_size": gpu.limits().max_storage_buffer_binding_size,
+                "max_buffer_size": gpu.limits().max_buffer_size,
+                "max_compute_workgroups_per_dimension":
+                    gpu.limits().max_compute_workgroups_per_dimension,
+            });
+            let result = serde_json::json!({
+                "kind": "gpu",
+                "adapters": adapters.iter().map(adapter).collect::<Vec<_>>(),
+                "opens": opened,
+            });
+            crate::output::report("info", text, &result)?;
         }
         Command::Info { mesh: None, .. } => bail!("trompe info: give a file, or --gpu"),
         Command::Info {
@@ -654,10 +703,15 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 SidecarKind::Impostor => {
                     let imp =
                         trompe::impostor::file::load(&mesh).context("loading the impostor")?;
-                    println!("{}", imp.summary(&mesh));
+                    let summary = imp.summary(&mesh);
+                    crate::output::report("info", &summary, &summary)?;
                 }
                 SidecarKind::Octahedral => {
-                    println!("{}", trompe::octahedral::file::read_sidecar(&mesh)?);
+                    let sidecar = trompe::octahedral::file::read_sidecar(&mesh)?;
+                    let mut result = serde_json::json!(sidecar);
+                    result["kind"] = "octahedral".into();
+                    result["path"] = serde_json::json!(mesh);
+                    crate::output::report("info", &sidecar, &result)?;
                 }
             }
         }
@@ -665,7 +719,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             mesh: Some(mesh), ..
         } => {
             let loaded = trompe::geom::io::load(&mesh)?;
-            println!("{}", loaded.summary(&mesh));
+            let summary = loaded.summary(&mesh);
+            crate::output::report("info", &summary, &summary)?;
             loaded
                 .warnings
                 .iter()
@@ -680,21 +735,24 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Impostor(ImpostorCommand::Check(args)) => {
             let output = args.output.clone();
             let report = with_spinner("checking", || args.check())?;
-            println!("{report}");
             if let Some(o) = &output {
                 trompe::impostor::file::save(&report.impostor, o).context("saving the impostor")?;
-                eprintln!("wrote {}", o.display());
+                crate::output::note(format_args!("wrote {}", o.display()));
             }
+            crate::output::report("impostor check", &report, &report)?;
             print_timings(verbose, &report.timings);
         }
         Command::Impostor(ImpostorCommand::MergeManifests(args)) => args.merge()?,
         Command::Impostor(ImpostorCommand::Export(args)) => args.export()?,
         Command::Impostor(ImpostorCommand::Bake(args)) => match args.octahedral {
-            Some(n) if args.is_batch() => args.bake_batch(n)?,
-            Some(n) => println!("{}", args.bake_octahedral(n)?),
+            Some(n) if args.is_batch() => return args.bake_batch(n),
+            Some(n) => {
+                let report = args.bake_octahedral(n)?;
+                crate::output::report("impostor bake", &report, &report)?;
+            }
             None => {
                 let report = args.bake()?;
-                println!("{report}");
+                crate::output::report("impostor bake", &report, &report)?;
                 print_timings(verbose, &report.timings);
             }
         },
@@ -714,7 +772,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let figures = with_spinner("timing", || {
                 crate::bench::octahedral::octahedral(&inputs, quick)
             })?;
-            println!("{figures}");
+            crate::output::report("bench", &figures, &figures)?;
         }
         Command::Bench {
             suite: BenchSuite::Reflect,
@@ -730,7 +788,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let tables = with_spinner("timing", || {
                 crate::bench::reflect::tables(&inputs, &selection)
             })?;
-            println!("{tables}");
+            crate::output::report("bench", &tables, &tables)?;
         }
         Command::Bench {
             suite: BenchSuite::C3rc,
@@ -739,7 +797,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let inputs = trompe::eval::fixtures::Shipped::locate();
             let tables = with_spinner("timing", || crate::bench::hybrid::tables(&inputs, quick))?;
-            println!("{tables}");
+            crate::output::report("bench", &tables, &tables)?;
         }
         Command::Bench {
             suite:
@@ -766,7 +824,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
                 ),
                 figures: figures?,
             };
-            println!("{report}");
+            crate::output::report("bench", &report, &report)?;
         }
         Command::Bench {
             suite: BenchSuite::Gpu,
@@ -776,7 +834,8 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let inputs = trompe::eval::fixtures::Shipped::locate();
             let (heading, figures) =
                 with_spinner("timing", || crate::bench::gpu::gpu(&inputs, quick))?;
-            println!("{}", crate::bench::BenchReport { heading, figures });
+            let report = crate::bench::BenchReport { heading, figures };
+            crate::output::report("bench", &report, &report)?;
         }
         Command::Bench {
             quick, mesh, goal, ..
@@ -785,8 +844,14 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             let path = mesh.unwrap_or_else(|| inputs.assets.join("meshes/bunny.obj"));
             let m = load_mesh(&path)?;
             match goal {
-                Some(runs) => println!("{}", crate::bench::goal(&path, &m, runs)?),
-                None => println!("{}", crate::bench::run(&path, &m, &inputs, quick)?),
+                Some(runs) => {
+                    let goal = crate::bench::goal(&path, &m, runs)?;
+                    crate::output::report("bench", &goal, &goal)?;
+                }
+                None => {
+                    let report = crate::bench::run(&path, &m, &inputs, quick)?;
+                    crate::output::report("bench", &report, &report)?;
+                }
             }
         }
     }

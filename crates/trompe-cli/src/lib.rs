@@ -2,7 +2,8 @@
 //!
 //! The application around the [`trompe`] library: the command line ([`cli`]), the demo report
 //! ([`report`]), the benchmark workloads of `trompe bench` and `cargo bench` ([`bench`]) and the
-//! interactive viewer ([`viewer`], its window in `cli/view.rs`). Each command parses its
+//! interactive viewer ([`viewer`], its window in `cli/view.rs`); how results print, as text or
+//! JSON ([`output`]). Each command parses its
 //! arguments, calls the library and prints what it returns; no rendering algorithm lives here.
 
 #![deny(unsafe_code)]
@@ -10,5 +11,6 @@
 
 pub mod bench;
 pub mod cli;
+pub mod output;
 pub mod report;
 pub mod viewer;

@@ -1,12 +1,23 @@
-//! The `trompe` binary: parse, run, print the error chain, exit non-zero on failure.
+//! The `trompe` binary: parse, run, print the error chain (as JSON under `--json`), exit
+//! non-zero on failure.
 
 use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
-    match trompe_cli::cli::run(trompe_cli::cli::Cli::parse()) {
+    let cli = trompe_cli::cli::Cli::parse();
+    let json = cli.json;
+    match trompe_cli::cli::run(cli) {
         Ok(code) => code,
+        Err(err) if json => {
+            let causes = err.chain().map(|c| c.to_string()).collect();
+            println!(
+                "{}",
+                trompe_cli::output::error_document(&error_chain(&err), causes)
+            );
+            ExitCode::from(1)
+        }
         Err(err) => {
             eprintln!("error: {}", error_chain(&err));
             ExitCode::from(1)

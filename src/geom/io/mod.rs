@@ -142,6 +142,36 @@ impl LoadedMesh {
     }
 }
 
+/// As JSON: every figure the text shows.
+impl serde::Serialize for MeshSummary<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let (loaded, m) = (self.loaded, &self.loaded.mesh);
+        let b = m.bounds();
+        let materials: Vec<_> = (m.materials.iter())
+            .map(|mat| {
+                serde_json::json!({
+                    "name": mat.name,
+                    "base_color": mat.base_color.to_array(),
+                    "texture": mat.texture.as_ref().map(|t| [t.width(), t.height()]),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "kind": "mesh",
+            "path": self.path,
+            "vertices_in_file": loaded.source.vertices,
+            "vertices": m.positions.len(),
+            "triangles_in_file": loaded.source.triangles,
+            "triangles": m.triangle_count(),
+            "bounds": { "min": b.min.to_array(), "max": b.max.to_array() },
+            "surface_area": m.area(),
+            "uvs": m.uvs.is_some(),
+            "materials": materials,
+        })
+        .serialize(s)
+    }
+}
+
 impl std::fmt::Display for MeshSummary<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (loaded, m) = (self.loaded, &self.loaded.mesh);

@@ -20,7 +20,7 @@ pub const MODELS: [(&str, &str); 3] = [
 ];
 
 /// One scene of the tables.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Row {
     /// Model and density (`0` dense, `1` at twice the spacing).
     pub name: String,
@@ -29,26 +29,31 @@ pub struct Row {
     /// Their tree.
     pub tree: TreeStats,
     /// Time to build it.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub build: Duration,
     /// The hybrid frame (median of the runs), its statistics.
     pub stats: trompe::hybrid::FrameStats,
     /// The hybrid frame's wall time, everything included.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub frame: Duration,
     /// The same frame with the paper's algorithm (no level of detail, no occlusion by mirrors):
     /// culling and projection.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub paper_reflection: Duration,
     /// Its valid-projection ratio.
     pub paper_valid: f64,
     /// The exact frame's wall time.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub exact: Duration,
     /// The impostor frame's wall time.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub impostor: Duration,
     /// Mean FLIP against the exact frame: hybrid, hybrid without level of detail, impostors.
     pub flip: [f64; 3],
 }
 
 /// Both tables.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Tables {
     /// What ran.
     pub heading: String,

@@ -15,20 +15,22 @@ use trompe::raster::{NoAttributes, rasterize};
 use trompe::scene::{Light, Lighting, Surface};
 
 /// One bake.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct BakeRow {
     /// The model.
     pub name: String,
     /// Its triangles.
     pub triangles: usize,
     /// The bake's wall time (colour, normal, depth, ORM, dilation).
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub bake: Duration,
     /// Rasterizing the 256 frames' depth alone, the peer.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub depth_only: Duration,
 }
 
 /// One turntable.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct TurntableRow {
     /// The model.
     pub name: String,
@@ -41,7 +43,7 @@ pub struct TurntableRow {
 }
 
 /// Every figure.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct OctahedralFigures {
     /// Bakes.
     pub bakes: Vec<BakeRow>,

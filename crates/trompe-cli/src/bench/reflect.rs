@@ -28,7 +28,7 @@ pub const SCENES: [&str; 7] = [
 ];
 
 /// All four tables.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct ReflectTables {
     /// What ran.
     pub heading: String,
@@ -43,28 +43,34 @@ pub struct ReflectTables {
 }
 
 /// A row of Table 1.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct OutputRow {
     /// Pixels.
     pub size: (u32, u32),
     /// The first frame, impostors built.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub first: Duration,
     /// A later frame, impostors kept (median).
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub kept: Duration,
     /// The same, the primary pass rasterized (median).
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub rasterized: Duration,
     /// The same frame traced exactly (median).
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub trace: Duration,
 }
 
 /// A row of Table 2.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct ImpostorRow {
     /// Texels a side.
     pub side: u32,
     /// Building and lighting the impostors.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub build: Duration,
     /// A frame with the impostors kept (median).
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub kept: Duration,
     /// Longest image path of a reflected ray through an impostor, in texels.
     pub max_projection: u64,
@@ -75,15 +81,17 @@ pub struct ImpostorRow {
 }
 
 /// A row of the method table.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct MethodRow {
     /// Scene file.
     pub scene: String,
     /// Method (and mirror choice).
     pub method: String,
     /// The tracing step less the same step with secondary rays answered by the environment.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub secondary: Duration,
     /// The whole frame, impostors built.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub frame: Duration,
     /// Against `trace`.
     pub flip: f64,
@@ -92,13 +100,15 @@ pub struct MethodRow {
 }
 
 /// A row of the growth table.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct GrowthRow {
     /// Triangles of the reflected mesh.
     pub triangles: usize,
     /// Secondary pass through impostors (kept), and through the exact BVH.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub impostor: Duration,
     /// Through the exact BVH.
+    #[serde(serialize_with = "trompe::progress::serialize_seconds")]
     pub trace: Duration,
 }
 

@@ -143,17 +143,23 @@ impl BuildArgs {
         let set = layers::build(meshes, names, &views, &settings, progress.as_ref())?;
         drop(progress);
         layers::file::save(out, &set)?;
-        println!("{}", layers::REPORT_HEADER);
+        let mut text = layers::REPORT_HEADER.to_string();
         for r in &set.reports {
-            println!("{r}");
+            text += &format!("\n{r}");
         }
-        println!(
-            "{} views, {} objects: layers.json, cameras and one .ora a view written to {}",
+        text += &format!(
+            "\n{} views, {} objects: layers.json, cameras and one .ora a view written to {}",
             set.views.len(),
             set.names.len(),
             out.display()
         );
-        Ok(())
+        let result = serde_json::json!({
+            "views": set.views.len(),
+            "objects": set.names,
+            "folder": out,
+            "reports": set.reports,
+        });
+        crate::output::report("layers build", text, &result)
     }
 }
 

@@ -124,13 +124,12 @@ impl MasterEncodeArgs {
             &self.output,
             progress.as_ref(),
         )?;
-        println!("{summary}");
-        println!(
-            "wrote {} files to {}",
+        let text = format!(
+            "{summary}\nwrote {} files to {}",
             summary.files.len(),
             self.output.display()
         );
-        Ok(())
+        crate::output::report("master encode", text, &summary)
     }
 }
 

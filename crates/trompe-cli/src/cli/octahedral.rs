@@ -74,7 +74,7 @@ impl ExportArgs {
             trompe::impostor::gltf::export(&self.input, &self.output).map_err(anyhow::Error::from)
         };
         exported.with_context(|| format!("exporting {}", self.input.display()))?;
-        eprintln!("wrote {}", self.output.display());
+        crate::output::note(format_args!("wrote {}", self.output.display()));
         Ok(())
     }
 }
@@ -168,7 +168,9 @@ impl BakeArgs {
     /// A batch of octahedral bakes into the folder -o names: a shard of the sorted inputs,
     /// each file baked (or, with --skip-existing, kept as an earlier run finished it) or skipped
     /// with its error, a journal then a manifest; fails at the end if any failed.
-    pub(super) fn bake_batch(&self, n: u32) -> Result<()> {
+    /// Bakes this shard's inputs; fails (exit code 1) where any input could not be baked, after
+    /// printing the report.
+    pub(super) fn bake_batch(&self, n: u32) -> Result<std::process::ExitCode> {
         if has_extension(&self.output, "glb") {
             anyhow::bail!(
                 "-o {}: an octahedral bake writes NAME.json and its maps (add --glb for \
@@ -233,7 +235,10 @@ impl BakeArgs {
         }
         std::fs::create_dir_all(&self.output)
             .with_context(|| format!("creating {}", self.output.display()))?;
-        let pb = ProgressBar::new(mine.len() as u64);
+        let pb = match crate::output::quiet() {
+            true => ProgressBar::hidden(),
+            false => ProgressBar::new(mine.len() as u64),
+        };
         pb.set_style(
             ProgressStyle::with_template("{msg:>28} [{bar:30}] {pos}/{len} {elapsed}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -249,33 +254,48 @@ impl BakeArgs {
                     }
                     (Outcome::UpToDate, _) => {
                         kept += 1;
-                        eprintln!("up to date {}", e.input.display())
+                        crate::output::note(format_args!("up to date {}", e.input.display()))
                     }
-                    _ => eprintln!(
+                    _ => crate::output::note(format_args!(
                         "baked {} ({} triangles) in {:.2} s",
                         e.input.display(),
                         e.triangles.unwrap_or(0),
                         e.seconds
-                    ),
+                    )),
                 });
                 pb.inc(1);
             })?;
         pb.finish_and_clear();
         let entries = &manifest_written.entries;
         let failed = entries.iter().filter(|e| e.error.is_some()).count();
-        println!(
+        let text = format!(
             "shard {shard}: {} of {} files baked ({kept} already up to date); wrote {}",
             entries.len() - failed,
             entries.len(),
             manifest.display()
         );
+        let result = serde_json::json!({
+            "shard": shard.to_string(),
+            "files": entries.len(),
+            "baked": entries.len() - failed,
+            "up_to_date": kept,
+            "failed": failed,
+            "manifest": manifest,
+            "entries": entries,
+        });
+        crate::output::report("impostor bake", text, &result)?;
         if failed > 0 {
-            anyhow::bail!(
-                "{failed} of {} files could not be baked (named above)",
-                entries.len()
-            );
+            // The failures are in the report (and named above in text): exit 1 without a
+            // second document.
+            if !crate::output::json() {
+                eprintln!(
+                    "error: {failed} of {} files could not be baked (named above)",
+                    entries.len()
+                );
+            }
+            return Ok(std::process::ExitCode::from(1));
         }
-        Ok(())
+        Ok(std::process::ExitCode::SUCCESS)
     }
 
     pub(super) fn bake_octahedral(
@@ -317,7 +337,7 @@ impl BakeArgs {
         let sidecar = file::save(&atlas, &self.output).context("writing the atlas")?;
         if self.glb {
             trompe::octahedral::gltf::export(&self.output, &glb).context("writing the glTF")?;
-            eprintln!("wrote {}", glb.display());
+            crate::output::note(format_args!("wrote {}", glb.display()));
         }
         Ok(file::OctahedralReport::new(
             &atlas, sidecar, files, bake_time,

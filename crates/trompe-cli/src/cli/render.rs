@@ -214,13 +214,13 @@ impl RenderArgs {
         let gpu = trompe_gpu::open_for(self.device.into(), kind).context("opening the GPU")?;
         let mut renderer = DeviceRenderer::new(&s, kind, settings, gpu.as_ref())?;
         if gpu.is_some() {
-            eprintln!("rendering on {}", renderer.device_name());
+            crate::output::note(format_args!("rendering on {}", renderer.device_name()));
         }
         let pb = bar(kind.name(), s.camera.height as u64);
         let out = renderer.frame(t, None, pb.as_ref()).context("rendering")?;
         timings.0.extend(out.timings.0);
         if !out.report.is_empty() {
-            eprintln!("{}", out.report);
+            crate::output::note(&out.report);
         }
         let frame = out.frame;
         let (depth, normals) = (self.depth.as_deref(), self.normals.as_deref());
@@ -229,7 +229,7 @@ impl RenderArgs {
                 write_frame(&frame, &self.output, depth, normals)
             })
             .context("writing the output")?;
-        eprintln!("wrote {}", self.output.display());
+        crate::output::note(format_args!("wrote {}", self.output.display()));
         print_timings(verbose, &timings);
         Ok(())
     }
@@ -271,7 +271,7 @@ impl RenderArgs {
         let gpu = trompe_gpu::open_for(self.device.into(), kind).context("opening the GPU")?;
         let mut sequence = DeviceRenderer::new(&s, kind, settings.clone(), gpu.as_ref())?;
         if gpu.is_some() {
-            eprintln!("rendering on {}", sequence.device_name());
+            crate::output::note(format_args!("rendering on {}", sequence.device_name()));
         }
         let mut exact = Renderer::new(&s, MethodKind::Trace, settings)?;
         let (mut total_ms, mut total_flip) = (0.0, 0.0);
@@ -309,11 +309,11 @@ impl RenderArgs {
             summary.push_str(&format!(", mean FLIP {:.4} against trace", total_flip / n));
         }
         println!("{summary}");
-        eprintln!(
+        crate::output::note(format_args!(
             "wrote {} … {}",
             paths[0].display(),
             paths[paths.len() - 1].display()
-        );
+        ));
         Ok(())
     }
 }

@@ -220,14 +220,19 @@ impl ScoreArgs {
             &which,
             progress.as_ref(),
         )?;
-        println!(
+        let mut text = format!(
             "{n} views; each of {} left out and rendered from the others:",
             which.len()
         );
-        for r in reports {
-            println!("  {r}");
+        for r in &reports {
+            text += &format!("\n  {r}");
         }
-        Ok(())
+        let result = serde_json::json!({
+            "views": n,
+            "left_out": which.len(),
+            "weightings": reports,
+        });
+        crate::output::report("views score", text, &result)
     }
 }
 

@@ -5,6 +5,7 @@ mod common;
 mod batch;
 mod cli;
 mod hybrid;
+mod json;
 mod layers;
 mod master;
 mod memory;

@@ -229,6 +229,17 @@ pub fn info_names_the_adapter_it_opens() {
     let first = &trompe_gpu::adapters(trompe_gpu::Backends::All)[0];
     assert!(out.contains(&first.name), "{out}");
     assert!(out.contains("opens:") && out.contains("limits"), "{out}");
+    // As JSON: every adapter, and the one opened with its limits.
+    let o = trompe(&["--json", "info", "--gpu"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON document");
+    let result = &doc["result"];
+    assert_eq!(result["adapters"][0]["name"], first.name.as_str());
+    let opened = result["opens"]["name"]
+        .as_str()
+        .expect("the adapter opened");
+    assert!(out.contains(opened), "{opened}\n{out}");
+    assert!(result["opens"]["limits"]["max_texture_dimension_2d"].as_u64() > Some(0));
 }
 
 /// The headless viewer with `--device gpu` replays a script whose frames, trace then raster,
