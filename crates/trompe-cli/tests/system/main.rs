@@ -122,10 +122,11 @@ pub fn the_window_under_a_virtual_x_server_shows_the_headless_frame() {
 pub fn the_gpu_window_shows_the_frame_through_a_wgpu_surface() {
     let dir = scratch("viewer-gpu-window");
     let keys = dir.join("keys.txt");
+    // F12 at 0.5 s; the window stays 8 s, time enough for a loaded machine to draw past it.
     std::fs::write(&keys, "0.5 tap F12\n").unwrap();
     let window = dir.join("window");
     let o = in_a_window(
-        &["--device", "gpu", "--size", "240x320", "--quit-after", "4"],
+        &["--device", "gpu", "--size", "240x320", "--quit-after", "8"],
         &keys,
         &window,
     );
