@@ -390,10 +390,21 @@ impl Scene {
             if object.impostor.is_some() || object.maze.is_some() {
                 return Err(invalid(
                     &key,
-                    "a maze or an object with a baked impostor stands where it was made: it has                      no copies"
+                    "a maze or an object with a baked impostor stands where it was made: it has \
+                     no copies"
                         .into(),
                 ));
             }
+            // Every copy is a mesh of its own in each view: its triangles, that many times.
+            let copies = o.instances.len() as u64;
+            crate::memory::check(
+                || format!("object[{i}]'s {copies} copies"),
+                crate::memory::times(
+                    (object.mesh.triangle_count() as u64).saturating_mul(copies),
+                    64,
+                ),
+            )
+            .map_err(|e| invalid(&key, e.to_string()))?;
             let first = objects.len();
             let origin = vec3(o.instances[0]);
             for (k, at) in o.instances.iter().enumerate() {

@@ -10,7 +10,7 @@
 //! invocation a pixel), so the same inputs give the same pixels on one device.
 
 use crate::device::{Gpu, GpuError};
-use crate::raster::v4;
+use crate::raster::{DEPTH, v4};
 use crate::trace::{GpuMaterial, GpuView, Texels};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, DVec4, Vec4};
@@ -32,11 +32,10 @@ fn shade_source() -> String {
     .join("\n")
 }
 
-/// The G-buffer's formats: base colour and normal (half floats), object id, depth (reversed:
-/// 1 on the near plane).
+/// The G-buffer's formats: base colour and normal (half floats), object id (and the depth,
+/// the rasterizer's reversed one).
 const COLOR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const OBJECT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The shader's `Camera`: world to clip, the eye and the near plane's distance.
 #[repr(C)]
@@ -309,13 +308,7 @@ fn impostor_pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
                     cull_mode: None,
                     ..Default::default()
                 },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                depth_stencil: Some(crate::raster::nearest_kept()),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,

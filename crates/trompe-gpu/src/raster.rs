@@ -134,7 +134,19 @@ impl GpuRasterCamera {
 
 /// The visibility buffer's texel format: leaf + 1, b1 bits, b2 bits.
 const VISIBILITY: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
-const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub(crate) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The depth test of every GPU draw: reversed depth ([`DEPTH`], 1 on the near plane), the
+/// nearest kept, ties to the earlier draw.
+pub(crate) fn nearest_kept() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Greater),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
 
 /// Draws `raster`'s triangles through `camera` into `visibility` (`w × h`, cleared first),
 /// recorded in `encoder`.
@@ -315,13 +327,7 @@ pub(crate) fn visibility_pipeline(gpu: &Gpu, behind: bool) -> wgpu::RenderPipeli
                     cull_mode: None,
                     ..Default::default()
                 },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                depth_stencil: Some(nearest_kept()),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,

@@ -31,6 +31,25 @@ fn json(args: &[&str], command: &str) -> Value {
     doc["result"].clone()
 }
 
+/// Eight calibrated views of the Duck, captured into a scratch folder `name`/cap.
+fn capture(name: &str) -> std::path::PathBuf {
+    let cap = scratch(name).join("cap");
+    let duck = common::asset("gltf/Duck.glb");
+    text(&[
+        "-q",
+        "views",
+        "capture",
+        s(&duck),
+        "--count",
+        "8",
+        "--size",
+        "96x72",
+        "-o",
+        s(&cap),
+    ]);
+    cap
+}
+
 fn f(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
@@ -116,7 +135,7 @@ fn compare_as_json_holds_the_texts_figures() {
 }
 
 #[test]
-fn impostor_bake_and_check_as_json_hold_the_texts_figures() {
+fn impostor_bake_as_json_holds_the_texts_figures() {
     let d = scratch("json-bake");
     let args = |out: &Path| {
         vec![
@@ -167,8 +186,22 @@ fn impostor_bake_and_check_as_json_hold_the_texts_figures() {
         ),
         (Some(64), Some(5))
     );
-    // The check of the SPOC just baked.
-    let baked = d.join("a.json");
+}
+
+#[test]
+fn impostor_check_as_json_holds_the_texts_figures() {
+    // A SPOC baked, then checked.
+    let baked = scratch("json-check").join("a.json");
+    text(&[
+        "-q",
+        "impostor",
+        "bake",
+        "assets/meshes/bunny.obj",
+        "--resolution",
+        "64",
+        "-o",
+        s(&baked),
+    ]);
     let check = [
         "impostor",
         "check",
@@ -233,22 +266,9 @@ fn a_batch_as_json_lists_every_entry_and_fails_with_its_failures() {
 }
 
 #[test]
-fn views_score_master_encode_and_layers_build_as_json_hold_the_texts_figures() {
-    let d = scratch("json-views");
-    let cap = d.join("cap");
+fn views_score_as_json_holds_the_texts_figures() {
+    let cap = capture("json-views");
     let duck = common::asset("gltf/Duck.glb");
-    text(&[
-        "-q",
-        "views",
-        "capture",
-        s(&duck),
-        "--count",
-        "8",
-        "--size",
-        "96x72",
-        "-o",
-        s(&cap),
-    ]);
     let score = [
         "views",
         "score",
@@ -273,6 +293,13 @@ fn views_score_master_encode_and_layers_build_as_json_hold_the_texts_figures() {
         f(&mean["ssim"])
     );
     assert!(printed.contains(&line), "{line}\n{printed}");
+}
+
+#[test]
+fn master_encode_as_json_holds_the_texts_figures() {
+    let cap = capture("json-master");
+    let d = cap.parent().expect("the scratch folder").to_path_buf();
+    let duck = common::asset("gltf/Duck.glb");
     let encode = |out: &Path| {
         [
             "master",
@@ -293,6 +320,11 @@ fn views_score_master_encode_and_layers_build_as_json_hold_the_texts_figures() {
     let line = format!("{} views of {} faces encoded", r["views"], r["faces"]);
     assert!(printed.contains(&line), "{line}\n{printed}");
     assert!(f(&r["compression"]) > 0.0);
+}
+
+#[test]
+fn layers_build_as_json_holds_the_texts_figures() {
+    let d = scratch("json-layers");
     let build = |out: &Path| {
         [
             "layers",
