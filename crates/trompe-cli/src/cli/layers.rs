@@ -206,7 +206,7 @@ impl RenderArgs {
             .with_context(|| format!("loading the layers in {}", self.layers.display()))?;
         if self.fill {
             let n = set.fill();
-            eprintln!("filled {n} hidden texels");
+            crate::output::note(format_args!("filled {n} hidden texels"));
         }
         let camera = scene.camera.at(scene.render.time)?;
         let settings = self.blend.settings();

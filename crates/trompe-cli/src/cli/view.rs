@@ -91,7 +91,11 @@ impl ViewArgs {
         let gpu = trompe_gpu::open_for(self.device.into(), trompe::methods::MethodKind::Trace)
             .context("opening the GPU")?;
         if let Some(g) = &gpu {
-            eprintln!("trace and raster run on {}", g.name());
+            crate::output::note(format_args!(
+                "the methods with a GPU path ({}) run on {}",
+                trompe_gpu::methods::gpu_methods().join(", "),
+                g.name()
+            ));
         }
         let viewer = Viewer::new(&scene, self.impostor_resolution, gpu.as_ref())?;
         match self.frames {
@@ -173,7 +177,7 @@ fn handle(
                     let path = out.write(&format!("{name}_{n:04}.png"), |p| {
                         Ok(io::write_png(p, image)?)
                     })?;
-                    eprintln!("wrote {}", path.display());
+                    crate::output::note(format_args!("wrote {}", path.display()));
                 }
             }
         }
@@ -182,7 +186,7 @@ fn handle(
             let path = out.write(&format!("camera_{n:04}.toml"), |p| {
                 Ok(trompe::files::write_atomically(p, block.as_bytes())?)
             })?;
-            eprintln!("wrote {}", path.display());
+            crate::output::note(format_args!("wrote {}", path.display()));
         }
     }
     Ok(())
@@ -362,11 +366,11 @@ impl ApplicationHandler for App<'_> {
                 if let Some(gpu) = self.gpu {
                     match WindowSurface::new(gpu, w.clone(), self.size) {
                         Ok(surface) => {
-                            eprintln!(
+                            crate::output::note(format_args!(
                                 "the window shows through a wgpu surface on {} ({:?})",
                                 gpu.name(),
                                 surface.format()
-                            );
+                            ));
                             return Ok((w, Surface::Gpu(Box::new(surface), gpu)));
                         }
                         Err(e) => {
@@ -502,7 +506,7 @@ fn window<'a>(
     match app.error {
         Some(e) => Err(e),
         None => {
-            eprintln!("{} frames shown", app.frames);
+            crate::output::note(format_args!("{} frames shown", app.frames));
             Ok(())
         }
     }
