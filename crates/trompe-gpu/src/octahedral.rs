@@ -136,11 +136,14 @@ impl<'a> GpuAtlases<'a> {
             instances.push(GpuInstance::zeroed());
         }
         let corners: [[f32; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [1.0, 1.0]];
+        let surfaces: Vec<_> = atlases.surfaces().map(GpuMaterial::specular).collect();
         let materials: Vec<GpuMaterial> = placed
             .iter()
-            .map(|p| match atlases.surfaces().nth(p.atlas) {
-                Some(surface) => GpuMaterial::specular(surface),
-                None => GpuMaterial::zeroed(),
+            .map(|p| {
+                surfaces
+                    .get(p.atlas)
+                    .copied()
+                    .unwrap_or_else(GpuMaterial::zeroed)
             })
             .collect();
         let materials: &[u8] = bytemuck::cast_slice(&materials);
