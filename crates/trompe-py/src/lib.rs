@@ -213,9 +213,18 @@ fn bake_octahedral(
     plan.reads(batch.iter().map(|i| i.path.clone()));
     for input in &batch {
         let sidecar = input.sidecar(&output);
-        plan.writes(&sidecar, &["json", "png", "exr", "glb"]);
+        for file in trompe::octahedral::file::files(&sidecar) {
+            plan.writes(file, &["json", "png", "exr"]);
+        }
+        if glb {
+            plan.writes(sidecar.with_extension("glb"), &["glb"]);
+        }
     }
     plan.check_overwrites().or_raise()?;
+    // A file of the user's where a map would go (not an earlier atlas's) is never replaced.
+    for input in &batch {
+        trompe::octahedral::file::check_replaceable(&input.sidecar(&output)).or_raise()?;
+    }
     std::fs::create_dir_all(&output).map_err(|e| invalid(&output.display().to_string(), e))?;
     let mut done = 0;
     let mut failure = None;

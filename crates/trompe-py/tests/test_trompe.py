@@ -117,6 +117,14 @@ def test_a_folder_bakes_to_octahedral_atlases_with_progress(tmp_path):
     again = trompe.bake_octahedral(lib, tmp_path / "out", frames=4, resolution=64, skip_existing=True)
     strip = lambda m: [{k: v for k, v in e.items() if k != "seconds"} for e in m["entries"]]
     assert strip(again) == strip(manifest)
+    # A file of the user's where a map would go is refused, before any work, and kept.
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "a").mkdir()
+    (mine / "a" / "pot.png").write_bytes(b"my texture")
+    with pytest.raises(trompe.TrompeError, match="pot.png"):
+        trompe.bake_octahedral(lib, mine, frames=4, resolution=64)
+    assert (mine / "a" / "pot.png").read_bytes() == b"my texture"
     # A progress callback that raises stops the batch with its exception.
     def stop(done, total, path):
         raise KeyboardInterrupt
