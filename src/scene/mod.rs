@@ -9,10 +9,12 @@
 //! file; unknown keys are errors.
 
 pub mod deform;
+mod field;
 mod file;
 pub mod maze;
 
 pub use deform::{DeformKind, Deformation};
+pub use field::{FieldCopy, MAX_INSTANCES};
 pub use file::SceneFile;
 
 use crate::camera::{CameraError, Pinhole};
@@ -170,20 +172,6 @@ pub struct SceneObject {
     /// draws it as an object of its own, and the octahedral method bakes one atlas a field.
     pub field: Option<FieldCopy>,
 }
-
-/// One copy of a field of instances: the same mesh, surface, motion and deformation as the
-/// field's first copy, moved by a translation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FieldCopy {
-    /// The object id of the field's first copy.
-    pub first: usize,
-    /// This copy's translation from the first (world units): its pose at every time is the
-    /// first's, moved by it.
-    pub offset: Vec3,
-}
-
-/// Most copies one object's `instances` may ask for.
-pub const MAX_INSTANCES: usize = 4096;
 
 /// A maze an object is made from: the plan and its file (named in errors).
 #[derive(Clone, Debug)]
@@ -379,45 +367,7 @@ impl Scene {
                 objects.push(object);
                 continue;
             }
-            let key = format!("object[{i}].instances");
-            if o.instances.len() > MAX_INSTANCES {
-                return Err(invalid(
-                    &key,
-                    format!("{} copies is more than {MAX_INSTANCES}", o.instances.len()),
-                ));
-            }
-            finite(&key, o.instances.as_flattened())?;
-            if object.impostor.is_some() || object.maze.is_some() {
-                return Err(invalid(
-                    &key,
-                    "a maze or an object with a baked impostor stands where it was made: it has \
-                     no copies"
-                        .into(),
-                ));
-            }
-            // Every copy is a mesh of its own in each view: its triangles, that many times.
-            let copies = o.instances.len() as u64;
-            crate::memory::check(
-                || format!("object[{i}]'s {copies} copies"),
-                crate::memory::times(
-                    (object.mesh.triangle_count() as u64).saturating_mul(copies),
-                    64,
-                ),
-            )
-            .map_err(|e| invalid(&key, e.to_string()))?;
-            let first = objects.len();
-            let origin = vec3(o.instances[0]);
-            for (k, at) in o.instances.iter().enumerate() {
-                let mut copy = object.clone();
-                copy.name = format!("{}#{k}", object.name);
-                copy.world_from_object =
-                    Mat4::from_translation(vec3(*at)) * object.world_from_object;
-                copy.field = Some(FieldCopy {
-                    first,
-                    offset: vec3(*at) - origin,
-                });
-                objects.push(copy);
-            }
+            field::expand(object, &o.instances, (path, i), &mut objects)?;
         }
         let bounds = objects.iter().fold(Aabb::EMPTY, |b, o| {
             b.union(o.mesh.bounds().transformed(&o.world_from_object))
