@@ -70,6 +70,20 @@ pub fn encode_png_data(image: &Image<Vec3>, path: &Path) -> Result<Vec<u8>, Fram
     png_bytes(&pixels, image.size(), image::ExtendedColorType::Rgb8, path)
 }
 
+/// An image of four data channels in `[0, 1]` as an 8-bit RGBA PNG, stored linearly (alpha
+/// too): packed maps such as the octahedral normal-depth texture.
+pub fn encode_png_data_rgba(image: &Image<Rgba>, path: &Path) -> Result<Vec<u8>, FrameError> {
+    let pixels: Vec<u8> = image
+        .pixels()
+        .iter()
+        .flat_map(|p| {
+            p.to_array()
+                .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        })
+        .collect();
+    png_bytes(&pixels, image.size(), image::ExtendedColorType::Rgba8, path)
+}
+
 /// Writes an image of data in `[0, 1]` as a linear 8-bit RGB PNG ([`encode_png_data`]).
 pub fn write_png_data(path: &Path, image: &Image<Vec3>) -> Result<(), FrameError> {
     publish(path, &encode_png_data(image, path)?)

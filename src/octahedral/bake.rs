@@ -4,8 +4,8 @@
 //! occlusion traced through the exact BVH at every vertex — [`AO_RAYS`] cosine-distributed rays
 //! reaching one bounding radius — then interpolated; roughness and metalness from the material);
 //! then every channel dilated
-//! into the empty texels around the object, frame by frame, so bilinear filtering and mip-maps
-//! never pull background into the silhouette.
+//! into the empty texels around the object and the rest of each frame filled, frame by frame, so
+//! bilinear filtering and mip-maps never pull background into the silhouette.
 //!
 //! Invariants: frame `(i, j)` is the atlas's texels `[i·s, (i+1)·s) × [j·s, (j+1)·s)`; a frame's
 //! camera looks at the sphere's centre from [`Grid::direction`] with image axes
@@ -428,8 +428,9 @@ fn bake_frame(
     Ok((color, normal, depth, orm))
 }
 
-/// Grows every channel `radius` texels into the uncovered texels of one `s × s` frame: each
-/// round, an uncovered texel with covered (or already grown) 8-neighbours takes their mean.
+/// Grows every channel `radius` texels into the uncovered texels of one `s × s` frame — each
+/// round, an uncovered texel with covered (or already grown) 8-neighbours takes their mean —
+/// then fills the rest of the frame with the nearest grown texel. Coverage stays 0 outside.
 pub fn dilate(
     color: &mut [Rgba],
     (normal, depth, orm): (&mut [Vec3], &mut [f32], &mut [Vec3]),
@@ -480,4 +481,59 @@ pub fn dilate(
             filled[t] = true;
         }
     }
+    // The rest of the frame takes its nearest filled texel (found by two chamfer sweeps), so
+    // that every mip level of the frame holds the object's colours and never the background.
+    let Some(nearest) = nearest_filled(&filled, s) else {
+        return;
+    };
+    for (t, &from) in nearest.iter().enumerate() {
+        if !filled[t] {
+            color[t] = color[from].truncate().extend(0.0);
+            normal[t] = normal[from];
+            depth[t] = depth[from];
+            orm[t] = orm[from];
+        }
+    }
+}
+
+/// For every texel of an `s × s` frame, a filled texel near it (itself where filled): the
+/// nearest one propagated through 8-neighbours by a forward and a backward sweep. `None` when
+/// nothing is filled.
+fn nearest_filled(filled: &[bool], s: usize) -> Option<Vec<usize>> {
+    if !filled.contains(&true) {
+        return None;
+    }
+    const NONE: usize = usize::MAX;
+    let mut nearest: Vec<usize> = (0..s * s)
+        .map(|t| if filled[t] { t } else { NONE })
+        .collect();
+    let distance = |t: usize, from: usize| {
+        let (dx, dy) = (
+            (t % s) as i64 - (from % s) as i64,
+            (t / s) as i64 - (from / s) as i64,
+        );
+        dx * dx + dy * dy
+    };
+    let relax = |t: usize, x: i64, y: i64, nearest: &mut Vec<usize>| {
+        if x < 0 || y < 0 || x >= s as i64 || y >= s as i64 {
+            return;
+        }
+        let from = nearest[y as usize * s + x as usize];
+        if from != NONE && (nearest[t] == NONE || distance(t, from) < distance(t, nearest[t])) {
+            nearest[t] = from;
+        }
+    };
+    for t in 0..s * s {
+        let (x, y) = ((t % s) as i64, (t / s) as i64);
+        for (dx, dy) in [(-1, 0), (-1, -1), (0, -1), (1, -1)] {
+            relax(t, x + dx, y + dy, &mut nearest);
+        }
+    }
+    for t in (0..s * s).rev() {
+        let (x, y) = ((t % s) as i64, (t / s) as i64);
+        for (dx, dy) in [(1, 0), (1, 1), (0, 1), (-1, 1)] {
+            relax(t, x + dx, y + dy, &mut nearest);
+        }
+    }
+    Some(nearest)
 }

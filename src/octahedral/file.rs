@@ -1,14 +1,15 @@
 //! An octahedral atlas on disk: `NAME.json` (the layout, below), `NAME.png` (base colour, sRGB,
-//! alpha = coverage), `NAME-normal.exr` (object-space unit normals, float), `NAME-depth.exr`
-//! (depth behind each frame's front plane over the bounding sphere's diameter, float) and
-//! `NAME-orm.png` (linear 8-bit: red ambient occlusion, green roughness, blue metalness — glTF's
-//! packing). The JSON
-//! says everything a shader needs to read the maps: the grid (`n` frames a side, `sphere` or
-//! `hemisphere`), the frame size, the bounding sphere in the object's own space, and the maps'
-//! file names; the mapping is docs/conventions.md §8's.
+//! alpha = coverage), `NAME-normal-depth.png` (the object-space normal and the depth packed in
+//! one linear RGBA8 texture, [`super::packing`]) and `NAME-orm.png` (linear 8-bit: red ambient
+//! occlusion, green roughness, blue metalness — glTF's packing); with [`FloatMaps::OpenExr`]
+//! also `NAME-normal.exr` and `NAME-depth.exr`, the same two maps as 32-bit floats, for
+//! pipelines that want them unquantized. The JSON says everything a shader needs to read the
+//! maps: the grid (`n` frames a side, `sphere` or `hemisphere`), the frame size, the bounding
+//! sphere in the object's own space, and the maps' file names; the mapping is
+//! docs/conventions.md §8's.
 //!
 //! Invariants: written through [`crate::files::write_atomically`]-backed writers; nothing but
-//! the five files is written.
+//! the files [`files`] lists is written, and the sidecar names exactly the maps written with it.
 
 use super::bake::OctahedralAtlas;
 use super::mapping::Grid;
@@ -25,7 +26,7 @@ pub const FORMAT: &str = "trompe-octahedral-impostor";
 pub struct Sidecar {
     /// Always `"trompe-octahedral-impostor"`.
     pub format: String,
-    /// Layout version: 2 (1 had no ORM map).
+    /// Layout version: 3 (2 had float normal and depth maps only, 1 no ORM map either).
     pub version: u32,
     /// Frames a side and the directions covered.
     pub grid: Grid,
@@ -44,10 +45,18 @@ pub struct Sidecar {
     pub projection: super::FrameProjection,
     /// Base colour + coverage (PNG, sRGB).
     pub color: String,
-    /// Object-space normals (OpenEXR, float RGB).
-    pub normal: String,
-    /// Depth over the sphere's diameter from each frame's front plane (OpenEXR, float).
-    pub depth: String,
+    /// Normal and depth packed in one linear RGBA8 PNG ([`super::packing`]); absent before
+    /// version 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_depth: Option<String>,
+    /// Object-space normals (OpenEXR, float RGB): always before version 3, then only when
+    /// asked for ([`FloatMaps::OpenExr`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<String>,
+    /// Depth over the sphere's diameter from each frame's front plane (OpenEXR, float): as
+    /// `normal`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth: Option<String>,
     /// Occlusion, roughness, metalness (PNG, linear); absent in version 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub orm: Option<String>,
@@ -58,7 +67,17 @@ pub struct Sidecar {
 }
 
 /// The layout version this build writes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
+
+/// Whether the normal and depth maps are also written as 32-bit float OpenEXR files.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FloatMaps {
+    /// The packed 8-bit map only.
+    #[default]
+    Omitted,
+    /// `NAME-normal.exr` and `NAME-depth.exr` beside it.
+    OpenExr,
+}
 
 /// Errors writing an atlas.
 #[derive(Debug, Error)]
@@ -175,16 +194,30 @@ impl std::fmt::Display for Sidecar {
             "  bounding sphere: centre ({:.4}, {:.4}, {:.4}), radius {:.4}",
             self.centre[0], self.centre[1], self.centre[2], self.radius
         )?;
-        write!(f, "  maps: {}, {}, {}", self.color, self.normal, self.depth)?;
-        if let Some(orm) = &self.orm {
-            write!(f, ", {orm}")?;
-        }
-        Ok(())
+        write!(f, "  maps: {}", self.maps().join(", "))
     }
 }
 
-/// The five files of an atlas whose sidecar is `json`.
-pub fn files(json: &Path) -> [PathBuf; 5] {
+impl Sidecar {
+    /// The file names of the maps this sidecar names, colour first.
+    pub fn maps(&self) -> Vec<String> {
+        [
+            Some(&self.color),
+            self.normal_depth.as_ref(),
+            self.orm.as_ref(),
+            self.normal.as_ref(),
+            self.depth.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        .cloned()
+        .collect()
+    }
+}
+
+/// Every file an atlas whose sidecar is `json` may have: the sidecar, the colour, packed
+/// normal-depth and ORM maps, and the two OpenEXR maps [`FloatMaps::OpenExr`] adds.
+pub fn files(json: &Path) -> [PathBuf; 6] {
     let stem = json
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -193,17 +226,31 @@ pub fn files(json: &Path) -> [PathBuf; 5] {
     [
         json.to_path_buf(),
         dir.join(format!("{stem}.png")),
+        dir.join(format!("{stem}-normal-depth.png")),
+        dir.join(format!("{stem}-orm.png")),
         dir.join(format!("{stem}-normal.exr")),
         dir.join(format!("{stem}-depth.exr")),
-        dir.join(format!("{stem}-orm.png")),
     ]
 }
 
-/// Refuses to write an atlas as `json` where one of its five files exists but is not part of
-/// an earlier atlas of that name (a texture of a user's named like a map): checked before work.
-pub fn check_replaceable(json: &Path) -> Result<(), OctahedralFileError> {
+/// The files the atlas of `sidecar`, written as `json`, has: the sidecar and its maps.
+pub fn written(json: &Path, sidecar: &Sidecar) -> Vec<PathBuf> {
+    let dir = json.parent().unwrap_or(Path::new(""));
+    std::iter::once(json.to_path_buf())
+        .chain(sidecar.maps().into_iter().map(|m| dir.join(m)))
+        .collect()
+}
+
+/// Refuses to write an atlas as `json` (its OpenEXR maps as `floats` says) where one of the
+/// files it writes exists but is not part of an earlier atlas of that name (a texture of a
+/// user's named like a map): checked before work.
+pub fn check_replaceable(json: &Path, floats: FloatMaps) -> Result<(), OctahedralFileError> {
     let files = files(json);
-    let existing: Vec<&PathBuf> = files.iter().filter(|f| f.exists()).collect();
+    let writes = match floats {
+        FloatMaps::Omitted => &files[..4],
+        FloatMaps::OpenExr => &files[..],
+    };
+    let existing: Vec<&PathBuf> = writes.iter().filter(|f| f.exists()).collect();
     if existing.is_empty() {
         return Ok(());
     }
@@ -211,16 +258,7 @@ pub fn check_replaceable(json: &Path) -> Result<(), OctahedralFileError> {
     for f in existing {
         let name = f.file_name().map(|n| n.to_string_lossy().into_owned());
         let recorded = earlier.as_ref().is_some_and(|s| {
-            f.as_path() == json
-                || [
-                    Some(&s.color),
-                    Some(&s.normal),
-                    Some(&s.depth),
-                    s.orm.as_ref(),
-                ]
-                .into_iter()
-                .flatten()
-                .any(|m| Some(m) == name.as_ref())
+            f.as_path() == json || s.maps().iter().any(|m| Some(m) == name.as_ref())
         });
         if !recorded {
             return Err(OctahedralFileError::NotAnAtlas {
@@ -232,25 +270,35 @@ pub fn check_replaceable(json: &Path) -> Result<(), OctahedralFileError> {
     Ok(())
 }
 
-/// Writes `atlas` as `json` and its four maps beside it.
-pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralFileError> {
+/// Writes `atlas` as `json` and its maps beside it (the OpenEXR ones as `floats` says).
+pub fn save(
+    atlas: &OctahedralAtlas,
+    json: &Path,
+    floats: FloatMaps,
+) -> Result<Sidecar, OctahedralFileError> {
     if json.file_stem().is_none() {
         return Err(OctahedralFileError::NotAFile(json.to_path_buf()));
     }
-    let [_, color, normal, depth, orm] = files(json);
-    // The maps first, then the sidecar naming them with their checksums, all under the folder's
-    // lock: a second writer waits, and a reader refuses maps that are not its sidecar's.
+    let [_, color, normal_depth, orm, normal, depth] = files(json);
     // Every map encoded, then staged whole beside its name, then the maps and last the sidecar
     // naming them with their checksums renamed into place, under the folder's lock: a second
     // writer waits, a kill leaves at most a few renames undone, and a reader refuses maps that
     // are not its sidecar's.
-    let maps = [
+    let packed = super::packing::pack(&atlas.normal, &atlas.depth)?;
+    let mut maps = vec![
         (&color, io::encode_png(&atlas.color, &color)?),
-        (&normal, io::encode_exr_normals(&normal, &atlas.normal)?),
-        (&depth, io::encode_exr_depth(&depth, &atlas.depth)?),
+        (
+            &normal_depth,
+            io::encode_png_data_rgba(&packed, &normal_depth)?,
+        ),
         (&orm, io::encode_png_data(&atlas.orm, &orm)?),
     ];
+    if floats == FloatMaps::OpenExr {
+        maps.push((&normal, io::encode_exr_normals(&normal, &atlas.normal)?));
+        maps.push((&depth, io::encode_exr_depth(&depth, &atlas.depth)?));
+    }
     let _lock = crate::files::PublishLock::of(json);
+    let earlier = read_sidecar(json).ok();
     let io_at = |path: &Path| {
         let path = path.to_path_buf();
         move |source| OctahedralFileError::Io { path, source }
@@ -264,21 +312,7 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    let sidecar = Sidecar {
-        format: FORMAT.into(),
-        version: VERSION,
-        grid: atlas.settings.grid,
-        frame_size: atlas.settings.frame_size,
-        dilation: atlas.settings.dilation,
-        centre: atlas.centre.to_array(),
-        radius: atlas.radius,
-        projection: atlas.settings.projection,
-        color: name(&color),
-        normal: name(&normal),
-        depth: name(&depth),
-        orm: Some(name(&orm)),
-        parts: None,
-    };
+    let sidecar = sidecar_of(atlas, json, floats);
     let parts = maps
         .iter()
         .map(|(p, bytes)| crate::files::Part::of_bytes(&name(p), bytes))
@@ -297,7 +331,54 @@ pub fn save(atlas: &OctahedralAtlas, json: &Path) -> Result<Sidecar, OctahedralF
     }
     pause_for_tests();
     index.commit().map_err(io_at(json))?;
+    // An earlier bake's maps this one does not write (its OpenEXR files, say) go, where they
+    // are still the files that bake recorded: never a file of the user's.
+    if let Some(earlier) = earlier {
+        let dir = json.parent().unwrap_or(Path::new(""));
+        let now = sidecar.maps();
+        for part in earlier.parts.iter().flatten() {
+            if !now.contains(&part.file) && part.verify(dir).is_ok() {
+                let _ = std::fs::remove_file(dir.join(&part.file));
+            }
+        }
+    }
     Ok(sidecar)
+}
+
+/// The sidecar of `atlas` written as `json` with its maps (no checksums yet).
+pub fn sidecar_of(atlas: &OctahedralAtlas, json: &Path, floats: FloatMaps) -> Sidecar {
+    let [_, color, normal_depth, orm, normal, depth] = files(json);
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let exr = floats == FloatMaps::OpenExr;
+    Sidecar {
+        format: FORMAT.into(),
+        version: VERSION,
+        grid: atlas.settings.grid,
+        frame_size: atlas.settings.frame_size,
+        dilation: atlas.settings.dilation,
+        centre: atlas.centre.to_array(),
+        radius: atlas.radius,
+        projection: atlas.settings.projection,
+        color: name(&color),
+        normal_depth: Some(name(&normal_depth)),
+        normal: exr.then(|| name(&normal)),
+        depth: exr.then(|| name(&depth)),
+        orm: Some(name(&orm)),
+        parts: None,
+    }
+}
+
+/// Distance (object units) from which one texel of frames `frame_size` texels across a sphere
+/// of `radius` covers one pixel of a 1080-row, 60° view: where a renderer can switch from the
+/// mesh to the impostor.
+pub fn switch_distance(radius: f32, frame_size: u32) -> f32 {
+    let texel = 2.0 * radius / frame_size.max(1) as f32;
+    let pixel_angle = 60f32.to_radians() / 1080.0;
+    texel / pixel_angle
 }
 
 /// What a bake did.
@@ -306,11 +387,11 @@ pub struct OctahedralReport {
     /// The sidecar written.
     pub sidecar: Sidecar,
     /// Its path and the maps'.
-    pub files: [PathBuf; 5],
+    pub files: Vec<PathBuf>,
     /// Time to bake.
     pub bake_time: Duration,
     /// Bytes of each file written.
-    pub bytes: [u64; 5],
+    pub bytes: Vec<u64>,
     /// Distance (in object units) from which one atlas texel covers one pixel of a 1080-row,
     /// 60° view: where a renderer can switch from the mesh to the impostor.
     pub switch_distance: f32,
@@ -321,20 +402,18 @@ impl OctahedralReport {
     pub fn new(
         atlas: &OctahedralAtlas,
         sidecar: Sidecar,
-        files: [PathBuf; 5],
+        files: Vec<PathBuf>,
         bake_time: Duration,
     ) -> Self {
-        let bytes = files
-            .clone()
-            .map(|f| std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0));
-        let texel = 2.0 * atlas.radius / atlas.settings.frame_size as f32;
-        let pixel_angle = 60f32.to_radians() / 1080.0;
+        let bytes = (files.iter())
+            .map(|f| std::fs::metadata(f).map(|m| m.len()).unwrap_or(0))
+            .collect();
         OctahedralReport {
             sidecar,
             files,
             bake_time,
             bytes,
-            switch_distance: texel / pixel_angle,
+            switch_distance: switch_distance(atlas.radius, atlas.settings.frame_size),
         }
     }
 }
@@ -342,7 +421,7 @@ impl OctahedralReport {
 /// As JSON: the sidecar, the files and their bytes, the bake's seconds, the switch distance.
 impl serde::Serialize for OctahedralReport {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let files: Vec<_> = (self.files.iter().zip(self.bytes))
+        let files: Vec<_> = (self.files.iter().zip(&self.bytes))
             .map(|(path, bytes)| serde_json::json!({ "path": path, "bytes": bytes }))
             .collect();
         serde_json::json!({
@@ -372,8 +451,8 @@ impl std::fmt::Display for OctahedralReport {
             n = s.grid.n,
             fs = s.frame_size
         )?;
-        for (path, bytes) in self.files.iter().zip(self.bytes) {
-            writeln!(f, "  {} ({:.1} MB)", path.display(), bytes as f64 / 1e6)?;
+        for (path, bytes) in self.files.iter().zip(&self.bytes) {
+            writeln!(f, "  {} ({:.1} MB)", path.display(), *bytes as f64 / 1e6)?;
         }
         write!(
             f,

@@ -22,6 +22,10 @@ use rayon::prelude::*;
 /// Parallax refinement steps (0: the frame's plane through the centre, no depth).
 pub const PARALLAX_STEPS: u32 = 4;
 
+/// The blended coverage a surface needs to be drawn by an alpha-tested impostor material (the
+/// glTF card's `alphaCutoff`, the runtimes' alpha test).
+pub const ALPHA_TEST: f32 = 0.5;
+
 /// Where world point `p` lands in frame `(i, j)` of an atlas baked with `settings` on the
 /// sphere `(centre, radius)`, in frame texel coordinates (texel centres at `+½`): along the
 /// frame's direction (orthographic), or through its pinhole. The shader's `frame_texel` is the
@@ -105,6 +109,37 @@ impl OctahedralAtlas {
                 let (a, albedo, n) = (b.alpha, b.albedo, b.normal);
                 // An atlas holds no occluders: relit unshadowed, as an engine's shader does.
                 (lambert(albedo, n, lighting, |_| true) * a + env * (1.0 - a)).extend(1.0)
+            })
+            .collect();
+        match Image::from_vec(w, h, pixels) {
+            Ok(img) => img,
+            Err(_) => unreachable!("the camera's resolution is a valid image size"),
+        }
+    }
+
+    /// [`OctahedralAtlas::render`] as engines' impostor materials draw: a pixel keeps the
+    /// surface where the blended coverage passes the alpha test ([`ALPHA_TEST`]), whole, and
+    /// shows the environment elsewhere — the reference of the runtimes in `shaders/` and `web/`.
+    pub fn render_cutout(
+        &self,
+        camera: &Pinhole,
+        lighting: &Lighting,
+        parallax: u32,
+    ) -> Image<Rgba> {
+        let (w, h) = crate::camera::Projection::resolution(camera);
+        let view = (camera.position() - self.centre.as_dvec3()).normalize_or(DVec3::Y);
+        let frames = self.settings.grid.frames_around(view);
+        let pixels: Vec<Rgba> = (0..h as usize * w as usize)
+            .into_par_iter()
+            .map(|k| {
+                let (x, y) = (k % w as usize, k / w as usize);
+                let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
+                match self.blend(&frames, ray, parallax) {
+                    Some(b) if b.alpha >= ALPHA_TEST && b.t > 0.0 => {
+                        lambert(b.albedo, b.normal, lighting, |_| true).extend(1.0)
+                    }
+                    _ => lighting.environment.radiance(ray.dir).extend(1.0),
+                }
             })
             .collect();
         match Image::from_vec(w, h, pixels) {

@@ -47,7 +47,7 @@ pub enum SceneAtlasError {
 }
 
 /// The coverage from which a blended lookup is a surface: an engine's alpha test.
-pub const ALPHA_TEST: f32 = 0.5;
+pub use super::render::ALPHA_TEST;
 
 /// The scene's objects as octahedral atlases, in world space.
 pub struct SceneAtlases {

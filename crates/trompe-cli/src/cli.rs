@@ -287,8 +287,9 @@ pub struct BakeArgs {
     /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
     #[arg(short, long)]
     output: PathBuf,
-    /// Bake an octahedral atlas of N × N frames instead (--resolution is the atlas side; NAME.png,
-    /// NAME-normal.exr and NAME-depth.exr go beside NAME.json).
+    /// Bake an octahedral atlas of N × N frames instead (--resolution is the atlas side): with
+    /// -o NAME.glb one self-contained glTF file; with -o NAME.json the layout, and NAME.png,
+    /// NAME-normal-depth.png and NAME-orm.png beside it.
     #[arg(long, value_parser = clap::value_parser!(u32).range(2..=64))]
     octahedral: Option<u32>,
     /// With --octahedral: the upper hemisphere only (hemi-octahedral).
@@ -303,6 +304,11 @@ pub struct BakeArgs {
     /// camera.
     #[arg(long)]
     glb: bool,
+    /// With --octahedral and -o NAME.json or a batch: also write the normal and depth maps as
+    /// 32-bit float OpenEXR files (NAME-normal.exr, NAME-depth.exr), for pipelines that want
+    /// them unquantized.
+    #[arg(long)]
+    exr: bool,
     /// With --octahedral and a batch: bake only shard K of N of the sorted inputs ("K/N",
     /// 1-based); "auto" reads it from a Slurm array job's variables, "auto/N" from a Kubernetes
     /// Indexed Job's JOB_COMPLETION_INDEX (0-based) with N completions.

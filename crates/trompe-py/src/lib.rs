@@ -172,7 +172,7 @@ fn bake_impostor(
 /// `output`, as `trompe impostor bake --octahedral` bakes a batch; `progress(done, total,
 /// input)` is called after each. The manifest as JSON text.
 #[pyfunction]
-#[pyo3(signature = (inputs, output, frames, resolution, glb, skip_existing, progress))]
+#[pyo3(signature = (inputs, output, frames, resolution, glb, exr, skip_existing, progress))]
 #[allow(clippy::too_many_arguments)]
 fn bake_octahedral(
     py: Python<'_>,
@@ -181,6 +181,7 @@ fn bake_octahedral(
     frames: u32,
     resolution: u32,
     glb: bool,
+    exr: bool,
     skip_existing: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
@@ -205,6 +206,10 @@ fn bake_octahedral(
     let settings = BatchSettings {
         bake: BakeSettings::new(grid, frame_size),
         glb,
+        floats: match exr {
+            true => trompe::octahedral::file::FloatMaps::OpenExr,
+            false => trompe::octahedral::file::FloatMaps::Omitted,
+        },
         skip_existing,
     };
     let batch = gather(&inputs, &[]).or_raise()?;
@@ -223,7 +228,8 @@ fn bake_octahedral(
     plan.check_overwrites().or_raise()?;
     // A file of the user's where a map would go (not an earlier atlas's) is never replaced.
     for input in &batch {
-        trompe::octahedral::file::check_replaceable(&input.sidecar(&output)).or_raise()?;
+        trompe::octahedral::file::check_replaceable(&input.sidecar(&output), settings.floats)
+            .or_raise()?;
     }
     std::fs::create_dir_all(&output).map_err(|e| invalid(&output.display().to_string(), e))?;
     let mut done = 0;

@@ -21,7 +21,7 @@ pub use record::{
 pub use shard::Shard;
 
 use super::bake::{BakeSettings, bake};
-use super::file::{files, save};
+use super::file::{FloatMaps, files, save};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -85,6 +85,8 @@ pub struct BatchSettings {
     pub bake: BakeSettings,
     /// Also write `<stem>.glb`.
     pub glb: bool,
+    /// Also write the normal and depth maps as OpenEXR floats.
+    pub floats: FloatMaps,
     /// Skip what an earlier run in the output folder finished.
     pub skip_existing: bool,
 }
@@ -128,8 +130,10 @@ pub fn bake_all(
         let sidecar = input.sidecar(out);
         let glb = sidecar.with_extension("glb");
         let here = |e: &Entry| {
+            let wrote = |path: &PathBuf| e.outputs.iter().any(|o| &o.path == path);
             e.output.as_ref() == Some(&sidecar)
-                && (!settings.glb || e.outputs.iter().any(|o| o.path == glb))
+                && (!settings.glb || wrote(&glb))
+                && (settings.floats == FloatMaps::Omitted || wrote(&files(&sidecar)[4]))
         };
         let kept = input_sha256.as_deref().and_then(|h| {
             earlier.get(&input.path).and_then(|es| {
@@ -193,8 +197,8 @@ fn bake_one(
             std::fs::create_dir_all(folder)
                 .map_err(|e| format!("creating {}: {e}", folder.display()))?;
         }
-        save(&atlas, &sidecar).map_err(|e| e.to_string())?;
-        let mut written: Vec<PathBuf> = files(&sidecar).to_vec();
+        let saved = save(&atlas, &sidecar, settings.floats).map_err(|e| e.to_string())?;
+        let mut written = super::file::written(&sidecar, &saved);
         if settings.glb {
             let glb = sidecar.with_extension("glb");
             super::gltf::export(&sidecar, &glb).map_err(|e| e.to_string())?;
@@ -202,7 +206,6 @@ fn bake_one(
         }
         let outputs = written
             .into_iter()
-            .filter(|p| p.is_file())
             .map(hashed)
             .collect::<Result<_, String>>()?;
         Ok((loaded.mesh.triangle_count(), outputs))

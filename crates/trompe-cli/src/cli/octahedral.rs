@@ -155,14 +155,21 @@ impl BakeArgs {
     }
 
     /// Whether this is a batch: several inputs, a folder or a list of them, a shard, or an
-    /// output that is not a .json file.
+    /// output that is neither a .json nor a .glb file.
     pub(super) fn is_batch(&self) -> bool {
         self.inputs.len() > 1
-            || has_extension(&self.output, "glb")
             || self.inputs.iter().any(|p| p.is_dir())
             || self.inputs_from.is_some()
-            || !has_extension(&self.output, "json")
+            || !(has_extension(&self.output, "json") || has_extension(&self.output, "glb"))
             || self.shard.is_some()
+    }
+
+    /// The float maps these arguments ask for.
+    fn floats(&self) -> trompe::octahedral::file::FloatMaps {
+        match self.exr {
+            true => trompe::octahedral::file::FloatMaps::OpenExr,
+            false => trompe::octahedral::file::FloatMaps::Omitted,
+        }
     }
 
     /// A batch of octahedral bakes into the folder -o names: a shard of the sorted inputs,
@@ -171,11 +178,10 @@ impl BakeArgs {
     /// Bakes this shard's inputs; fails (exit code 1) where any input could not be baked, after
     /// printing the report.
     pub(super) fn bake_batch(&self, n: u32) -> Result<std::process::ExitCode> {
-        if has_extension(&self.output, "glb") {
+        if has_extension(&self.output, "glb") || has_extension(&self.output, "json") {
             anyhow::bail!(
-                "-o {}: an octahedral bake writes NAME.json and its maps (add --glb for \
-                 NAME.glb beside them), and a batch writes into a folder: give -o NAME.json or \
-                 -o FOLDER/",
+                "-o {}: a batch writes into a folder (NAME.json and its maps for each input, \
+                 NAME.glb beside them with --glb): give -o FOLDER/",
                 self.output.display()
             );
         }
@@ -186,6 +192,7 @@ impl BakeArgs {
         let settings = BatchSettings {
             bake: self.octahedral_settings(n)?,
             glb: self.glb,
+            floats: self.floats(),
             skip_existing: self.skip_existing,
         };
         let shard = match self.shard {
@@ -231,7 +238,10 @@ impl BakeArgs {
         plan.writes(&journal, &["jsonl"]);
         plan.check_overwrites()?;
         for input in &mine {
-            trompe::octahedral::file::check_replaceable(&input.sidecar(&self.output))?;
+            trompe::octahedral::file::check_replaceable(
+                &input.sidecar(&self.output),
+                settings.floats,
+            )?;
         }
         std::fs::create_dir_all(&self.output)
             .with_context(|| format!("creating {}", self.output.display()))?;
@@ -306,20 +316,36 @@ impl BakeArgs {
         let settings = self.octahedral_settings(n)?;
         let input = self.input()?;
         let files = file::files(&self.output);
+        // -o NAME.glb: that one self-contained file, nothing beside it.
+        let alone = has_extension(&self.output, "glb");
+        if alone && (self.glb || self.exr) {
+            anyhow::bail!(
+                "-o {}: a .glb output is the whole bake; --glb and --exr add files beside a \
+                 NAME.json output",
+                self.output.display()
+            );
+        }
         let glb = self.output.with_extension("glb");
         let mut plan = OutputPlan::new();
-        plan.creating_folders()
-            .reads([input])
-            .writes(&files[0], &["json"])
-            .writes(&files[1], &["png"])
-            .writes(&files[2], &["exr"])
-            .writes(&files[3], &["exr"])
-            .writes(&files[4], &["png"]);
-        if self.glb {
+        plan.creating_folders().reads([input]);
+        if alone {
             plan.writes(&glb, &["glb"]);
+        } else {
+            plan.writes(&files[0], &["json"])
+                .writes(&files[1], &["png"])
+                .writes(&files[2], &["png"])
+                .writes(&files[3], &["png"]);
+            if self.exr {
+                plan.writes(&files[4], &["exr"]).writes(&files[5], &["exr"]);
+            }
+            if self.glb {
+                plan.writes(&glb, &["glb"]);
+            }
         }
         plan.check_overwrites()?;
-        file::check_replaceable(&self.output)?;
+        if !alone {
+            file::check_replaceable(&self.output, self.floats())?;
+        }
         let loaded = trompe::geom::io::load(input)
             .with_context(|| format!("loading {}", input.display()))?;
         check_plan(plan.reads(loaded.files.iter().cloned()))?;
@@ -334,13 +360,25 @@ impl BakeArgs {
             )
         })?;
         let bake_time = start.elapsed();
-        let sidecar = file::save(&atlas, &self.output).context("writing the atlas")?;
+        if alone {
+            let sidecar =
+                trompe::octahedral::gltf::save(&atlas, &glb).context("writing the glTF")?;
+            return Ok(file::OctahedralReport::new(
+                &atlas,
+                sidecar,
+                vec![glb],
+                bake_time,
+            ));
+        }
+        let sidecar =
+            file::save(&atlas, &self.output, self.floats()).context("writing the atlas")?;
+        let mut written = file::written(&self.output, &sidecar);
         if self.glb {
             trompe::octahedral::gltf::export(&self.output, &glb).context("writing the glTF")?;
-            crate::output::note(format_args!("wrote {}", glb.display()));
+            written.push(glb);
         }
         Ok(file::OctahedralReport::new(
-            &atlas, sidecar, files, bake_time,
+            &atlas, sidecar, written, bake_time,
         ))
     }
 }

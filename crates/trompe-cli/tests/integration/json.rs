@@ -184,7 +184,7 @@ fn impostor_bake_as_json_holds_the_texts_figures() {
             r["atlas_side"].as_u64(),
             r["files"].as_array().map(Vec::len)
         ),
-        (Some(64), Some(5))
+        (Some(64), Some(4))
     );
 }
 

@@ -22,12 +22,12 @@ fn octahedral_bakes_write_the_atlas_and_its_layout() {
     for f in [
         "duck.json",
         "duck.png",
-        "duck-normal.exr",
-        "duck-depth.exr",
+        "duck-normal-depth.png",
         "duck-orm.png",
     ] {
         assert!(d.join(f).is_file(), "{f}");
     }
+    assert!(!d.join("duck-normal.exr").exists() && !d.join("duck-depth.exr").exists());
     let sidecar: trompe::octahedral::file::Sidecar =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!((sidecar.grid.n, sidecar.frame_size), (8, 32));
@@ -181,7 +181,7 @@ fn an_octahedral_batch_skips_a_broken_file_and_shards_merge() {
 #[test]
 fn a_glb_output_or_an_atlas_checked_as_an_impostor_is_refused_by_name() {
     let d = scratch("cli_octahedral_refusals");
-    // -o NAME.glb: neither the sidecar nor a folder; refused before anything is written.
+    // -o NAME.glb with --exr: the .glb is the whole bake; refused before anything is written.
     let glb = d.join("eng.glb");
     let o = trompe(&[
         "impostor",
@@ -191,10 +191,26 @@ fn a_glb_output_or_an_atlas_checked_as_an_impostor_is_refused_by_name() {
         "4",
         "--resolution",
         "64",
+        "--exr",
         "-o",
         glb.to_str().unwrap(),
     ]);
-    fails_cleanly(&o, "add --glb");
+    fails_cleanly(&o, "a .glb output is the whole bake");
+    assert!(!glb.exists());
+    // A batch's -o is a folder, never a .glb.
+    let o = trompe(&[
+        "impostor",
+        "bake",
+        "assets/gltf/Duck.glb",
+        "assets/meshes/teapot.obj",
+        "--octahedral",
+        "4",
+        "--resolution",
+        "64",
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    fails_cleanly(&o, "give -o FOLDER/");
     assert!(!glb.exists());
     // An atlas's layout given to `impostor check --impostor` says what it is.
     let json = d.join("duck.json");
@@ -218,4 +234,48 @@ fn a_glb_output_or_an_atlas_checked_as_an_impostor_is_refused_by_name() {
         json.to_str().unwrap(),
     ]);
     fails_cleanly(&o, "octahedral atlas");
+}
+
+#[test]
+fn a_glb_output_is_the_whole_bake_and_exr_adds_the_float_maps() {
+    let d = scratch("cli_octahedral_glb_alone");
+    let glb = d.join("duck.glb");
+    let bake = |extra: &[&str], out: &std::path::Path| {
+        let mut args = vec![
+            "impostor",
+            "bake",
+            "assets/gltf/Duck.glb",
+            "--octahedral",
+            "4",
+            "--resolution",
+            "64",
+        ];
+        args.extend_from_slice(extra);
+        args.extend(["-o", out.to_str().unwrap()]);
+        trompe(&args)
+    };
+    let o = bake(&[], &glb);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // One file, nothing beside it, holding the three maps.
+    let names: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert_eq!(names, ["duck.glb"]);
+    let atlas = trompe::octahedral::gltf::load(&glb).unwrap();
+    assert_eq!((atlas.settings.grid.n, atlas.side()), (4, 64));
+    // --exr adds the float maps beside a sidecar; baked again without, they go.
+    let json = d.join("duck.json");
+    let o = bake(&["--exr"], &json);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join("duck-normal.exr").is_file() && d.join("duck-depth.exr").is_file());
+    let o = bake(&[], &json);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!d.join("duck-normal.exr").exists() && !d.join("duck-depth.exr").exists());
+    // A user's file named like a float map is never removed, nor replaced by --exr.
+    std::fs::write(d.join("duck-depth.exr"), b"mine").unwrap();
+    let o = bake(&[], &json);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails_cleanly(&bake(&["--exr"], &json), "a file of the user's");
+    assert_eq!(std::fs::read(d.join("duck-depth.exr")).unwrap(), b"mine");
 }

@@ -1,10 +1,12 @@
 //! The command-line tests that need a system package: the viewer's real window under a virtual
-//! X server (Xvfb), and `--device gpu` on a GPU adapter (Mesa's lavapipe where there is no GPU). A missing package makes its test *ignored* — counted in the summary, the
+//! X server (Xvfb), `--device gpu` on a GPU adapter (Mesa's lavapipe where there is no GPU),
+//! and the three.js runtime in headless Chromium. A missing package makes its test *ignored* — counted in the summary, the
 //! reason printed above it — or failed where `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets
 //! it.
 
 #[path = "../integration/common/mod.rs"]
 mod common;
+mod web;
 
 use common::{fails_cleanly, needs, scratch, stderr, trompe};
 use libtest_mimic::{Arguments, Trial};
@@ -49,6 +51,12 @@ fn main() {
             the_headless_viewer_draws_trace_and_raster_on_the_gpu,
             adapter,
             ADAPTER,
+        ),
+        trial(
+            "web::the_threejs_runtime_draws_the_ducks_bake_as_trompe_does",
+            web::the_threejs_runtime_draws_the_ducks_bake_as_trompe_does,
+            web::ready(),
+            web::NEEDS,
         ),
         trial(
             "gpu::info_names_the_adapter_it_opens",

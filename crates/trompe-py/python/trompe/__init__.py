@@ -137,14 +137,17 @@ def bake_octahedral(
     frames: int = 16,
     resolution: int = 2048,
     glb: bool = False,
+    exr: bool = False,
     skip_existing: bool = False,
     progress: Optional[Callable[[int, int, str], None]] = None,
 ) -> dict:
     """Bakes octahedral atlases of meshes into the folder ``output``, as ``trompe impostor bake
     --octahedral`` bakes a batch: ``inputs`` mesh files and folders (walked, mirrored under
-    ``output``), ``frames`` × ``frames`` views in a ``resolution``² atlas. ``progress(done,
-    total, input)`` is called after each mesh. Returns the manifest (``shards``, ``entries``:
-    each input with its hash, outputs and their hashes, settings, seconds, or its error).
+    ``output``), ``frames`` × ``frames`` views in a ``resolution``² atlas; ``glb`` adds a
+    self-contained ``.glb`` beside each atlas, ``exr`` its normal and depth maps as float
+    OpenEXR files. ``progress(done, total, input)`` is called after each mesh. Returns the
+    manifest (``shards``, ``entries``: each input with its hash, outputs and their hashes,
+    settings, seconds, or its error).
     """
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
@@ -154,6 +157,7 @@ def bake_octahedral(
         int(frames),
         int(resolution),
         bool(glb),
+        bool(exr),
         bool(skip_existing),
         progress,
     )

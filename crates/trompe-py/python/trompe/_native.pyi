@@ -25,6 +25,7 @@ def bake_octahedral(
     frames: int,
     resolution: int,
     glb: bool,
+    exr: bool,
     skip_existing: bool,
     progress: Optional[Callable[[int, int, str], None]],
 ) -> str: ...
