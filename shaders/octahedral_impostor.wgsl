@@ -6,12 +6,20 @@
 // same rules; the layout is src/octahedral/mapping.rs (docs/conventions.md §8). The constants
 // below are checked against the Rust code by the tests.
 //
-// Instanced: each instance is one copy of the baked object, moved by its own translation, with
-// its own object id (two per-instance vertex attributes); one copy drawn at the bake's place has
-// offset zero.
+// Instanced: each instance is one copy of the baked object placed by its own similarity —
+// world = rotation · (scale · p) + offset, p in the bake's space — with its own object id
+// (per-instance vertex attributes 1–4); a copy drawn at the bake's place has offset zero, the
+// identity rotation (0, 0, 0, 1) and scale 1.
 //
-// Bindings: the atlas's three maps as the bake writes them (NAME.png as an sRGB texture,
-// NAME-normal.exr and NAME-depth.exr as float textures), a linear sampler, and two uniforms.
+// Entry points: `vs_main` with `fs_main` (colour, normal, object id and depth: a G-buffer), and
+// `vs_main` with `fs_depth` (the depth alone: a shadow map seen from a light's eye, or a depth
+// pre-pass), which keeps exactly the pixels fs_main keeps, at the same depth.
+//
+// Bindings: the colour atlas (NAME.png, an sRGB texture: coverage in alpha) and the normal-depth
+// atlas (NAME-normal-depth.png, linear: rgb = n·½ + ½, a = depth), as the .glb embeds them, with
+// or without mip levels; a linear sampler; two uniforms. Mip levels are chosen from each pixel's
+// footprint and kept inside their frame (trompe fills every frame whole, so a power-of-two
+// frame's box-filtered levels never mix frames).
 
 const PARALLAX_STEPS: u32 = 4u;
 const COVERAGE_SPHERE: u32 = 0u;
@@ -27,8 +35,7 @@ struct Camera {
 };
 
 struct Impostor {
-    // World position of the bounding sphere's centre, and its radius (the object's own space
-    // placed by the engine without rotation or scale).
+    // The bounding sphere's centre and radius in the bake's own space.
     centre: vec3<f32>,
     radius: f32,
     // Frames a side, texels a frame side, COVERAGE_*.
@@ -43,9 +50,8 @@ struct Impostor {
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> impostor: Impostor;
 @group(0) @binding(2) var atlas_color: texture_2d<f32>;
-@group(0) @binding(3) var atlas_normal: texture_2d<f32>;
-@group(0) @binding(4) var atlas_depth: texture_2d<f32>;
-@group(0) @binding(5) var atlas_sampler: sampler;
+@group(0) @binding(3) var atlas_normal_depth: texture_2d<f32>;
+@group(0) @binding(4) var atlas_sampler: sampler;
 
 fn sign_nonzero(v: f32) -> f32 {
     return select(-1.0, 1.0, v >= 0.0);
@@ -128,17 +134,19 @@ fn frames_around(v: vec3<f32>) -> Frames {
     return out;
 }
 
-// Atlas coordinates of frame texel coordinates t (texel centres at +0.5), clamped to the frame.
-fn atlas_uv(frame: vec2<u32>, t: vec2<f32>) -> vec2<f32> {
+// Atlas coordinates of frame texel coordinates t (texel centres at +0.5), kept half a texel of
+// mip level lod inside the frame.
+fn atlas_uv(frame: vec2<u32>, t: vec2<f32>, lod: f32) -> vec2<f32> {
     let fs = f32(impostor.frame_size);
     let side = fs * f32(impostor.frames);
-    let inside = clamp(t, vec2<f32>(0.5), vec2<f32>(fs - 0.5));
+    let margin = 0.5 * exp2(lod);
+    let inside = clamp(t, vec2<f32>(margin), vec2<f32>(fs - margin));
     return (vec2<f32>(frame) * fs + inside) / side;
 }
 
-// Frame texel coordinates of world point p in the frame looking along -d, the sphere centred
-// on `centre` (mapping.rs `frame_basis`; render.rs `frame_texel`): orthographic, or through the
-// frame's pinhole.
+// Frame texel coordinates of point p (the bake's space) in the frame looking along -d, the
+// sphere centred on `centre` (mapping.rs `frame_basis`; render.rs `frame_texel`): orthographic,
+// or through the frame's pinhole.
 fn frame_texel(p: vec3<f32>, centre: vec3<f32>, d: vec3<f32>, right: vec3<f32>, up: vec3<f32>) -> vec2<f32> {
     let r = impostor.radius;
     let fs = f32(impostor.frame_size);
@@ -160,9 +168,10 @@ struct Lookup {
     inside: f32,
 };
 
-// Frame `frame` along the ray o + t·dir, parallax-corrected, the sphere centred on `centre`
-// (render.rs `lookup`).
-fn lookup(frame: vec2<u32>, centre: vec3<f32>, o: vec3<f32>, dir: vec3<f32>) -> Lookup {
+// Frame `frame` along the ray o + t·dir (the bake's space), parallax-corrected, sampled at
+// mip level lod (render.rs `lookup`).
+fn lookup(frame: vec2<u32>, o: vec3<f32>, dir: vec3<f32>, lod: f32) -> Lookup {
+    let centre = impostor.centre;
     let d = frame_direction(frame);
     let right = frame_right(d);
     let up = cross(d, right);
@@ -172,46 +181,64 @@ fn lookup(frame: vec2<u32>, centre: vec3<f32>, o: vec3<f32>, dir: vec3<f32>) -> 
     var p = o + dir * (dot(centre + d * offset - o, d) / facing);
     var t = frame_texel(p, centre, d, right, up);
     for (var k = 0u; k < PARALLAX_STEPS; k = k + 1u) {
-        let depth = textureSampleLevel(atlas_depth, atlas_sampler, atlas_uv(frame, t), 0.0).r;
+        let depth = textureSampleLevel(atlas_normal_depth, atlas_sampler, atlas_uv(frame, t, lod), lod).a;
         offset = r - 2.0 * r * depth;
         p = o + dir * (dot(centre + d * offset - o, d) / facing);
         t = frame_texel(p, centre, d, right, up);
     }
     let fs = f32(impostor.frame_size);
+    let uv = atlas_uv(frame, t, lod);
     var out: Lookup;
-    out.color = textureSampleLevel(atlas_color, atlas_sampler, atlas_uv(frame, t), 0.0);
-    out.normal = textureSampleLevel(atlas_normal, atlas_sampler, atlas_uv(frame, t), 0.0).xyz;
+    out.color = textureSampleLevel(atlas_color, atlas_sampler, uv, lod);
+    out.normal = textureSampleLevel(atlas_normal_depth, atlas_sampler, uv, lod).xyz * 2.0 - vec3<f32>(1.0);
     out.position = p;
     out.inside = select(0.0, 1.0, all(t >= vec2<f32>(-1.0)) && all(t <= vec2<f32>(fs + 1.0)));
     return out;
 }
 
+// Unit quaternion q (x, y, z, w) applied to v.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let u = cross(q.xyz, v) + q.w * v;
+    return v + 2.0 * cross(q.xyz, u);
+}
+
+// The inverse rotation.
+fn unrotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    return rotate(vec4<f32>(-q.xyz, q.w), v);
+}
+
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    // The instance's bounding sphere centre, and its object id.
-    @location(1) @interpolate(flat) centre: vec3<f32>,
+    // The card's point in the bake's space.
+    @location(0) local: vec3<f32>,
+    // The eye in the bake's space, and the instance's similarity and object id.
+    @location(1) @interpolate(flat) eye: vec3<f32>,
     @location(2) @interpolate(flat) object: u32,
+    @location(3) @interpolate(flat) rotation: vec4<f32>,
+    @location(4) @interpolate(flat) offset_scale: vec4<f32>,
 };
 
 // A camera-facing card of the bounding sphere's diameter; `corner` in [-1, 1]²; per instance,
-// its translation from the bake's place and its object id.
+// its offset, object id, rotation (a unit quaternion) and scale.
 @vertex
 fn vs_main(
     @location(0) corner: vec2<f32>,
     @location(1) offset: vec3<f32>,
     @location(2) object: u32,
+    @location(3) rotation: vec4<f32>,
+    @location(4) scale: f32,
 ) -> VertexOut {
-    let centre = impostor.centre + offset;
+    let centre = impostor.centre;
     let r = impostor.radius;
-    let to_eye = normalize(camera.eye - centre);
-    var world: vec3<f32>;
-    if (length(camera.eye - centre) - r > 4.0 * camera.near) {
+    let eye = unrotate(rotation, camera.eye - offset) / scale;
+    let to_eye = normalize(eye - centre);
+    var local: vec3<f32>;
+    if ((length(eye - centre) - r) * scale > 4.0 * camera.near) {
         // The card stands in front of the sphere so no surface point is clipped by it, and
         // covers its silhouette.
         let right = frame_right(to_eye);
         let up = cross(to_eye, right);
-        world = centre + to_eye * r + (right * corner.x + up * corner.y) * r;
+        local = centre + to_eye * r + (right * corner.x + up * corner.y) * r;
     } else {
         // The eye in the sphere or at it: a card across the whole view just past the near
         // plane (the view direction is clip w's row), every pixel's ray through it.
@@ -220,37 +247,52 @@ fn vs_main(
         let right = frame_right(-forward);
         let up = cross(-forward, right);
         let d = 4.0 * camera.near;
-        world = camera.eye + forward * d + (right * corner.x + up * corner.y) * (100.0 * d);
+        let world = camera.eye + forward * d + (right * corner.x + up * corner.y) * (100.0 * d);
+        local = unrotate(rotation, world - offset) / scale;
     }
     var out: VertexOut;
-    out.clip = camera.view_proj * vec4<f32>(world, 1.0);
-    out.world = world;
-    out.centre = centre;
+    out.clip = camera.view_proj * vec4<f32>(rotate(rotation, local * scale) + offset, 1.0);
+    out.local = local;
+    out.eye = eye;
     out.object = object;
+    out.rotation = rotation;
+    out.offset_scale = vec4<f32>(offset, scale);
     return out;
 }
 
-struct FragmentOut {
-    // Base colour (alpha 1: the surface is kept whole).
-    @location(0) color: vec4<f32>,
-    // The blended unit normal (toward the eye where the frames' normals cancel).
-    @location(1) normal: vec4<f32>,
-    @location(2) object: u32,
-    @builtin(frag_depth) depth: f32,
+// What a fragment found: the blended colour, normal (the bake's space) and point.
+struct Found {
+    keep: bool,
+    color: vec3<f32>,
+    normal: vec3<f32>,
+    // In the world.
+    position: vec3<f32>,
+    depth: f32,
 };
 
-@fragment
-fn fs_main(in: VertexOut) -> FragmentOut {
-    let o = camera.eye;
-    let dir = normalize(in.world - o);
-    let centre = in.centre;
+// The mip level of a pixel's footprint on the card (in uniform control flow: derivatives).
+fn footprint_lod(local: vec3<f32>) -> f32 {
+    let footprint = max(length(dpdx(local)), length(dpdy(local)));
+    let texels = footprint * f32(impostor.frame_size) / (2.0 * impostor.radius);
+    let levels = f32(textureNumLevels(atlas_color)) - 1.0;
+    // Down to two texels a frame at most.
+    let coarsest = min(levels, max(log2(f32(impostor.frame_size)) - 1.0, 0.0));
+    return clamp(log2(max(texels, 1e-8)), 0.0, coarsest);
+}
+
+fn find(in: VertexOut, lod: f32) -> Found {
+    var found: Found;
+    found.keep = false;
+    let o = in.eye;
+    let dir = normalize(in.local - o);
+    let centre = impostor.centre;
     // Only rays through the bounding sphere meet the object.
     let oc = o - centre;
     let b = dot(oc, dir);
     if (b * b - (dot(oc, oc) - impostor.radius * impostor.radius) < 0.0) {
-        discard;
+        return found;
     }
-    let frames = frames_around(normalize(camera.eye - centre));
+    let frames = frames_around(normalize(o - centre));
     var color = vec3<f32>(0.0);
     var normal = vec3<f32>(0.0);
     var position = vec3<f32>(0.0);
@@ -260,7 +302,7 @@ fn fs_main(in: VertexOut) -> FragmentOut {
         if (w <= 0.0) {
             continue;
         }
-        let s = lookup(frames.cells[k], centre, o, dir);
+        let s = lookup(frames.cells[k], o, dir, lod);
         let a = s.color.a * s.inside * w;
         color += s.color.rgb * a;
         normal += s.normal * a;
@@ -269,15 +311,51 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     }
     // The alpha test; and only what lies ahead of the eye.
     if (alpha < ALPHA_TEST || dot(position / alpha - o, dir) <= 0.0) {
+        return found;
+    }
+    let n = length(normal);
+    let rotation = in.rotation;
+    let offset = in.offset_scale.xyz;
+    let scale = in.offset_scale.w;
+    found.keep = true;
+    found.color = color / alpha;
+    found.normal = rotate(rotation, select(-dir, normal / n, n > 1e-20));
+    found.position = rotate(rotation, position / alpha * scale) + offset;
+    // Pixel depth offset: the depth of the surface found, not of the card.
+    let clip = camera.view_proj * vec4<f32>(found.position, 1.0);
+    found.depth = clamp(clip.z / clip.w, 0.0, 1.0);
+    return found;
+}
+
+struct FragmentOut {
+    // Base colour (alpha 1: the surface is kept whole).
+    @location(0) color: vec4<f32>,
+    // The blended unit normal in the world (toward the eye where the frames' normals cancel).
+    @location(1) normal: vec4<f32>,
+    @location(2) object: u32,
+    @builtin(frag_depth) depth: f32,
+};
+
+@fragment
+fn fs_main(in: VertexOut) -> FragmentOut {
+    let found = find(in, footprint_lod(in.local));
+    if (!found.keep) {
         discard;
     }
     var out: FragmentOut;
-    out.color = vec4<f32>(color / alpha, 1.0);
-    let n = length(normal);
-    out.normal = vec4<f32>(select(-dir, normal / n, n > 1e-20), 0.0);
+    out.color = vec4<f32>(found.color, 1.0);
+    out.normal = vec4<f32>(found.normal, 0.0);
     out.object = in.object;
-    // Pixel depth offset: the depth of the surface found, not of the card.
-    let clip = camera.view_proj * vec4<f32>(position / alpha, 1.0);
-    out.depth = clamp(clip.z / clip.w, 0.0, 1.0);
+    out.depth = found.depth;
     return out;
+}
+
+// The depth alone: a shadow map or a depth pre-pass (no colour target).
+@fragment
+fn fs_depth(in: VertexOut) -> @builtin(frag_depth) f32 {
+    let found = find(in, footprint_lod(in.local));
+    if (!found.keep) {
+        discard;
+    }
+    return found.depth;
 }

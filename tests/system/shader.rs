@@ -26,7 +26,7 @@ pub fn the_shader_parses_and_validates() {
         .iter()
         .map(|e| e.name.as_str())
         .collect();
-    assert_eq!(entries, ["vs_main", "fs_main"]);
+    assert_eq!(entries, ["vs_main", "fs_main", "fs_depth"]);
 }
 
 pub fn the_shader_constants_are_the_rust_codes() {

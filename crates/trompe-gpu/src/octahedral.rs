@@ -13,9 +13,9 @@ use crate::device::{Gpu, GpuError};
 use crate::raster::{DEPTH, v4};
 use crate::trace::{GpuMaterial, GpuView, Texels};
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, DVec4, Vec4};
+use glam::{DVec3, DVec4, Quat, Vec3, Vec4};
 use trompe::camera::Pinhole;
-use trompe::frame::{Frame, NO_OBJECT};
+use trompe::frame::{Frame, Image, NO_OBJECT};
 use trompe::octahedral::scene::SceneAtlases;
 use trompe::octahedral::{Coverage, FrameProjection, OctahedralAtlas};
 use trompe::scene::{Lighting, RenderSettings};
@@ -57,13 +57,51 @@ struct GpuImpostor {
     distance: f32,
 }
 
-/// One copy drawn: its translation from the bake's place and its object id (vertex locations
-/// 1 and 2, one a instance).
+/// One copy drawn: its offset, object id, rotation and scale (vertex locations 1–4, one a
+/// instance): `world = rotation · (scale · p) + offset`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct GpuInstance {
     offset: [f32; 3],
     object: u32,
+    rotation: [f32; 4],
+    scale: f32,
+}
+
+/// A similarity every copy is drawn through, after its own placement: `world = rotation ·
+/// (scale · p) + translation`. What an engine's instance transforms are; the scene's own
+/// placement is [`Similarity::IDENTITY`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Similarity {
+    /// A unit quaternion.
+    pub rotation: Quat,
+    /// A uniform scale, positive.
+    pub scale: f32,
+    /// Applied last.
+    pub translation: Vec3,
+}
+
+impl Similarity {
+    /// No move.
+    pub const IDENTITY: Similarity = Similarity {
+        rotation: Quat::IDENTITY,
+        scale: 1.0,
+        translation: Vec3::ZERO,
+    };
+
+    /// The point `p` moved.
+    pub fn apply(&self, p: Vec3) -> Vec3 {
+        self.rotation * (p * self.scale) + self.translation
+    }
+}
+
+/// Which fragment entry point draws the impostors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Entry {
+    /// `fs_main`: base colour, normal, object id and depth.
+    GBuffer,
+    /// `fs_depth`: the depth alone, as a shadow map or a depth pre-pass draws.
+    DepthOnly,
 }
 
 /// An atlas on the device: its three maps, its uniform, and the copies it draws.
@@ -76,6 +114,9 @@ struct UploadedAtlas {
 pub struct GpuAtlases<'a> {
     gpu: &'a Gpu,
     pipeline: wgpu::RenderPipeline,
+    depth_pipeline: wgpu::RenderPipeline,
+    /// Every copy's placement in the scene (offset and object id), before [`Similarity`].
+    placed: Vec<GpuInstance>,
     shade: wgpu::ComputePipeline,
     atlases: Vec<UploadedAtlas>,
     /// The card's four corners, and every copy of every atlas, atlas by atlas.
@@ -97,7 +138,8 @@ impl<'a> GpuAtlases<'a> {
         lighting: &Lighting,
         settings: &RenderSettings,
     ) -> Result<Self, GpuError> {
-        let pipeline = impostor_pipeline(gpu);
+        let pipeline = impostor_pipeline(gpu, Entry::GBuffer);
+        let depth_pipeline = impostor_pipeline(gpu, Entry::DepthOnly);
         let shade = gpu.compute_pipeline("octahedral_shade.wgsl", &shade_source(), "shade_atlases");
         let camera = gpu.buffer(
             "octahedral camera",
@@ -124,9 +166,11 @@ impl<'a> GpuAtlases<'a> {
                     .map(|(object, p)| GpuInstance {
                         offset: p.offset.to_array(),
                         object: object as u32,
+                        rotation: Quat::IDENTITY.to_array(),
+                        scale: 1.0,
                     }),
             );
-            let group = upload_atlas(gpu, &pipeline, atlas, (&camera, &sampler))?;
+            let group = upload_atlas(gpu, atlas, (&camera, &sampler))?;
             uploaded.push(UploadedAtlas {
                 group,
                 instances: first..instances.len() as u32,
@@ -154,6 +198,8 @@ impl<'a> GpuAtlases<'a> {
         Ok(GpuAtlases {
             gpu,
             pipeline,
+            depth_pipeline,
+            placed: instances.clone(),
             shade,
             atlases: uploaded,
             corners: gpu.vertices_with("card corners", bytemuck::cast_slice(&corners)),
@@ -165,21 +211,54 @@ impl<'a> GpuAtlases<'a> {
         })
     }
 
-    /// The frame through `camera`: colour and object id, as the CPU twin fills them.
-    pub fn frame(&self, camera: &Pinhole) -> Result<Frame, GpuError> {
+    /// Draws every copy through `similarity` from now on (the scene's placement first).
+    pub fn place(&mut self, similarity: Similarity) {
+        let moved: Vec<GpuInstance> = (self.placed.iter())
+            .map(|i| GpuInstance {
+                offset: similarity.apply(Vec3::from_array(i.offset)).to_array(),
+                rotation: similarity.rotation.normalize().to_array(),
+                scale: similarity.scale,
+                ..*i
+            })
+            .collect();
+        self.instances = self
+            .gpu
+            .vertices_with("instances", bytemuck::cast_slice(&moved));
+    }
+
+    /// The depth buffer of the impostors drawn through `camera` by `entry` (reversed: 1 on the
+    /// near plane, 0 where no surface was kept).
+    pub fn depth(&self, camera: &Pinhole, entry: Entry) -> Result<Image<f32>, GpuError> {
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let (encoder, views) = self.draw(camera, entry)?;
+        let bytes = self
+            .gpu
+            .read_texture_bytes(encoder, &views.depth, ((w, h), 4), "the depth")?;
+        Ok(Image::from_vec(w, h, bytemuck::pod_collect_to_vec(&bytes))?)
+    }
+
+    /// Encodes the impostors drawn through `camera` by `entry` into a fresh G-buffer.
+    fn draw(
+        &self,
+        camera: &Pinhole,
+        entry: Entry,
+    ) -> Result<(wgpu::CommandEncoder, GBuffer), GpuError> {
         let gpu = self.gpu;
         let (w, h) = trompe::camera::Projection::resolution(camera);
         gpu.check_texture("the frame", w, h)?;
-        let out_bytes = u64::from(w) * u64::from(h) * 16;
-        gpu.check_storage("the frame", out_bytes)?;
         gpu.queue
             .write_buffer(&self.camera, 0, bytemuck::bytes_of(&clip_camera(camera)));
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-        let color = gpu.texture("base colour", (w, h), COLOR, usage);
-        let normal = gpu.texture("normal", (w, h), COLOR, usage);
-        let object = gpu.texture("object", (w, h), OBJECT, usage);
-        let depth = gpu.texture("depth", (w, h), DEPTH, usage);
-        let views = [&color, &normal, &object, &depth].map(|t| t.create_view(&Default::default()));
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let g = GBuffer {
+            color: gpu.texture("base colour", (w, h), COLOR, usage),
+            normal: gpu.texture("normal", (w, h), COLOR, usage),
+            object: gpu.texture("object", (w, h), OBJECT, usage),
+            depth: gpu.texture("depth", (w, h), DEPTH, usage),
+        };
+        let views =
+            [&g.color, &g.normal, &g.object, &g.depth].map(|t| t.create_view(&Default::default()));
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
             let target = |view, clear: f64| {
@@ -198,13 +277,18 @@ impl<'a> GpuAtlases<'a> {
                     },
                 })
             };
+            let targets = [
+                target(&views[0], 0.0),
+                target(&views[1], 0.0),
+                target(&views[2], f64::from(NO_OBJECT)),
+            ];
+            let (pipeline, targets) = match entry {
+                Entry::GBuffer => (&self.pipeline, &targets[..]),
+                Entry::DepthOnly => (&self.depth_pipeline, &[][..]),
+            };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("octahedral impostors"),
-                color_attachments: &[
-                    target(&views[0], 0.0),
-                    target(&views[1], 0.0),
-                    target(&views[2], f64::from(NO_OBJECT)),
-                ],
+                color_attachments: targets,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &views[3],
                     depth_ops: Some(wgpu::Operations {
@@ -217,7 +301,7 @@ impl<'a> GpuAtlases<'a> {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_vertex_buffer(0, self.corners.slice(..));
             pass.set_vertex_buffer(1, self.instances.slice(..));
             for atlas in &self.atlases {
@@ -225,6 +309,17 @@ impl<'a> GpuAtlases<'a> {
                 pass.draw(0..4, atlas.instances.clone());
             }
         }
+        Ok((encoder, g))
+    }
+
+    /// The frame through `camera`: colour and object id, as the CPU twin fills them.
+    pub fn frame(&self, camera: &Pinhole) -> Result<Frame, GpuError> {
+        let gpu = self.gpu;
+        let (w, h) = trompe::camera::Projection::resolution(camera);
+        let out_bytes = u64::from(w) * u64::from(h) * 16;
+        gpu.check_storage("the frame", out_bytes)?;
+        let (mut encoder, g) = self.draw(camera, Entry::GBuffer)?;
+        let views = [&g.color, &g.normal, &g.object].map(|t| t.create_view(&Default::default()));
         let uniform = gpu.uniform_with("view", bytemuck::bytes_of(&self.uniform.through(camera)));
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let outputs = ["colour", "depth and id"].map(|l| gpu.buffer(l, out_bytes, storage));
@@ -271,13 +366,69 @@ impl<'a> GpuAtlases<'a> {
     }
 }
 
-/// The engine shader's pipeline: instanced cards, three targets, reversed depth (the nearest
-/// kept, ties to the earlier draw).
-fn impostor_pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
-    gpu.render_pipeline("octahedral impostors", || {
+/// The bindings of the impostor shader's group 0, shared by both entries' pipelines: the
+/// camera and impostor uniforms, the colour and normal-depth atlases, the sampler.
+fn atlas_group_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+    use wgpu::ShaderStages as S;
+    let uniform = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: S::VERTEX | S::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let texture = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: S::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("octahedral atlas"),
+            entries: &[
+                uniform(0),
+                uniform(1),
+                texture(2),
+                texture(3),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: S::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        })
+}
+
+/// The textures one draw fills.
+struct GBuffer {
+    color: wgpu::Texture,
+    normal: wgpu::Texture,
+    object: wgpu::Texture,
+    depth: wgpu::Texture,
+}
+
+/// The engine shader's pipeline: instanced cards, three targets (none for the depth-only
+/// entry), reversed depth (the nearest kept, ties to the earlier draw).
+fn impostor_pipeline(gpu: &Gpu, entry: Entry) -> wgpu::RenderPipeline {
+    let (name, entry_point) = match entry {
+        Entry::GBuffer => ("octahedral impostors", "fs_main"),
+        Entry::DepthOnly => ("octahedral impostors, depth only", "fs_depth"),
+    };
+    gpu.render_pipeline(name, || {
         let module = gpu.module("octahedral_impostor.wgsl", IMPOSTOR_SHADER);
         let corner = wgpu::vertex_attr_array![0 => Float32x2];
-        let instance = wgpu::vertex_attr_array![1 => Float32x3, 2 => Uint32];
+        let instance = wgpu::vertex_attr_array![
+            1 => Float32x3, 2 => Uint32, 3 => Float32x4, 4 => Float32
+        ];
         let target = |format| {
             Some(wgpu::ColorTargetState {
                 format,
@@ -285,10 +436,19 @@ fn impostor_pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
+        let g_buffer = [target(COLOR), target(COLOR), target(OBJECT)];
+        let group = atlas_group_layout(gpu);
+        let layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(name),
+                bind_group_layouts: &[Some(&group)],
+                immediate_size: 0,
+            });
         gpu.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("octahedral impostors"),
-                layout: None,
+                label: Some(name),
+                layout: Some(&layout),
                 vertex: wgpu::VertexState {
                     module: &module,
                     entry_point: Some("vs_main"),
@@ -315,9 +475,12 @@ fn impostor_pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(entry_point),
                     compilation_options: Default::default(),
-                    targets: &[target(COLOR), target(COLOR), target(OBJECT)],
+                    targets: match entry {
+                        Entry::GBuffer => &g_buffer,
+                        Entry::DepthOnly => &[],
+                    },
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -329,7 +492,6 @@ fn impostor_pipeline(gpu: &Gpu) -> wgpu::RenderPipeline {
 /// uniform and `sampler` as the shader's group 0.
 fn upload_atlas(
     gpu: &Gpu,
-    pipeline: &wgpu::RenderPipeline,
     atlas: &OctahedralAtlas,
     (camera, sampler): (&wgpu::Buffer, &wgpu::Sampler),
 ) -> Result<wgpu::BindGroup, GpuError> {
@@ -342,33 +504,28 @@ fn upload_atlas(
         .iter()
         .flat_map(|c| c.to_array().map(to_half))
         .collect();
-    let normal: Vec<half::f16> = atlas
-        .normal
-        .pixels()
-        .iter()
-        .flat_map(|n| n.extend(0.0).to_array().map(to_half))
+    // The normal and depth packed as the .glb packs them (rgb = n·½ + ½, a = depth), in half
+    // floats rather than 8 bits.
+    let normal_depth: Vec<half::f16> = (atlas.normal.pixels().iter())
+        .zip(atlas.depth.pixels())
+        .flat_map(|(&n, &d)| {
+            trompe::octahedral::packing::pack_texel(n, d)
+                .to_array()
+                .map(to_half)
+        })
         .collect();
-    let depth: Vec<half::f16> = atlas.depth.pixels().iter().map(|&d| to_half(d)).collect();
     let maps = [
+        ("atlas colour", bytemuck::cast_slice::<_, u8>(&color)),
         (
-            "atlas colour",
-            COLOR,
-            bytemuck::cast_slice::<_, u8>(&color),
-            8,
-        ),
-        ("atlas normal", COLOR, bytemuck::cast_slice(&normal), 8),
-        (
-            "atlas depth",
-            wgpu::TextureFormat::R16Float,
-            bytemuck::cast_slice(&depth),
-            2,
+            "atlas normal and depth",
+            bytemuck::cast_slice(&normal_depth),
         ),
     ]
-    .map(|(label, format, bytes, texel)| {
+    .map(|(label, bytes)| {
         let texture = gpu.texture(
             label,
             (side, side),
-            format,
+            COLOR,
             wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         );
         gpu.queue.write_texture(
@@ -376,7 +533,7 @@ fn upload_atlas(
             bytes,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
-                bytes_per_row: Some(side * texel),
+                bytes_per_row: Some(side * 8),
                 rows_per_image: Some(side),
             },
             crate::device::extent((side, side)),
@@ -405,7 +562,7 @@ fn upload_atlas(
     };
     Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("octahedral atlas"),
-        layout: &pipeline.get_bind_group_layout(0),
+        layout: &atlas_group_layout(gpu),
         entries: &[
             wgpu::BindGroupEntry {
                 binding: 0,
@@ -417,9 +574,8 @@ fn upload_atlas(
             },
             texture(2, &maps[0]),
             texture(3, &maps[1]),
-            texture(4, &maps[2]),
             wgpu::BindGroupEntry {
-                binding: 5,
+                binding: 4,
                 resource: wgpu::BindingResource::Sampler(sampler),
             },
         ],

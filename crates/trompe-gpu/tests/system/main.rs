@@ -94,6 +94,10 @@ fn main() {
             octahedral::a_field_of_instances_is_one_atlas_drawn_once_a_copy_on_the_gpu,
         ),
         on_gpu(
+            "octahedral::instances_moved_turned_and_scaled_and_the_depth_only_entry_draw_what_the_scene_draws",
+            octahedral::instances_moved_turned_and_scaled_and_the_depth_only_entry_draw_what_the_scene_draws,
+        ),
+        on_gpu(
             "trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu,
         ),

@@ -56,3 +56,88 @@ pub fn a_field_of_instances_is_one_atlas_drawn_once_a_copy_on_the_gpu(gpu: &Gpu)
         );
     }
 }
+
+/// The engines' shader places each copy by its own similarity: the field of ducks moved, turned
+/// (about the sun's direction, so the light falls alike) and scaled, seen from the camera moved
+/// with it, is the same frame; and the depth-only entry (`fs_depth`, a shadow map's) keeps
+/// exactly the pixels the G-buffer entry keeps, at the same depth.
+pub fn instances_moved_turned_and_scaled_and_the_depth_only_entry_draw_what_the_scene_draws(
+    gpu: &Gpu,
+) {
+    use glam::{Quat, Vec3};
+    use trompe::camera::Pinhole;
+    use trompe::frame::NO_OBJECT;
+    use trompe::scene::{Light, Lighting};
+    use trompe_gpu::octahedral::{Entry, GpuAtlases, Similarity};
+    let (_, scene) = shipped_scenes()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("field.toml"))
+        .expect("scenes/field.toml");
+    let t = scene.render.time;
+    let baked =
+        trompe::octahedral::scene::SceneAtlases::bake(&scene, t, small().octahedral_bake(), &())
+            .unwrap();
+    let sun = Vec3::new(0.3, 1.0, 0.4).normalize();
+    let lighting = Lighting {
+        environment: trompe::frame::envmap::EnvMap::constant(Vec3::splat(0.3)),
+        light: Some(Light {
+            direction: sun,
+            irradiance: Vec3::splat(2.5),
+        }),
+    };
+    let mut atlases = GpuAtlases::new(gpu, &baked, &lighting, &scene.render).unwrap();
+    let c = &scene.camera;
+    let camera = |m: Similarity| {
+        Pinhole::look_at(
+            m.apply(c.position),
+            m.apply(c.look_at),
+            m.rotation * c.up,
+            c.fov_y,
+            320,
+            240,
+        )
+        .unwrap()
+        .with_near(c.near * f64::from(m.scale))
+    };
+    let here = atlases.frame(&camera(Similarity::IDENTITY)).unwrap();
+    let depth = atlases
+        .depth(&camera(Similarity::IDENTITY), Entry::GBuffer)
+        .unwrap();
+    let depth_only = atlases
+        .depth(&camera(Similarity::IDENTITY), Entry::DepthOnly)
+        .unwrap();
+    // The depth-only entry: the same pixels, the same depths, bit for bit.
+    assert!(
+        depth_only == depth,
+        "the depth-only entry drew another depth"
+    );
+    let kept = depth.pixels().iter().filter(|&&d| d > 0.0).count();
+    let ids = (here.object_id.pixels().iter())
+        .filter(|&&id| id != NO_OBJECT)
+        .count();
+    assert_eq!(kept, ids, "depth kept where no object was drawn");
+    assert!(kept > 10_000, "{kept} pixels drawn");
+    // Moved, turned and scaled.
+    let m = Similarity {
+        rotation: Quat::from_axis_angle(sun, 1.3),
+        scale: 1.6,
+        translation: Vec3::new(2.0, -1.0, 3.0),
+    };
+    atlases.place(m);
+    let moved = atlases.frame(&camera(m)).unwrap();
+    let same = (here.object_id.pixels().iter())
+        .zip(moved.object_id.pixels())
+        .filter(|(a, b)| a == b)
+        .count();
+    let share = same as f64 / here.object_id.pixels().len() as f64;
+    let flip = trompe::frame::metrics::flip(&here.color, &moved.color, None).unwrap();
+    println!(
+        "moved, turned and scaled: {:.3} % of ids the same, FLIP {flip:.5}",
+        100.0 * share
+    );
+    assert!(share >= 0.999, "{share}");
+    assert!(flip <= 0.005, "{flip}");
+    // Not a tautology: the copies moved without the camera are elsewhere.
+    let elsewhere = atlases.frame(&camera(Similarity::IDENTITY)).unwrap();
+    assert!(elsewhere.object_id != here.object_id);
+}
