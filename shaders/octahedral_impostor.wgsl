@@ -270,14 +270,15 @@ struct Found {
     depth: f32,
 };
 
-// The mip level of a pixel's footprint on the card (in uniform control flow: derivatives).
+// The mip level of a pixel's footprint on the card (in uniform control flow: derivatives): a
+// bilinear tap of level L spans 2^(L+1) texels, so a footprint of w texels takes log2(w) - 1.
 fn footprint_lod(local: vec3<f32>) -> f32 {
     let footprint = max(length(dpdx(local)), length(dpdy(local)));
     let texels = footprint * f32(impostor.frame_size) / (2.0 * impostor.radius);
     let levels = f32(textureNumLevels(atlas_color)) - 1.0;
     // Down to two texels a frame at most.
     let coarsest = min(levels, max(log2(f32(impostor.frame_size)) - 1.0, 0.0));
-    return clamp(log2(max(texels, 1e-8)), 0.0, coarsest);
+    return clamp(log2(max(texels, 1e-8)) - 1.0, 0.0, coarsest);
 }
 
 fn find(in: VertexOut, lod: f32) -> Found {

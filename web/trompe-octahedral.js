@@ -232,9 +232,10 @@ Lookup lookup(vec2 frame, vec3 o, vec3 dir, float lod) {
 }
 
 void main() {
-  // The mip level of this pixel's footprint on the card (before any branch).
+  // The mip level of this pixel's footprint on the card (before any branch): a bilinear tap
+  // of level L spans 2^(L+1) texels, so a footprint of w texels takes level log2(w) - 1.
   float footprint = max(length(dFdx(vObject)), length(dFdy(vObject)));
-  float lod = clamp(log2(footprint * uFrameSize / (2.0 * uRadius)), 0.0, uMaxLod);
+  float lod = clamp(log2(footprint * uFrameSize / (2.0 * uRadius)) - 1.0, 0.0, uMaxLod);
   vec3 o = vEye;
   vec3 dir = normalize(vObject - o);
   // Only rays through the bounding sphere meet the object.
@@ -289,7 +290,8 @@ void main() {
 /**
  * The impostor's material. `options`: `sunDirection` (world, toward the sun), `sunIrradiance`
  * (a Vector3: the irradiance on a surface facing the sun, W/m², as trompe's scenes give it),
- * `ambient` (a Vector3: the radiance of a constant sky), `parallaxSteps` (4), `alphaTest` (0.5).
+ * `ambient` (a Vector3: the radiance of a constant sky), `parallaxSteps` (4), `alphaTest` (0.5),
+ * `mipmaps` (true: levels chosen by each pixel's footprint; false: level 0 only).
  */
 export class OctahedralImpostorMaterial extends ShaderMaterial {
   constructor(atlas, options = {}) {
@@ -314,7 +316,7 @@ export class OctahedralImpostorMaterial extends ShaderMaterial {
         uParallaxSteps: { value: options.parallaxSteps ?? 4 },
         uAlphaTest: { value: options.alphaTest ?? 0.5 },
         // The coarsest level that still holds two texels a frame.
-        uMaxLod: { value: Math.max(0, Math.log2(l.frame_size) - 1) },
+        uMaxLod: { value: options.mipmaps === false ? 0 : Math.max(0, Math.log2(l.frame_size) - 1) },
         uNear: { value: 0.1 },
         uSunDirection: { value: (options.sunDirection ?? new Vector3(0.3, 1, 0.5)).clone().normalize() },
         uSunIrradiance: { value: options.sunIrradiance ?? new Vector3(3, 3, 3) },

@@ -9,6 +9,7 @@
 
 pub mod envmap;
 pub mod io;
+pub mod ktx2;
 pub mod metrics;
 pub mod packed;
 

@@ -14,7 +14,7 @@
 use super::bake::{BakeSettings, FrameProjection, OctahedralAtlas};
 use super::file::{OctahedralFileError, Sidecar};
 use super::mapping::Grid;
-use crate::frame::{Image, io};
+use crate::frame::{FrameError, Image, io};
 use glam::Vec3;
 use std::path::Path;
 
@@ -59,9 +59,33 @@ pub struct Textures {
     pub orm: usize,
 }
 
-/// The three maps of an atlas, encoded as PNG.
+/// How the `.glb` holds its textures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TextureFormat {
+    /// PNG, one level (engines make the mip levels).
+    #[default]
+    Png,
+    /// KTX2, Basis Universal UASTC supercompressed with Zstandard (glTF's
+    /// `KHR_texture_basisu`), with the frame-by-frame mip chain of [`super::mips`]: what a GPU
+    /// transcodes to its own block format.
+    Ktx2,
+}
+
+impl TextureFormat {
+    /// The images' MIME type.
+    pub fn mime(self) -> &'static str {
+        match self {
+            TextureFormat::Png => "image/png",
+            TextureFormat::Ktx2 => "image/ktx2",
+        }
+    }
+}
+
+/// The three maps of an atlas, encoded as `format` says.
 #[derive(Clone, Copy, Debug)]
 pub struct EncodedMaps<'a> {
+    /// How they are encoded.
+    pub format: TextureFormat,
     /// Colour + coverage (sRGB).
     pub color: &'a [u8],
     /// Normal + depth ([`super::packing`], linear).
@@ -104,12 +128,15 @@ pub fn glb(sidecar: &Sidecar, maps: EncodedMaps) -> Result<Vec<u8>, ::gltf::Erro
         serde_json::json!({ "buffer": 0, "byteOffset": indices_at, "byteLength": 12, "target": 34963 }),
     ];
     let mut images = Vec::new();
-    for png in [maps.color, maps.orm, maps.normal_depth] {
+    for encoded in [maps.color, maps.orm, maps.normal_depth] {
         let at = bin.len().next_multiple_of(4);
         bin.resize(at, 0);
-        bin.extend_from_slice(png);
-        images.push(serde_json::json!({ "bufferView": views.len(), "mimeType": "image/png" }));
-        views.push(serde_json::json!({ "buffer": 0, "byteOffset": at, "byteLength": png.len() }));
+        bin.extend_from_slice(encoded);
+        images
+            .push(serde_json::json!({ "bufferView": views.len(), "mimeType": maps.format.mime() }));
+        views.push(
+            serde_json::json!({ "buffer": 0, "byteOffset": at, "byteLength": encoded.len() }),
+        );
     }
     let textures = Textures {
         color: 0,
@@ -153,11 +180,12 @@ pub fn glb(sidecar: &Sidecar, maps: EncodedMaps) -> Result<Vec<u8>, ::gltf::Erro
             "doubleSided": true,
             "extras": { "trompe_octahedral": layout }
         }],
-        "textures": [
-            { "source": 0, "sampler": 0 },
-            { "source": 1, "sampler": 0 },
-            { "source": 2, "sampler": 0 }
-        ],
+        "textures": (0..3).map(|k| match maps.format {
+            TextureFormat::Png => serde_json::json!({ "source": k, "sampler": 0 }),
+            TextureFormat::Ktx2 => serde_json::json!({
+                "sampler": 0, "extensions": { "KHR_texture_basisu": { "source": k } }
+            }),
+        }).collect::<Vec<_>>(),
         "samplers": [{ "magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071 }],
         "images": images,
         "buffers": [{ "byteLength": bin.len() }],
@@ -170,8 +198,78 @@ pub fn glb(sidecar: &Sidecar, maps: EncodedMaps) -> Result<Vec<u8>, ::gltf::Erro
             { "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" }
         ]
     });
+    let mut doc = doc;
+    if maps.format == TextureFormat::Ktx2 {
+        doc["extensionsUsed"] = serde_json::json!(["KHR_texture_basisu"]);
+        doc["extensionsRequired"] = serde_json::json!(["KHR_texture_basisu"]);
+    }
     let json = serde_json::to_vec(&doc).map_err(|e| ::gltf::Error::Io(std::io::Error::other(e)))?;
     crate::geom::io::glb_bytes(json, bin)
+}
+
+/// The colour, normal-depth and ORM maps of `atlas` encoded as `format` says (`path` only
+/// names them in errors): PNG, or KTX2 with each map's frame-by-frame mip chain, down to the
+/// last level whose side block compression accepts — refused where the atlas side itself is
+/// not a multiple of 4.
+pub fn encode_maps(
+    atlas: &OctahedralAtlas,
+    format: TextureFormat,
+    path: &Path,
+) -> Result<[Vec<u8>; 3], OctahedralFileError> {
+    use crate::frame::Rgba;
+    use crate::frame::ktx2::{Level, Transfer, encode_uastc};
+    let packed = super::packing::pack(&atlas.normal, &atlas.depth)?;
+    if format == TextureFormat::Png {
+        return Ok([
+            io::encode_png(&atlas.color, path)?,
+            io::encode_png_data_rgba(&packed, path)?,
+            io::encode_png_data(&atlas.orm, path)?,
+        ]);
+    }
+    let side = atlas.side();
+    if !side.is_multiple_of(4) {
+        return Err(OctahedralFileError::Frame(FrameError::InvalidSize {
+            width: u64::from(side),
+            height: u64::from(side),
+            reason: "a KTX2 atlas is block-compressed: its side (frames a side × texels a \
+                     frame) must be a multiple of 4",
+        }));
+    }
+    let frame_size = atlas.settings.frame_size;
+    let linear = |img: &Image<Rgba>| -> Vec<u8> {
+        (img.pixels().iter())
+            .flat_map(|p| {
+                p.to_array()
+                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+            })
+            .collect()
+    };
+    let encode = |map: &Image<Rgba>, transfer: Transfer| -> Result<Vec<u8>, OctahedralFileError> {
+        let texels: Vec<(u32, Vec<u8>)> = super::mips::frame_mips(map, frame_size)?
+            .iter()
+            .take_while(|l| l.width().is_multiple_of(4))
+            .map(|l| {
+                let bytes = match transfer {
+                    Transfer::Srgb => io::to_srgb8(l),
+                    Transfer::Linear => linear(l),
+                };
+                (l.width(), bytes)
+            })
+            .collect();
+        let levels: Vec<Level> = (texels.iter())
+            .map(|(w, rgba8)| Level {
+                width: *w,
+                height: *w,
+                rgba8,
+            })
+            .collect();
+        Ok(encode_uastc(&levels, transfer, path)?)
+    };
+    Ok([
+        encode(&atlas.color, Transfer::Srgb)?,
+        encode(&packed, Transfer::Linear)?,
+        encode(&atlas.orm.map(|o| o.extend(1.0)), Transfer::Linear)?,
+    ])
 }
 
 /// Writes `out` (a `.glb`) from the atlas whose sidecar is `sidecar_path`; an atlas of an
@@ -224,6 +322,7 @@ pub fn export(sidecar_path: &Path, out: &Path) -> Result<(), OctahedralFileError
         }
     };
     let maps = EncodedMaps {
+        format: TextureFormat::Png,
         color: &color,
         normal_depth: &normal_depth,
         orm: &orm,
@@ -235,14 +334,17 @@ pub fn export(sidecar_path: &Path, out: &Path) -> Result<(), OctahedralFileError
     crate::files::write_atomically(out, &bytes).map_err(io_at(out))
 }
 
-/// Writes `atlas` as one self-contained `.glb` at `out` (no sidecar, no maps beside it).
-pub fn save(atlas: &OctahedralAtlas, out: &Path) -> Result<Sidecar, OctahedralFileError> {
-    let color = io::encode_png(&atlas.color, out)?;
-    let packed = super::packing::pack(&atlas.normal, &atlas.depth)?;
-    let normal_depth = io::encode_png_data_rgba(&packed, out)?;
-    let orm = io::encode_png_data(&atlas.orm, out)?;
+/// Writes `atlas` as one self-contained `.glb` at `out`, its textures as `format` says (no
+/// sidecar, no maps beside it).
+pub fn save(
+    atlas: &OctahedralAtlas,
+    out: &Path,
+    format: TextureFormat,
+) -> Result<Sidecar, OctahedralFileError> {
+    let [color, normal_depth, orm] = encode_maps(atlas, format, out)?;
     let sidecar = super::file::sidecar_of(atlas, out, super::file::FloatMaps::Omitted);
     let maps = EncodedMaps {
+        format,
         color: &color,
         normal_depth: &normal_depth,
         orm: &orm,
@@ -314,11 +416,15 @@ pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {
         )));
     }
     let side = u64::from(layout.grid.n) * u64::from(layout.frame_size);
-    // The PNG bytes of texture `index`, found through its image's buffer view.
-    let png = |index: usize| -> Result<&[u8], OctahedralFileError> {
+    crate::frame::check_size(side, side)?;
+    // The image of texture `index` (PNG, or KTX2 through KHR_texture_basisu), decoded as
+    // stored: 8-bit values scaled to [0, 1].
+    let image = |index: usize| -> Result<Image<crate::frame::Rgba>, OctahedralFileError> {
         let at = |what: String| invalid(format!("textures[{index}]: {what}"));
-        let source = doc["textures"][index]["source"]
+        let texture = &doc["textures"][index];
+        let source = texture["extensions"]["KHR_texture_basisu"]["source"]
             .as_u64()
+            .or(texture["source"].as_u64())
             .ok_or_else(|| at("no such texture, or no source".into()))?;
         let view = doc["images"][source as usize]["bufferView"]
             .as_u64()
@@ -326,8 +432,14 @@ pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {
         let view = &doc["bufferViews"][view as usize];
         let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
         let length = view["byteLength"].as_u64().unwrap_or(0) as usize;
-        blob.get(offset..offset.saturating_add(length))
-            .ok_or_else(|| at(format!("its bytes {offset}..+{length} are past the buffer")))
+        let bytes = blob
+            .get(offset..offset.saturating_add(length))
+            .ok_or_else(|| at(format!("its bytes {offset}..+{length} are past the buffer")))?;
+        let side = side as u32;
+        Ok(match doc["images"][source as usize]["mimeType"].as_str() {
+            Some("image/ktx2") => crate::frame::ktx2::decode_level0(bytes, (side, side), path)?,
+            _ => io::decode_linear_image(bytes, path)?,
+        })
     };
     let sized = |img: Image<crate::frame::Rgba>, what: &str| {
         if img.size() != (side as u32, side as u32) {
@@ -340,12 +452,12 @@ pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {
         Ok(img)
     };
     let t = layout.textures;
-    let color = sized(io::decode_srgb_image(png(t.color)?, path)?, "colour")?;
-    let packed = sized(
-        io::decode_linear_image(png(t.normal_depth)?, path)?,
-        "normal-depth",
-    )?;
-    let orm = sized(io::decode_linear_image(png(t.orm)?, path)?, "ORM")?;
+    let color = sized(image(t.color)?, "colour")?.map(|c| {
+        let l = crate::frame::srgb_to_linear;
+        crate::frame::Rgba::new(l(c.x), l(c.y), l(c.z), c.w)
+    });
+    let packed = sized(image(t.normal_depth)?, "normal-depth")?;
+    let orm = sized(image(t.orm)?, "ORM")?;
     let (normal, depth) = super::packing::unpack(&packed)?;
     let orm = orm.map(|o| o.truncate());
     Ok(OctahedralAtlas {
@@ -437,7 +549,7 @@ mod tests {
         let atlas = ball(32);
         let dir = crate::test_scratch::scratch("octahedral_glb_round_trip");
         let path = dir.join("ball.glb");
-        save(&atlas, &path).unwrap();
+        save(&atlas, &path, TextureFormat::Png).unwrap();
         let back = load(&path).unwrap();
         assert_eq!(back.settings, atlas.settings);
         assert_eq!((back.centre, back.radius), (atlas.centre, atlas.radius));
@@ -487,5 +599,74 @@ mod tests {
             err.contains("plain.glb") && err.contains("trompe_octahedral"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn a_ktx2_glb_holds_uastc_mip_chains_and_loads_back_near_the_bake() {
+        let atlas = ball(32);
+        let dir = crate::test_scratch::scratch("octahedral_glb_ktx2");
+        let path = dir.join("ball.glb");
+        save(&atlas, &path, TextureFormat::Ktx2).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let glb = ::gltf::binary::Glb::from_slice(&bytes).unwrap();
+        let json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+        assert_eq!(json["extensionsRequired"][0], "KHR_texture_basisu");
+        let blob = glb.bin.unwrap();
+        for k in 0..3 {
+            assert_eq!(json["images"][k]["mimeType"], "image/ktx2");
+            let view = &json["bufferViews"][json["images"][k]["bufferView"].as_u64().unwrap() as usize];
+            let at = view["byteOffset"].as_u64().unwrap() as usize;
+            let len = view["byteLength"].as_u64().unwrap() as usize;
+            let reader = ::ktx2::Reader::new(&blob[at..at + len]).unwrap();
+            let h = reader.header();
+            // Frames of 32 down to 1 texel: sides 128 … 4, six levels, UASTC under Zstandard.
+            assert_eq!((h.pixel_width, h.pixel_height, h.level_count), (128, 128, 6));
+            assert_eq!(
+                h.supercompression_scheme,
+                Some(::ktx2::SupercompressionScheme::Zstandard)
+            );
+            let sizes: Vec<usize> = reader.levels().map(|l| l.uncompressed_byte_length as usize).collect();
+            // 16 bytes a 4 × 4 block.
+            assert_eq!(sizes, [1024, 256, 64, 16, 4, 1].map(|blocks| blocks * 16));
+            assert_eq!(reader.color_model(), Some(::ktx2::ColorModel::UASTC));
+        }
+        let back = load(&path).unwrap();
+        let camera = crate::camera::Pinhole::look_at(
+            atlas.centre + glam::Vec3::new(1.0, 2.5, 3.0),
+            atlas.centre,
+            glam::Vec3::Y,
+            35.0,
+            96,
+            96,
+        )
+        .unwrap();
+        let lighting = crate::scene::Lighting {
+            environment: crate::frame::envmap::EnvMap::constant(glam::Vec3::splat(0.3)),
+            light: None,
+        };
+        let flip = crate::frame::metrics::flip(
+            &atlas.render(&camera, &lighting, 4),
+            &back.render(&camera, &lighting, 4),
+            None,
+        )
+        .unwrap();
+        assert!(flip < 0.02, "FLIP {flip}");
+        // A KTX2 atlas must tile into 4 × 4 blocks.
+        let odd = bake(
+            &crate::geom::icosphere(1),
+            &crate::scene::Surface::Diffuse(None),
+            BakeSettings::new(
+                Grid {
+                    n: 3,
+                    coverage: Coverage::Sphere,
+                },
+                9,
+            ),
+        )
+        .unwrap();
+        let err = save(&odd, &dir.join("odd.glb"), TextureFormat::Ktx2)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("multiple of 4"), "{err}");
     }
 }

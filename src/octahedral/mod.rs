@@ -13,6 +13,7 @@ pub mod batch;
 pub mod file;
 pub mod gltf;
 pub mod mapping;
+pub mod mips;
 pub mod packing;
 pub mod render;
 pub mod scene;

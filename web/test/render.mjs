@@ -22,7 +22,10 @@ for (const need of ['glb', 'views', 'out']) {
   }
 }
 const web = resolve(dirname(fileURLToPath(import.meta.url)), '..');
-const types = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.glb': 'model/gltf-binary' };
+const types = {
+  '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript',
+  '.glb': 'model/gltf-binary', '.wasm': 'application/wasm',
+};
 
 // The runtime, three.js from node_modules, and the bake at /bake.glb; nothing else.
 const server = createServer(async (req, res) => {

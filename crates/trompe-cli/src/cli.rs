@@ -304,6 +304,11 @@ pub struct BakeArgs {
     /// camera.
     #[arg(long)]
     glb: bool,
+    /// With --octahedral: the .glb's textures as KTX2 (Basis Universal UASTC, Zstandard
+    /// supercompression, glTF's KHR_texture_basisu) with a mip chain made frame by frame,
+    /// instead of PNG.
+    #[arg(long)]
+    ktx2: bool,
     /// With --octahedral and -o NAME.json or a batch: also write the normal and depth maps as
     /// 32-bit float OpenEXR files (NAME-normal.exr, NAME-depth.exr), for pipelines that want
     /// them unquantized.

@@ -205,7 +205,7 @@ fn bake_octahedral(
     };
     let settings = BatchSettings {
         bake: BakeSettings::new(grid, frame_size),
-        glb,
+        glb: glb.then_some(trompe::octahedral::gltf::TextureFormat::Png),
         floats: match exr {
             true => trompe::octahedral::file::FloatMaps::OpenExr,
             false => trompe::octahedral::file::FloatMaps::Omitted,

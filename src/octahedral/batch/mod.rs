@@ -83,8 +83,8 @@ pub fn shard_inputs(inputs: &[BatchInput], shard: Shard) -> Vec<BatchInput> {
 pub struct BatchSettings {
     /// The bake.
     pub bake: BakeSettings,
-    /// Also write `<stem>.glb`.
-    pub glb: bool,
+    /// Also write `<stem>.glb`, its textures so encoded.
+    pub glb: Option<super::gltf::TextureFormat>,
     /// Also write the normal and depth maps as OpenEXR floats.
     pub floats: FloatMaps,
     /// Skip what an earlier run in the output folder finished.
@@ -132,7 +132,7 @@ pub fn bake_all(
         let here = |e: &Entry| {
             let wrote = |path: &PathBuf| e.outputs.iter().any(|o| &o.path == path);
             e.output.as_ref() == Some(&sidecar)
-                && (!settings.glb || wrote(&glb))
+                && (settings.glb.is_none() || wrote(&glb))
                 && (settings.floats == FloatMaps::Omitted || wrote(&files(&sidecar)[4]))
         };
         let kept = input_sha256.as_deref().and_then(|h| {
@@ -199,9 +199,9 @@ fn bake_one(
         }
         let saved = save(&atlas, &sidecar, settings.floats).map_err(|e| e.to_string())?;
         let mut written = super::file::written(&sidecar, &saved);
-        if settings.glb {
+        if let Some(format) = settings.glb {
             let glb = sidecar.with_extension("glb");
-            super::gltf::export(&sidecar, &glb).map_err(|e| e.to_string())?;
+            super::gltf::save(&atlas, &glb, format).map_err(|e| e.to_string())?;
             written.push(glb);
         }
         let outputs = written

@@ -164,6 +164,14 @@ impl BakeArgs {
             || self.shard.is_some()
     }
 
+    /// How the .glb holds its textures.
+    fn texture_format(&self) -> trompe::octahedral::gltf::TextureFormat {
+        match self.ktx2 {
+            true => trompe::octahedral::gltf::TextureFormat::Ktx2,
+            false => trompe::octahedral::gltf::TextureFormat::Png,
+        }
+    }
+
     /// The float maps these arguments ask for.
     fn floats(&self) -> trompe::octahedral::file::FloatMaps {
         match self.exr {
@@ -185,13 +193,16 @@ impl BakeArgs {
                 self.output.display()
             );
         }
+        if self.ktx2 && !self.glb {
+            anyhow::bail!("--ktx2 sets the .glb's textures: add --glb");
+        }
         use trompe::octahedral::batch::{
             BatchSettings, Outcome, bake_all, gather, journal_path, listed, manifest_path, outputs,
             shard_inputs,
         };
         let settings = BatchSettings {
             bake: self.octahedral_settings(n)?,
-            glb: self.glb,
+            glb: self.glb.then_some(self.texture_format()),
             floats: self.floats(),
             skip_existing: self.skip_existing,
         };
@@ -318,6 +329,11 @@ impl BakeArgs {
         let files = file::files(&self.output);
         // -o NAME.glb: that one self-contained file, nothing beside it.
         let alone = has_extension(&self.output, "glb");
+        if self.ktx2 && !(alone || self.glb) {
+            anyhow::bail!(
+                "--ktx2 sets the .glb's textures: give -o NAME.glb, or add --glb beside -o NAME.json"
+            );
+        }
         if alone && (self.glb || self.exr) {
             anyhow::bail!(
                 "-o {}: a .glb output is the whole bake; --glb and --exr add files beside a \
@@ -360,9 +376,10 @@ impl BakeArgs {
             )
         })?;
         let bake_time = start.elapsed();
+        let format = self.texture_format();
         if alone {
             let sidecar =
-                trompe::octahedral::gltf::save(&atlas, &glb).context("writing the glTF")?;
+                trompe::octahedral::gltf::save(&atlas, &glb, format).context("writing the glTF")?;
             return Ok(file::OctahedralReport::new(
                 &atlas,
                 sidecar,
@@ -374,7 +391,7 @@ impl BakeArgs {
             file::save(&atlas, &self.output, self.floats()).context("writing the atlas")?;
         let mut written = file::written(&self.output, &sidecar);
         if self.glb {
-            trompe::octahedral::gltf::export(&self.output, &glb).context("writing the glTF")?;
+            trompe::octahedral::gltf::save(&atlas, &glb, format).context("writing the glTF")?;
             written.push(glb);
         }
         Ok(file::OctahedralReport::new(

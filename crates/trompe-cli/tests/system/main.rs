@@ -59,6 +59,12 @@ fn main() {
             web::NEEDS,
         ),
         trial(
+            "web::distant_impostors_sample_their_mip_levels",
+            web::distant_impostors_sample_their_mip_levels,
+            web::ready(),
+            web::NEEDS,
+        ),
+        trial(
             "gpu::info_names_the_adapter_it_opens",
             info_names_the_adapter_it_opens,
             adapter,

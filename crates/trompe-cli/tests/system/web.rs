@@ -1,14 +1,18 @@
 //! The three.js runtime (`web/trompe-octahedral.js`) in a real browser: headless Chromium
-//! (Debian's package, WebGL 2 through SwiftShader) draws the Duck's self-contained bake from 8
+//! (Debian's package, WebGL 2 through SwiftShader) draws the Duck's self-contained bake — with
+//! PNG textures and with KTX2 ones (Basis Universal, transcoded by three's KTX2Loader) — from 8
 //! directions, straight down included, and one instance moved, turned and scaled; each picture
 //! is scored by FLIP against trompe's CPU reference of the same bake and camera
-//! (`OctahedralAtlas::render_cutout`) and against the exact render of the mesh.
+//! (`OctahedralAtlas::render_cutout` of the file loaded back) and against the exact render of
+//! the mesh. A distant view checks that the mip levels help: nearer the supersampled reference
+//! with them than without.
 
 use super::common::{root, scratch};
 use glam::{Quat, Vec3};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use trompe::camera::Pinhole;
-use trompe::frame::{io, metrics};
+use trompe::frame::{Image, Rgba, io, metrics};
+use trompe::octahedral::OctahedralAtlas;
 use trompe::scene::{Light, Lighting, RenderSettings, Surface, View};
 
 /// Whether the browser test can run here: Node.js, Chromium and the runtime's npm packages.
@@ -24,27 +28,36 @@ pub fn ready() -> bool {
 pub const NEEDS: &str =
     "node, Chromium (package chromium) and the runtime's npm packages (npm ci in web/)";
 
+/// A camera: eye, target, up.
+type Eye = (Vec3, Vec3, Vec3);
+
+const SIZE: u32 = 256;
+
+fn lighting() -> Lighting {
+    Lighting {
+        environment: trompe::frame::envmap::EnvMap::constant(Vec3::splat(0.3)),
+        light: Some(Light {
+            direction: Vec3::new(0.4, 1.0, 0.6).normalize(),
+            irradiance: Vec3::splat(2.5),
+        }),
+    }
+}
+
 /// One view as `web/test/render.html` reads it.
-fn view_json(
-    camera: (Vec3, Vec3, Vec3),
-    size: u32,
-    lighting: &Lighting,
-    sky: Vec3,
-) -> serde_json::Value {
+fn view_json((eye, target, up): Eye, lighting: &Lighting) -> serde_json::Value {
     let sun = lighting.light.expect("the test's lighting has a sun");
     serde_json::json!({
-        "eye": camera.0.to_array(), "target": camera.1.to_array(), "up": camera.2.to_array(),
-        "fov_y": 30.0, "width": size, "height": size, "near": 0.01,
-        "ambient": sky.to_array(),
+        "eye": eye.to_array(), "target": target.to_array(), "up": up.to_array(),
+        "fov_y": 30.0, "width": SIZE, "height": SIZE, "near": 0.01,
+        "ambient": [0.3, 0.3, 0.3],
         "sun_direction": sun.direction.to_array(),
         "sun_irradiance": sun.irradiance.to_array(),
     })
 }
 
-pub fn the_threejs_runtime_draws_the_ducks_bake_as_trompe_does() {
-    let dir = scratch("web_threejs_runtime");
-    let glb = dir.join("duck.glb");
-    let out = super::common::trompe(&[
+/// `trompe impostor bake` of the Duck to `glb`, 16 × 16 frames in a 2048² atlas, with `extra`.
+fn bake(glb: &Path, extra: &[&str]) -> OctahedralAtlas {
+    let mut args = vec![
         "impostor",
         "bake",
         "assets/gltf/Duck.glb",
@@ -52,76 +65,28 @@ pub fn the_threejs_runtime_draws_the_ducks_bake_as_trompe_does() {
         "16",
         "--resolution",
         "2048",
-        "-o",
-        glb.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    args.extend(["-o", glb.to_str().unwrap()]);
+    let out = super::common::trompe(&args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let atlas = trompe::octahedral::gltf::load(&glb).unwrap();
-    let mesh = trompe::geom::io::load(&root().join("assets/gltf/Duck.glb"))
-        .unwrap()
-        .mesh;
-    let sky = Vec3::splat(0.3);
-    let lighting = Lighting {
-        environment: trompe::frame::envmap::EnvMap::constant(sky),
-        light: Some(Light {
-            direction: Vec3::new(0.4, 1.0, 0.6).normalize(),
-            irradiance: Vec3::splat(2.5),
-        }),
-    };
-    let size = 256;
-    let (c, r) = (atlas.centre, atlas.radius);
-    // 8 directions (azimuth, elevation in degrees) round the duck, straight down last.
-    let directions = [
-        (0.0f32, 0.0f32),
-        (45.0, 20.0),
-        (100.0, 35.0),
-        (150.0, -25.0),
-        (200.0, 50.0),
-        (250.0, 10.0),
-        (310.0, 65.0),
-        (0.0, 90.0),
-    ];
-    let cameras: Vec<(Vec3, Vec3, Vec3)> = directions
-        .iter()
-        .map(|&(a, e)| {
-            let (a, e) = (a.to_radians(), e.to_radians());
-            let d = Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
-            let up = if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
-            (c + d * (4.0 * r), c, up)
-        })
-        .collect();
-    let mut views: Vec<serde_json::Value> = cameras
-        .iter()
-        .map(|&cam| view_json(cam, size, &lighting, sky))
-        .collect();
-    // The second view again with the duck moved, turned and scaled as an instance, the camera
-    // and the sun carried along: the same picture.
-    let (q, s, t) = (
-        Quat::from_axis_angle(Vec3::new(1.0, 2.0, -0.5).normalize(), 1.1),
-        1.7f32,
-        Vec3::new(3.0, -1.0, 2.0),
-    );
-    let place = |p: Vec3| q * (p * s) + t;
-    let (eye, target, up) = cameras[1];
-    let mut moved = view_json((place(eye), place(target), q * up), size, &lighting, sky);
-    let sun = lighting.light.unwrap();
-    moved["sun_direction"] = serde_json::json!((q * sun.direction).to_array());
-    moved["near"] = serde_json::json!(0.01 * s);
-    moved["instance"] = serde_json::json!({
-        "position": t.to_array(), "quaternion": q.to_array(), "scale": s,
-    });
-    views.push(moved);
+    trompe::octahedral::gltf::load(glb).unwrap()
+}
+
+/// The browser's pictures of `views` of the bake `glb`.
+fn browser(glb: &Path, views: &[serde_json::Value], dir: &Path) -> Vec<Image<Rgba>> {
+    std::fs::create_dir_all(dir).unwrap();
     let views_path = dir.join("views.json");
-    std::fs::write(&views_path, serde_json::to_string(&views).unwrap()).unwrap();
-    let shots = dir.join("shots");
+    std::fs::write(&views_path, serde_json::to_string(views).unwrap()).unwrap();
+    let shots: PathBuf = dir.join("shots");
     let run = std::process::Command::new("node")
         .arg(root().join("web/test/render.mjs"))
         .arg("--glb")
-        .arg(&glb)
+        .arg(glb)
         .arg("--views")
         .arg(&views_path)
         .arg("--out")
@@ -135,15 +100,78 @@ pub fn the_threejs_runtime_draws_the_ducks_bake_as_trompe_does() {
         String::from_utf8_lossy(&run.stderr)
     );
     print!("{said}");
+    (0..views.len())
+        .map(|k| io::read_png(&shots.join(format!("view-{k}.png"))).unwrap())
+        .collect()
+}
+
+/// The 8 directions (azimuth, elevation in degrees) round the duck, straight down last.
+const DIRECTIONS: [(f32, f32); 8] = [
+    (0.0, 0.0),
+    (45.0, 20.0),
+    (100.0, 35.0),
+    (150.0, -25.0),
+    (200.0, 50.0),
+    (250.0, 10.0),
+    (310.0, 65.0),
+    (0.0, 90.0),
+];
+
+/// A camera `distance` radii from the sphere's centre along (azimuth, elevation).
+fn around(atlas: &OctahedralAtlas, (a, e): (f32, f32), distance: f32) -> Eye {
+    let (a, e) = (a.to_radians(), e.to_radians());
+    let d = Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
+    let up = if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    (
+        atlas.centre + d * (distance * atlas.radius),
+        atlas.centre,
+        up,
+    )
+}
+
+fn pinhole((eye, target, up): Eye, size: u32) -> Pinhole {
+    Pinhole::look_at(eye, target, up, 30.0, size, size).unwrap()
+}
+
+/// Scores the 8 directions and the moved instance of `atlas` (baked to `glb`); returns the
+/// mean FLIP against the CPU reference and against the exact render over the 8 directions,
+/// and the moved instance's against the reference.
+fn score(name: &str, glb: &Path, atlas: &OctahedralAtlas, dir: &Path) -> (f64, f64, f64) {
+    let lighting = lighting();
+    let mesh = trompe::geom::io::load(&root().join("assets/gltf/Duck.glb"))
+        .unwrap()
+        .mesh;
+    let cameras: Vec<Eye> = DIRECTIONS.iter().map(|&d| around(atlas, d, 4.0)).collect();
+    let mut views: Vec<serde_json::Value> = cameras
+        .iter()
+        .map(|&cam| view_json(cam, &lighting))
+        .collect();
+    // The second view again with the duck moved, turned and scaled as an instance, the camera
+    // and the sun carried along: the same picture.
+    let (q, s, t) = (
+        Quat::from_axis_angle(Vec3::new(1.0, 2.0, -0.5).normalize(), 1.1),
+        1.7f32,
+        Vec3::new(3.0, -1.0, 2.0),
+    );
+    let place = |p: Vec3| q * (p * s) + t;
+    let (eye, target, up) = cameras[1];
+    let mut moved = view_json((place(eye), place(target), q * up), &lighting);
+    let sun = lighting.light.unwrap();
+    moved["sun_direction"] = serde_json::json!((q * sun.direction).to_array());
+    moved["near"] = serde_json::json!(0.01 * s);
+    moved["instance"] = serde_json::json!({
+        "position": t.to_array(), "quaternion": q.to_array(), "scale": s,
+    });
+    views.push(moved);
+    let pictures = browser(glb, &views, dir);
     let settings = RenderSettings {
         max_depth: 2,
         time: 0.0,
-        ray_epsilon: r * 1e-4,
+        ray_epsilon: atlas.radius * 1e-4,
     };
     let mut scores = Vec::new();
-    for (k, &(eye, target, up)) in cameras.iter().chain([&cameras[1]]).enumerate() {
-        let camera = Pinhole::look_at(eye, target, up, 30.0, size, size).unwrap();
-        let browser = io::read_png(&shots.join(format!("view-{k}.png"))).unwrap();
+    for (k, &cam) in cameras.iter().chain([&cameras[1]]).enumerate() {
+        let camera = pinhole(cam, SIZE);
         let reference = atlas.render_cutout(&camera, &lighting, 4);
         let view = View {
             camera,
@@ -153,39 +181,104 @@ pub fn the_threejs_runtime_draws_the_ducks_bake_as_trompe_does() {
         let exact = trompe::octahedral::turntable::exact_unshadowed(&view, &lighting, &settings)
             .unwrap()
             .color;
-        let flip_reference = metrics::flip(&reference, &browser, None).unwrap();
-        let flip_exact = metrics::flip(&exact, &browser, None).unwrap();
+        let to_reference = metrics::flip(&reference, &pictures[k], None).unwrap();
+        let to_exact = metrics::flip(&exact, &pictures[k], None).unwrap();
+        let what = match DIRECTIONS.get(k) {
+            Some((a, e)) => format!("azimuth {a}°, elevation {e}°"),
+            None => "instance moved, turned, scaled".to_string(),
+        };
         println!(
-            "view {k}, {}: FLIP {flip_reference:.4} against trompe's CPU reference, \
-             {flip_exact:.4} against the exact render",
-            directions
-                .get(k)
-                .map_or("instance moved, turned, scaled".to_string(), |d| format!(
-                    "azimuth {}°, elevation {}°",
-                    d.0, d.1
-                ))
+            "{name} view {k}, {what}: FLIP {to_reference:.4} against trompe's CPU reference, \
+             {to_exact:.4} against the exact render"
         );
-        scores.push((flip_reference, flip_exact));
+        scores.push((to_reference, to_exact));
     }
     let eight = &scores[..8];
     let mean = |f: fn(&(f64, f64)) -> f64| eight.iter().map(f).sum::<f64>() / 8.0;
     let worst = eight.iter().map(|s| s.0).fold(0.0, f64::max);
     println!(
-        "mean FLIP over 8 directions: {:.4} against the CPU reference (worst {worst:.4}), {:.4} \
-         against the exact render",
+        "{name}: mean FLIP over 8 directions {:.4} against the CPU reference (worst {worst:.4}), \
+         {:.4} against the exact render; the moved instance {:.4}",
         mean(|s| s.0),
-        mean(|s| s.1)
+        mean(|s| s.1),
+        scores[8].0
     );
-    assert!(
-        mean(|s| s.0) <= 0.02,
-        "mean FLIP {} against the CPU reference",
-        mean(|s| s.0)
-    );
-    assert!(
-        mean(|s| s.1) <= 0.05,
-        "mean FLIP {} against the exact render",
-        mean(|s| s.1)
-    );
-    // The moved instance draws what the instance at the bake's place drew.
-    assert!(scores[8].0 <= 0.02, "moved instance: FLIP {}", scores[8].0);
+    (mean(|s| s.0), mean(|s| s.1), scores[8].0)
+}
+
+pub fn the_threejs_runtime_draws_the_ducks_bake_as_trompe_does() {
+    let dir = scratch("web_threejs_runtime");
+    for (name, extra) in [("PNG", &[][..]), ("KTX2", &["--ktx2"][..])] {
+        let glb = dir.join(format!("duck-{name}.glb"));
+        let atlas = bake(&glb, extra);
+        let bytes = std::fs::metadata(&glb).unwrap().len();
+        println!("{name} bake: {:.1} MB", bytes as f64 / 1e6);
+        let (reference, exact, moved) = score(name, &glb, &atlas, &dir.join(name));
+        assert!(
+            reference <= 0.02,
+            "{name}: mean FLIP {reference} against the CPU reference"
+        );
+        assert!(
+            exact <= 0.05,
+            "{name}: mean FLIP {exact} against the exact render"
+        );
+        // The moved instance draws what the instance at the bake's place drew.
+        assert!(moved <= 0.02, "{name}: moved instance FLIP {moved}");
+    }
+}
+
+/// Far away (40 radii: the duck some 25 pixels across), the KTX2 bake's mip levels bring the
+/// browser's picture nearer the CPU reference supersampled 8 × 8 than level 0 alone does.
+pub fn distant_impostors_sample_their_mip_levels() {
+    let dir = scratch("web_threejs_mips");
+    let glb = dir.join("duck.glb");
+    let atlas = bake(&glb, &["--ktx2"]);
+    let lighting = lighting();
+    let cameras: Vec<Eye> = [(30.0, 25.0), (200.0, 50.0)]
+        .iter()
+        .map(|&d| around(&atlas, d, 40.0))
+        .collect();
+    let mut views = Vec::new();
+    for &cam in &cameras {
+        for mipmaps in [true, false] {
+            let mut v = view_json(cam, &lighting);
+            v["mipmaps"] = serde_json::json!(mipmaps);
+            views.push(v);
+        }
+    }
+    let pictures = browser(&glb, &views, &dir);
+    for (k, &cam) in cameras.iter().enumerate() {
+        let fine = atlas.render_cutout(&pinhole(cam, SIZE * 8), &lighting, 4);
+        let sky = lighting.environment.radiance(Vec3::Y).extend(1.0);
+        let samples = |i: u32| {
+            let (x, y) = (i % SIZE, i / SIZE);
+            (0..64).map(move |j| (8 * x + j % 8, 8 * y + j / 8))
+        };
+        let reference = Image::from_vec(
+            SIZE,
+            SIZE,
+            (0..SIZE * SIZE)
+                .map(|i| samples(i).map(|(x, y)| fine.get(x, y)).sum::<Rgba>() / 64.0)
+                .collect(),
+        )
+        .unwrap();
+        // Scored inside the duck (every sample of the pixel on it): where the atlas is
+        // minified, not where the alpha test cuts the silhouette.
+        let inside = Image::from_vec(
+            SIZE,
+            SIZE,
+            (0..SIZE * SIZE)
+                .map(|i| samples(i).all(|(x, y)| fine.get(x, y) != sky))
+                .collect(),
+        )
+        .unwrap();
+        let pixels = inside.pixels().iter().filter(|&&b| b).count();
+        let with = metrics::flip(&reference, &pictures[2 * k], Some(&inside)).unwrap();
+        let without = metrics::flip(&reference, &pictures[2 * k + 1], Some(&inside)).unwrap();
+        println!(
+            "distant view {k}: FLIP {with:.4} with mip levels, {without:.4} with level 0 alone, \
+             against the CPU reference supersampled 8 × 8, over the {pixels} pixels inside the duck"
+        );
+        assert!(with < without, "view {k}: mips {with} vs level 0 {without}");
+    }
 }
