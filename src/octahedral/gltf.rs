@@ -614,18 +614,25 @@ mod tests {
         let blob = glb.bin.unwrap();
         for k in 0..3 {
             assert_eq!(json["images"][k]["mimeType"], "image/ktx2");
-            let view = &json["bufferViews"][json["images"][k]["bufferView"].as_u64().unwrap() as usize];
+            let view =
+                &json["bufferViews"][json["images"][k]["bufferView"].as_u64().unwrap() as usize];
             let at = view["byteOffset"].as_u64().unwrap() as usize;
             let len = view["byteLength"].as_u64().unwrap() as usize;
             let reader = ::ktx2::Reader::new(&blob[at..at + len]).unwrap();
             let h = reader.header();
             // Frames of 32 down to 1 texel: sides 128 … 4, six levels, UASTC under Zstandard.
-            assert_eq!((h.pixel_width, h.pixel_height, h.level_count), (128, 128, 6));
+            assert_eq!(
+                (h.pixel_width, h.pixel_height, h.level_count),
+                (128, 128, 6)
+            );
             assert_eq!(
                 h.supercompression_scheme,
                 Some(::ktx2::SupercompressionScheme::Zstandard)
             );
-            let sizes: Vec<usize> = reader.levels().map(|l| l.uncompressed_byte_length as usize).collect();
+            let sizes: Vec<usize> = reader
+                .levels()
+                .map(|l| l.uncompressed_byte_length as usize)
+                .collect();
             // 16 bytes a 4 × 4 block.
             assert_eq!(sizes, [1024, 256, 64, 16, 4, 1].map(|blocks| blocks * 16));
             assert_eq!(reader.color_model(), Some(::ktx2::ColorModel::UASTC));
