@@ -1,7 +1,7 @@
 //! Storage of a Master Texture encoding, engine-neutral: one PNG per view (`master_NNNN.png`,
 //! alpha = the view sees the texel), the packing map and the one UV set as JSON (`masters.json`),
 //! and the mesh with that single UV set as glTF 2.0 binary (`mesh.glb`: one primitive of
-//! unwelded corners, three a face in face order, textured by a chosen PNG) — written with
+//! unwelded corners, three a face in face order, its texture embedded) — written with
 //! `serde_json` and the `gltf` crate's GLB container, and read back by the `gltf` crate to
 //! check it.
 //!
@@ -80,14 +80,14 @@ pub fn stored_views(cameras: &[(String, crate::camera::Pinhole)]) -> Vec<StoredV
         .collect()
 }
 
-/// Writes `masters.json` and `mesh.glb` (textured by `texture`, a PNG in `dir`) into `dir`;
-/// the master textures are written apart ([`master_name`]). Returns the files written.
+/// Writes `masters.json` and `mesh.glb` (textured by `texture`, PNG bytes it embeds) into
+/// `dir`; the master textures are written apart ([`master_name`]). Returns the files written.
 pub fn save_manifest(
     dir: &Path,
     layout: &Layout,
     cameras: &[(String, crate::camera::Pinhole)],
     mesh: &Mesh,
-    texture: &str,
+    texture: &[u8],
 ) -> Result<Vec<PathBuf>, MasterError> {
     let manifest = Manifest {
         version: 1,
@@ -105,12 +105,12 @@ pub fn save_manifest(
 }
 
 /// Writes `encoding` into `dir`: the master textures, `masters.json` and `mesh.glb` (textured
-/// by `texture`, a PNG in `dir`). Returns the files written.
+/// by `texture`, PNG bytes it embeds). Returns the files written.
 pub fn save(
     dir: &Path,
     encoding: &Encoding,
     mesh: &Mesh,
-    texture: &str,
+    texture: &[u8],
 ) -> Result<Vec<PathBuf>, MasterError> {
     let mut written = Vec::new();
     for (i, m) in encoding.masters.iter().enumerate() {
@@ -204,8 +204,8 @@ pub fn load(dir: &Path) -> Result<(Manifest, Vec<Image<Rgba>>), MasterError> {
 }
 
 /// The mesh as a GLB: positions, normals and the one UV set per face corner, a material whose
-/// base colour is the PNG `texture` (a URI beside the file).
-pub fn gltf_bytes(mesh: &Mesh, uvs: &[[f32; 2]], texture: &str) -> Result<Vec<u8>, MasterError> {
+/// base colour is `texture` (PNG bytes, embedded: the file needs nothing beside it).
+pub fn gltf_bytes(mesh: &Mesh, uvs: &[[f32; 2]], texture: &[u8]) -> Result<Vec<u8>, MasterError> {
     let n = mesh.triangle_count() * 3;
     let mut bin: Vec<u8> = Vec::with_capacity(n * 32);
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
@@ -229,6 +229,8 @@ pub fn gltf_bytes(mesh: &Mesh, uvs: &[[f32; 2]], texture: &str) -> Result<Vec<u8
     for uv in uvs.iter().take(n) {
         bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
     }
+    let image_at = bin.len();
+    bin.extend_from_slice(texture);
     let length = bin.len();
     let doc = serde_json::json!({
         "asset": { "version": "2.0", "generator": "trompe master encode" },
@@ -244,12 +246,13 @@ pub fn gltf_bytes(mesh: &Mesh, uvs: &[[f32; 2]], texture: &str) -> Result<Vec<u8
         }}],
         "textures": [{ "source": 0, "sampler": 0 }],
         "samplers": [{ "magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071 }],
-        "images": [{ "uri": texture }],
+        "images": [{ "bufferView": 3, "mimeType": "image/png" }],
         "buffers": [{ "byteLength": length }],
         "bufferViews": [
             { "buffer": 0, "byteOffset": 0, "byteLength": normals_at, "target": 34962 },
             { "buffer": 0, "byteOffset": normals_at, "byteLength": uvs_at - normals_at, "target": 34962 },
-            { "buffer": 0, "byteOffset": uvs_at, "byteLength": length - uvs_at, "target": 34962 }
+            { "buffer": 0, "byteOffset": uvs_at, "byteLength": image_at - uvs_at, "target": 34962 },
+            { "buffer": 0, "byteOffset": image_at, "byteLength": texture.len() }
         ],
         "accessors": [
             { "bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi },
@@ -271,7 +274,12 @@ mod tests {
         let sizes = vec![[6, 4]; mesh.triangle_count()];
         let layout = Layout::new(&sizes);
         let uvs = layout.uvs();
-        let bytes = gltf_bytes(&mesh, &uvs, "bake.png").unwrap();
+        let png = io::encode_png(
+            &Image::new(layout.width, layout.height, Rgba::ONE).unwrap(),
+            Path::new("bake.png"),
+        )
+        .unwrap();
+        let bytes = gltf_bytes(&mesh, &uvs, &png).unwrap();
         let g = gltf::Gltf::from_slice(&bytes).unwrap();
         let blob = g.blob.as_deref().unwrap();
         let prim = g.meshes().next().unwrap().primitives().next().unwrap();
@@ -281,13 +289,15 @@ mod tests {
         let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
         assert_eq!(positions.len(), mesh.triangle_count() * 3);
         assert_eq!(positions[4], mesh.corners(1)[1].to_array());
+        // The bake embedded, and the atlas's sides block-compressible.
         let image = g.images().next().unwrap();
         assert!(matches!(
             image.source(),
-            gltf::image::Source::Uri {
-                uri: "bake.png",
+            gltf::image::Source::View {
+                mime_type: "image/png",
                 ..
             }
         ));
+        assert!(layout.width % 4 == 0 && layout.height % 4 == 0);
     }
 }

@@ -7,7 +7,7 @@ use super::file::{Manifest, load, load_manifest, load_master, master_name, save_
 use super::{Atlas, DEFAULT_SCALE, MasterError, encode, encode_stream};
 use crate::camera::Pinhole;
 use crate::files::{FolderKind, StagedFolder};
-use crate::frame::{Image, Rgba, io};
+use crate::frame::{FrameError, Image, Rgba, io};
 use crate::geom::Mesh;
 use crate::progress::Progress;
 use crate::texturing::{Blend, BlendSettings};
@@ -169,8 +169,12 @@ fn finish_folder(
     baked: &Image<Rgba>,
 ) -> Result<Vec<PathBuf>, MasterError> {
     let bake_path = out.join("bake.png");
-    io::write_png(&bake_path, baked)?;
-    let mut files = save_manifest(out, &atlas.layout, cameras, mesh, "bake.png")?;
+    let png = io::encode_png(baked, &bake_path)?;
+    crate::files::write_atomically(&bake_path, &png).map_err(|source| FrameError::Io {
+        path: bake_path.clone(),
+        source,
+    })?;
+    let mut files = save_manifest(out, &atlas.layout, cameras, mesh, &png)?;
     files.push(bake_path);
     Ok(files)
 }

@@ -157,7 +157,11 @@ impl Layout {
             .map(|g| g.size[0] as f64 * g.size[1] as f64)
             .sum();
         let widest = groups.iter().map(|g| g.size[0]).max().unwrap_or(1);
-        let width = widest.max((1.1 * total).sqrt().ceil() as u32).max(1);
+        // Sides in multiples of 4, so that the atlas block-compresses as it is.
+        let width = widest
+            .max((1.1 * total).sqrt().ceil() as u32)
+            .max(1)
+            .next_multiple_of(4);
         let mut sky = Skyline::new(width);
         let mut faces = vec![
             FacePlace {
@@ -185,7 +189,7 @@ impl Layout {
         }
         Layout {
             width,
-            height: sky.height().max(1),
+            height: sky.height().max(1).next_multiple_of(4),
             faces,
         }
     }

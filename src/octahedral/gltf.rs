@@ -341,8 +341,23 @@ pub fn save(
     out: &Path,
     format: TextureFormat,
 ) -> Result<Sidecar, OctahedralFileError> {
-    let [color, normal_depth, orm] = encode_maps(atlas, format, out)?;
-    let sidecar = super::file::sidecar_of(atlas, out, super::file::FloatMaps::Omitted);
+    let (bytes, sidecar) = encode(atlas, format, out)?;
+    crate::files::write_atomically(out, &bytes).map_err(|source| OctahedralFileError::Io {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    Ok(sidecar)
+}
+
+/// The self-contained `.glb` of `atlas`, its textures as `format` says, in memory (`path` only
+/// names it in errors), and its layout.
+pub fn encode(
+    atlas: &OctahedralAtlas,
+    format: TextureFormat,
+    path: &Path,
+) -> Result<(Vec<u8>, Sidecar), OctahedralFileError> {
+    let [color, normal_depth, orm] = encode_maps(atlas, format, path)?;
+    let sidecar = super::file::sidecar_of(atlas, path, super::file::FloatMaps::Omitted);
     let maps = EncodedMaps {
         format,
         color: &color,
@@ -350,14 +365,10 @@ pub fn save(
         orm: &orm,
     };
     let bytes = glb(&sidecar, maps).map_err(|e| OctahedralFileError::Io {
-        path: out.to_path_buf(),
+        path: path.to_path_buf(),
         source: std::io::Error::other(e.to_string()),
     })?;
-    crate::files::write_atomically(out, &bytes).map_err(|source| OctahedralFileError::Io {
-        path: out.to_path_buf(),
-        source,
-    })?;
-    Ok(sidecar)
+    Ok((bytes, sidecar))
 }
 
 /// Loads the atlas of a `.glb` trompe wrote: its layout and its three maps (the normal and

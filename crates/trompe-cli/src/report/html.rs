@@ -68,6 +68,7 @@ enum Block {
     Paragraph(String),
     Figures(Vec<Figure>),
     Table(Table),
+    Link(String, String),
 }
 
 /// One section of the report.
@@ -103,6 +104,12 @@ impl Section {
     /// A row of figures.
     pub fn figures(&mut self, figures: Vec<Figure>) -> &mut Self {
         self.blocks.push(Block::Figures(figures));
+        self
+    }
+
+    /// A paragraph that is one link to `href` (a file beside the report).
+    pub fn link(&mut self, href: impl Into<String>, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Link(href.into(), text.into()));
         self
     }
 
@@ -172,6 +179,9 @@ fn write_block(h: &mut String, b: &Block) {
         }
         Block::Paragraph(t) => {
             let _ = writeln!(h, "<p>{}</p>", inline(t));
+        }
+        Block::Link(href, t) => {
+            let _ = writeln!(h, "<p><a href=\"{}\">{}</a></p>", escape(href), inline(t));
         }
         Block::Figures(fs) => {
             h.push_str("<div class=row>");

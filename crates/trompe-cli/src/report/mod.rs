@@ -13,6 +13,7 @@ mod master;
 mod maze;
 mod octahedral;
 mod relief;
+mod turn;
 mod views;
 
 use html::{Report, Section, Table};

@@ -92,6 +92,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         "octahedral-turntable.png",
         "FLIP per turntable view: with parallax (orange), without (grey); the last two views look straight down and up",
     ));
+    interactive_page(out, &atlas, &mesh, &lighting)?;
     let n = views.len() as f64;
     let mean = |f: fn(&TurntableView) -> f64| views.iter().map(f).sum::<f64>() / n;
     let worst = views.iter().map(|v| v.flip).fold(0.0, f64::max);
@@ -150,8 +151,71 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
          (`trompe impostor bake MESH --octahedral 16`).",
     );
     s.figures(figures);
+    s.link(
+        PAGE,
+        "Turn the baked Duck yourself: its `.glb` drawn in your browser by the three.js runtime \
+         (`web/trompe-octahedral.js`), beside the exact turntable",
+    );
     s.table(table);
     Ok(s)
+}
+
+/// The interactive page's file.
+const PAGE: &str = "octahedral-turn.html";
+
+/// The bake as a self-contained `.glb` in a page of its own, turned by the reader with the
+/// three.js runtime, beside the exact renders of 8 views round the Duck.
+fn interactive_page(
+    out: &Path,
+    atlas: &trompe::octahedral::OctahedralAtlas,
+    mesh: &trompe::geom::Mesh,
+    lighting: &Lighting,
+) -> Result<(), ReportError> {
+    let page = out.join(PAGE);
+    let png = trompe::octahedral::gltf::TextureFormat::Png;
+    let (bytes, _) =
+        trompe::octahedral::gltf::encode(atlas, png, &page).map_err(|e| ReportError::Io {
+            path: page.clone(),
+            source: std::io::Error::other(e.to_string()),
+        })?;
+    let settings = RenderSettings {
+        max_depth: 2,
+        time: 0.0,
+        ray_epsilon: atlas.radius * 1e-4,
+    };
+    let mut turntable = Vec::new();
+    for k in 0..8 {
+        let azimuth = 45.0 * k as f32;
+        let (a, e) = (azimuth.to_radians(), 20f32.to_radians());
+        let dir = Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
+        let eye = atlas.centre + dir * atlas.radius * 4.0;
+        let view = View {
+            camera: Pinhole::look_at(eye, atlas.centre, Vec3::Y, 30.0, 192, 192)?,
+            meshes: vec![Arc::new(mesh.clone())],
+            surfaces: vec![Surface::Diffuse(None)],
+        };
+        let exact = trompe::octahedral::turntable::exact_unshadowed(&view, lighting, &settings)?;
+        let file = format!("octahedral-turn-{k}.png");
+        io::write_png(&out.join(&file), &exact.color)?;
+        turntable.push((file, format!("azimuth {azimuth}°, exact")));
+    }
+    let sun = lighting.light.unwrap_or(Light {
+        direction: Vec3::Y,
+        irradiance: Vec3::ZERO,
+    });
+    let eye = atlas.centre + Vec3::new(0.8, 0.35, 0.5).normalize() * atlas.radius * 4.0;
+    super::turn::write_page(
+        out,
+        PAGE,
+        &bytes,
+        (eye.to_array(), atlas.centre.to_array()),
+        &super::turn::PageLighting {
+            sky: lighting.environment.radiance(Vec3::Y).to_array(),
+            sun_direction: sun.direction.to_array(),
+            sun_irradiance: sun.irradiance.to_array(),
+        },
+        &turntable,
+    )
 }
 
 /// One score of a turntable view.
