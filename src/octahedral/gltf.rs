@@ -371,6 +371,63 @@ pub fn encode(
     Ok((bytes, sidecar))
 }
 
+/// What a `.glb` holds when trompe baked an octahedral impostor into it: its layout and how its
+/// textures are encoded (`None` for any other glTF binary). Reads the JSON chunk alone.
+pub fn read_layout(path: &Path) -> Result<Option<(Layout, TextureFormat)>, OctahedralFileError> {
+    let invalid = |reason: String| OctahedralFileError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, reason),
+    };
+    let bytes = std::fs::read(path).map_err(|source| OctahedralFileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let glb = ::gltf::binary::Glb::from_slice(&bytes).map_err(|e| invalid(e.to_string()))?;
+    let doc: serde_json::Value =
+        serde_json::from_slice(&glb.json).map_err(|e| invalid(e.to_string()))?;
+    let materials = doc["materials"]
+        .as_array()
+        .map(Vec::as_slice)
+        .unwrap_or(&[]);
+    let Some(extra) = materials
+        .iter()
+        .find_map(|m| m["extras"].get("trompe_octahedral"))
+    else {
+        return Ok(None);
+    };
+    let layout: Layout = serde_json::from_value(extra.clone())
+        .map_err(|e| invalid(format!("materials[].extras.trompe_octahedral: {e}")))?;
+    let format = match doc["images"][0]["mimeType"].as_str() {
+        Some("image/ktx2") => TextureFormat::Ktx2,
+        _ => TextureFormat::Png,
+    };
+    Ok(Some((layout, format)))
+}
+
+impl std::fmt::Display for Layout {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let side = self.grid.n * self.frame_size;
+        writeln!(f, "octahedral impostor (layout version {})", self.version)?;
+        writeln!(
+            f,
+            "  frames: {n} × {n} ({coverage:?}), {fs} texels a side, atlas {side} × {side}",
+            n = self.grid.n,
+            coverage = self.grid.coverage,
+            fs = self.frame_size,
+        )?;
+        writeln!(
+            f,
+            "  bounding sphere: centre ({:.4}, {:.4}, {:.4}), radius {:.4}",
+            self.centre[0], self.centre[1], self.centre[2], self.radius
+        )?;
+        write!(
+            f,
+            "  switch distance: {:.2} units (one texel a pixel at 1080 rows, 60° field of view)",
+            self.switch_distance
+        )
+    }
+}
+
 /// Loads the atlas of a `.glb` trompe wrote: its layout and its three maps (the normal and
 /// depth unpacked, so within [`super::packing`]'s bounds of the bake).
 pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {

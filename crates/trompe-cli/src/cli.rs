@@ -728,6 +728,21 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         }
         Command::Info {
             mesh: Some(mesh), ..
+        } if has_extension(&mesh, "glb")
+            && trompe::octahedral::gltf::read_layout(&mesh)?.is_some() =>
+        {
+            let Some((layout, format)) = trompe::octahedral::gltf::read_layout(&mesh)? else {
+                bail!("{}: not an octahedral impostor", mesh.display());
+            };
+            let text = format!("{layout}\n  textures: {format:?}, embedded");
+            let mut result = serde_json::json!(layout);
+            result["kind"] = "octahedral".into();
+            result["path"] = serde_json::json!(mesh);
+            result["texture_format"] = format!("{format:?}").to_lowercase().into();
+            crate::output::report("info", &text, &result)?;
+        }
+        Command::Info {
+            mesh: Some(mesh), ..
         } => {
             let loaded = trompe::geom::io::load(&mesh)?;
             let summary = loaded.summary(&mesh);

@@ -264,6 +264,20 @@ fn a_glb_output_is_the_whole_bake_and_exr_adds_the_float_maps() {
     assert_eq!(names, ["duck.glb"]);
     let atlas = trompe::octahedral::gltf::load(&glb).unwrap();
     assert_eq!((atlas.settings.grid.n, atlas.side()), (4, 64));
+    // `info` reads its layout.
+    let o = trompe(&["info", glb.to_str().unwrap()]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success() && said.contains("4 × 4") && said.contains("Png"),
+        "{said}{}",
+        stderr(&o)
+    );
+    // --ktx2 sets the .glb's textures: refused where no .glb is written.
+    fails_cleanly(
+        &bake(&["--ktx2"], &d.join("k.json")),
+        "--ktx2 sets the .glb's textures",
+    );
+    assert!(!d.join("k.json").exists());
     // --exr adds the float maps beside a sidecar; baked again without, they go.
     let json = d.join("duck.json");
     let o = bake(&["--exr"], &json);
