@@ -298,6 +298,6 @@ mod tests {
                 ..
             }
         ));
-        assert!(layout.width % 4 == 0 && layout.height % 4 == 0);
+        assert!(layout.width.is_multiple_of(4) && layout.height.is_multiple_of(4));
     }
 }
