@@ -59,29 +59,22 @@ fn png_bytes(
 /// An image of data in `[0, 1]` (not colour: occlusion, roughness …) as an 8-bit RGB PNG, stored
 /// linearly, as glTF's data textures are.
 pub fn encode_png_data(image: &Image<Vec3>, path: &Path) -> Result<Vec<u8>, FrameError> {
-    let pixels: Vec<u8> = image
-        .pixels()
-        .iter()
-        .flat_map(|p| {
-            p.to_array()
-                .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        })
-        .collect();
+    let pixels = data_bytes(image.pixels().iter().map(|p| p.to_array()));
     png_bytes(&pixels, image.size(), image::ExtendedColorType::Rgb8, path)
 }
 
 /// An image of four data channels in `[0, 1]` as an 8-bit RGBA PNG, stored linearly (alpha
 /// too): packed maps such as the octahedral normal-depth texture.
 pub fn encode_png_data_rgba(image: &Image<Rgba>, path: &Path) -> Result<Vec<u8>, FrameError> {
-    let pixels: Vec<u8> = image
-        .pixels()
-        .iter()
-        .flat_map(|p| {
-            p.to_array()
-                .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        })
-        .collect();
+    let pixels = data_bytes(image.pixels().iter().map(|p| p.to_array()));
     png_bytes(&pixels, image.size(), image::ExtendedColorType::Rgba8, path)
+}
+
+/// Data values in `[0, 1]` as bytes, rounded to the nearest of 256 steps (clamped).
+pub fn data_bytes<const N: usize>(texels: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
+    texels
+        .flat_map(|t| t.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .collect()
 }
 
 /// Writes an image of data in `[0, 1]` as a linear 8-bit RGB PNG ([`encode_png_data`]).

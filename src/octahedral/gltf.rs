@@ -236,14 +236,7 @@ pub fn encode_maps(
         }));
     }
     let frame_size = atlas.settings.frame_size;
-    let linear = |img: &Image<Rgba>| -> Vec<u8> {
-        (img.pixels().iter())
-            .flat_map(|p| {
-                p.to_array()
-                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            })
-            .collect()
-    };
+    let linear = |img: &Image<Rgba>| io::data_bytes(img.pixels().iter().map(|p| p.to_array()));
     let encode = |map: &Image<Rgba>, transfer: Transfer| -> Result<Vec<u8>, OctahedralFileError> {
         let texels: Vec<(u32, Vec<u8>)> = super::mips::frame_mips(map, frame_size)?
             .iter()
@@ -371,37 +364,57 @@ pub fn encode(
     Ok((bytes, sidecar))
 }
 
-/// What a `.glb` holds when trompe baked an octahedral impostor into it: its layout and how its
-/// textures are encoded (`None` for any other glTF binary). Reads the JSON chunk alone.
-pub fn read_layout(path: &Path) -> Result<Option<(Layout, TextureFormat)>, OctahedralFileError> {
-    let invalid = |reason: String| OctahedralFileError::Io {
+/// A `.glb` read far enough to find an octahedral impostor's layout: its JSON, its binary
+/// chunk and the layout (`None` for any other glTF binary).
+struct Opened {
+    doc: serde_json::Value,
+    blob: Vec<u8>,
+    layout: Option<Layout>,
+}
+
+/// The error of `path` holding invalid data, for `reason`.
+fn invalid(path: &Path, reason: String) -> OctahedralFileError {
+    OctahedralFileError::Io {
         path: path.to_path_buf(),
         source: std::io::Error::new(std::io::ErrorKind::InvalidData, reason),
-    };
+    }
+}
+
+fn open(path: &Path) -> Result<Opened, OctahedralFileError> {
     let bytes = std::fs::read(path).map_err(|source| OctahedralFileError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    let glb = ::gltf::binary::Glb::from_slice(&bytes).map_err(|e| invalid(e.to_string()))?;
+    let glb = ::gltf::binary::Glb::from_slice(&bytes).map_err(|e| invalid(path, e.to_string()))?;
     let doc: serde_json::Value =
-        serde_json::from_slice(&glb.json).map_err(|e| invalid(e.to_string()))?;
+        serde_json::from_slice(&glb.json).map_err(|e| invalid(path, e.to_string()))?;
+    let blob = glb.bin.map(|b| b.into_owned()).unwrap_or_default();
     let materials = doc["materials"]
         .as_array()
         .map(Vec::as_slice)
         .unwrap_or(&[]);
-    let Some(extra) = materials
+    let layout = match materials
         .iter()
         .find_map(|m| m["extras"].get("trompe_octahedral"))
-    else {
-        return Ok(None);
+    {
+        None => None,
+        Some(extra) => Some(
+            serde_json::from_value(extra.clone())
+                .map_err(|e| invalid(path, format!("materials[].extras.trompe_octahedral: {e}")))?,
+        ),
     };
-    let layout: Layout = serde_json::from_value(extra.clone())
-        .map_err(|e| invalid(format!("materials[].extras.trompe_octahedral: {e}")))?;
-    let format = match doc["images"][0]["mimeType"].as_str() {
+    Ok(Opened { doc, blob, layout })
+}
+
+/// What a `.glb` holds when trompe baked an octahedral impostor into it: its layout and how its
+/// textures are encoded (`None` for any other glTF binary).
+pub fn read_layout(path: &Path) -> Result<Option<(Layout, TextureFormat)>, OctahedralFileError> {
+    let opened = open(path)?;
+    let format = match opened.doc["images"][0]["mimeType"].as_str() {
         Some("image/ktx2") => TextureFormat::Ktx2,
         _ => TextureFormat::Png,
     };
-    Ok(Some((layout, format)))
+    Ok(opened.layout.map(|l| (l, format)))
 }
 
 impl std::fmt::Display for Layout {
@@ -431,33 +444,14 @@ impl std::fmt::Display for Layout {
 /// Loads the atlas of a `.glb` trompe wrote: its layout and its three maps (the normal and
 /// depth unpacked, so within [`super::packing`]'s bounds of the bake).
 pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {
-    let invalid = |reason: String| OctahedralFileError::Io {
-        path: path.to_path_buf(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidData, reason),
-    };
-    let bytes = std::fs::read(path).map_err(|source| OctahedralFileError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let glb = ::gltf::binary::Glb::from_slice(&bytes).map_err(|e| invalid(e.to_string()))?;
-    let doc: serde_json::Value =
-        serde_json::from_slice(&glb.json).map_err(|e| invalid(e.to_string()))?;
-    let blob = glb.bin.as_deref().unwrap_or(&[]);
-    let materials = doc["materials"]
-        .as_array()
-        .map(Vec::as_slice)
-        .unwrap_or(&[]);
-    let Some(extra) = materials
-        .iter()
-        .find_map(|m| m["extras"].get("trompe_octahedral"))
-    else {
+    let invalid = |reason: String| invalid(path, reason);
+    let Opened { doc, blob, layout } = open(path)?;
+    let Some(layout) = layout else {
         return Err(invalid(
             "no material has extras.trompe_octahedral: not an octahedral impostor trompe baked"
                 .into(),
         ));
     };
-    let layout: Layout = serde_json::from_value(extra.clone())
-        .map_err(|e| invalid(format!("materials[].extras.trompe_octahedral: {e}")))?;
     if layout.format != FORMAT {
         return Err(invalid(format!(
             "format {:?} is not {FORMAT:?}",

@@ -3,12 +3,12 @@
 // names, and checks that it draws the impostor: no page error, and the canvas not one flat
 // colour. Usage: node web/test/page.mjs REPORT/octahedral-turn.html
 //
-// Chromium is /usr/bin/chromium unless CHROMIUM names another.
+// Chromium as web/test/browser.mjs starts it.
 
 import { readFile } from 'node:fs/promises';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 
 const page_path = process.argv[2];
 if (!page_path) {
@@ -16,14 +16,7 @@ if (!page_path) {
   process.exit(2);
 }
 const three = resolve(dirname(fileURLToPath(import.meta.url)), '..', 'node_modules', 'three');
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: [
-    '--headless', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader',
-    '--enable-unsafe-swiftshader', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync',
-  ],
-});
+const browser = await launch();
 let failed = false;
 try {
   const page = await browser.newPage();
