@@ -553,6 +553,19 @@ mod tests {
         bake(&mesh, &crate::scene::Surface::Diffuse(None), settings).unwrap()
     }
 
+    /// A 96² view of `atlas` from above and aside.
+    fn camera_on(atlas: &OctahedralAtlas) -> crate::camera::Pinhole {
+        crate::camera::Pinhole::look_at(
+            atlas.centre + glam::Vec3::new(1.0, 2.5, 3.0),
+            atlas.centre,
+            glam::Vec3::Y,
+            35.0,
+            96,
+            96,
+        )
+        .unwrap()
+    }
+
     #[test]
     fn the_glb_holds_its_three_maps_and_its_layout() {
         let atlas = ball(16);
@@ -626,15 +639,7 @@ mod tests {
             assert!((c - c2).abs().max_element() < 1.0 / 64.0, "{c} {c2}");
         }
         // The renders agree: every pixel within FLIP's noise of 8-bit maps.
-        let camera = crate::camera::Pinhole::look_at(
-            atlas.centre + glam::Vec3::new(1.0, 2.5, 3.0),
-            atlas.centre,
-            glam::Vec3::Y,
-            35.0,
-            96,
-            96,
-        )
-        .unwrap();
+        let camera = camera_on(&atlas);
         let lighting = crate::scene::Lighting {
             environment: crate::frame::envmap::EnvMap::constant(glam::Vec3::splat(0.3)),
             light: Some(crate::scene::Light {
@@ -700,15 +705,7 @@ mod tests {
             assert_eq!(reader.color_model(), Some(::ktx2::ColorModel::UASTC));
         }
         let back = load(&path).unwrap();
-        let camera = crate::camera::Pinhole::look_at(
-            atlas.centre + glam::Vec3::new(1.0, 2.5, 3.0),
-            atlas.centre,
-            glam::Vec3::Y,
-            35.0,
-            96,
-            96,
-        )
-        .unwrap();
+        let camera = camera_on(&atlas);
         let lighting = crate::scene::Lighting {
             environment: crate::frame::envmap::EnvMap::constant(glam::Vec3::splat(0.3)),
             light: None,
