@@ -1,8 +1,8 @@
 // Validates glTF files with the Khronos glTF validator; exits 1 if any has an error or a warning.
 // Usage: node validate_gltf.js FILE.glb... (with gltf-validator installed beside it or on NODE_PATH)
 //
-// The released validator (2.0.0-dev.3.10) does not know KHR_texture_basisu (KhronosGroup/
-// glTF-Validator issue 177): in a file that uses it, the warnings that say so — the extension
+// The released validator (2.0.0-dev.3.10) does not know KHR_texture_basisu (an open request on
+// KhronosGroup/glTF-Validator): in a file that uses it, the warnings that say so — the extension
 // unsupported, `image/ktx2` not among the MIME types it knows, the KTX2 image not recognised —
 // are listed but not counted; every other warning is. The KTX2 images themselves are checked by
 // trompe's tests (the ktx2 crate reads their levels and format back).
