@@ -377,9 +377,15 @@ impl BakeArgs {
         })?;
         let bake_time = start.elapsed();
         let format = self.texture_format();
+        // KTX2 encoding takes seconds at 2048²: said while it runs.
+        let save_glb = || {
+            with_spinner("encoding the .glb's textures", || {
+                trompe::octahedral::gltf::save(&atlas, &glb, format)
+            })
+            .context("writing the glTF")
+        };
         if alone {
-            let sidecar =
-                trompe::octahedral::gltf::save(&atlas, &glb, format).context("writing the glTF")?;
+            let sidecar = save_glb()?;
             return Ok(file::OctahedralReport::new(
                 &atlas,
                 sidecar,
@@ -391,7 +397,7 @@ impl BakeArgs {
             file::save(&atlas, &self.output, self.floats()).context("writing the atlas")?;
         let mut written = file::written(&self.output, &sidecar);
         if self.glb {
-            trompe::octahedral::gltf::save(&atlas, &glb, format).context("writing the glTF")?;
+            save_glb()?;
             written.push(glb);
         }
         Ok(file::OctahedralReport::new(
