@@ -1,8 +1,9 @@
 //! A depth-image impostor (pinhole, orthographic, SPOC or graph camera; paper 1 §3–5) as a glTF
 //! 2.0 binary that any viewer or engine loads without trompe: its proxy geometry is the
 //! impostor's own surface — a grid mesh through the world positions of its covered texels, at
-//! most [`MAX_GRID`] vertices a side — textured with the colour map (embedded PNG, alpha =
-//! coverage, masked); the camera and maps are in the node's `extras.trompe_impostor`, the
+//! most [`MAX_GRID`] vertices a side, quantized and meshopt-compressed by default
+//! ([`GeometryEncoding`], `geom::io::compressed`) — textured with the colour map (embedded PNG,
+//! alpha = coverage, masked); the camera and maps are in the node's `extras.trompe_impostor`, the
 //! sidecar's fields as `impostor::file` documents them, whose `exr` names the OpenEXR file of
 //! every map (`gd`, normals, face normals, positions, ids) beside the `.glb` — glTF images are
 //! PNG or JPEG and cannot hold them. Of a layered impostor the surface is its first layer's;
@@ -15,6 +16,8 @@
 use super::Impostor;
 use super::file::ImpostorFileError;
 use crate::frame::{Image, Rgba};
+pub use crate::geom::io::compressed::GeometryEncoding;
+use crate::geom::io::compressed::{MeshStreams, write_mesh};
 use glam::Vec3;
 use std::path::Path;
 
@@ -108,45 +111,25 @@ impl SurfaceGrid {
     }
 }
 
-/// The GLB of `grid` textured with `color` (embedded as PNG), its node's `extras` holding
-/// `extras` under the key `key`; `generator` names what made it.
+/// The GLB of `grid` textured with `color` (embedded as PNG), its geometry stored as `encoding`
+/// says, its node's `extras` holding `extras` under the key `key`; `generator` names what made
+/// it.
 pub fn surface_glb(
     grid: &SurfaceGrid,
     color: &Image<Rgba>,
+    encoding: GeometryEncoding,
     (key, extras): (&str, serde_json::Value),
     generator: &str,
 ) -> Result<Vec<u8>, ::gltf::Error> {
+    let other = |e: String| ::gltf::Error::Io(std::io::Error::other(e));
     let png = crate::frame::io::encode_png(color, Path::new("the colour map"))
-        .map_err(|e| ::gltf::Error::Io(std::io::Error::other(e.to_string())))?;
+        .map_err(|e| other(e.to_string()))?;
     let (_, triangles) = grid.triangles();
     let present: Vec<_> = grid.vertices.iter().flatten().collect();
-    let count = present.len();
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let positions: Vec<Vec3> = present.iter().map(|v| v.0).collect();
+    let normals: Vec<Vec3> = present.iter().map(|v| v.1).collect();
+    let uvs: Vec<[f32; 2]> = present.iter().map(|v| v.2).collect();
     let mut bin: Vec<u8> = Vec::new();
-    for (p, _, _) in &present {
-        (lo, hi) = (lo.min(*p), hi.max(*p));
-        bin.extend(p.to_array().iter().flat_map(|v| v.to_le_bytes()));
-    }
-    let normals_at = bin.len();
-    for (_, n, _) in &present {
-        let n = n.try_normalize().unwrap_or(Vec3::Z);
-        bin.extend(n.to_array().iter().flat_map(|v| v.to_le_bytes()));
-    }
-    let uvs_at = bin.len();
-    for (_, _, uv) in &present {
-        bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
-    }
-    let indices_at = bin.len();
-    for i in &triangles {
-        bin.extend(i.to_le_bytes());
-    }
-    let image_at = bin.len().next_multiple_of(4);
-    bin.resize(image_at, 0);
-    bin.extend_from_slice(&png);
-    let length = bin.len();
-    if count == 0 {
-        (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
-    }
     let mut node = serde_json::json!({ "name": generator, "extras": { key: extras } });
     let mut doc = serde_json::json!({
         "asset": { "version": "2.0", "generator": generator },
@@ -164,44 +147,58 @@ pub fn surface_glb(
         "textures": [{ "source": 0, "sampler": 0 }],
         "samplers": [{ "magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071 }],
         "images": [{ "bufferView": 0, "mimeType": "image/png" }],
-        "buffers": [{ "byteLength": length }],
-        "bufferViews": [
-            { "buffer": 0, "byteOffset": image_at, "byteLength": png.len() }
-        ],
+        "bufferViews": [],
     });
+    let mut buffers = Vec::new();
     // A mesh only when there is a triangle (glTF has no empty primitive).
     if !triangles.is_empty() {
+        let streams = MeshStreams {
+            positions: &positions,
+            normals: &normals,
+            uvs: &uvs,
+            indices: &triangles,
+        };
+        let mesh =
+            write_mesh(&streams, encoding, &mut bin, 1, 0).map_err(|e| other(e.to_string()))?;
         node["mesh"] = 0.into();
+        if let Some((translation, scale)) = mesh.placement {
+            node["translation"] = serde_json::json!(translation.to_array());
+            node["scale"] = serde_json::json!([scale, scale, scale]);
+        }
         doc["meshes"] = serde_json::json!([{ "primitives": [{
-            "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 },
-            "indices": 3,
+            "attributes": mesh.attributes,
+            "indices": mesh.indices,
             "material": 0
         }]}]);
-        let views = doc["bufferViews"].as_array_mut();
-        if let Some(views) = views {
-            views.extend([
-                serde_json::json!({ "buffer": 0, "byteOffset": 0, "byteLength": normals_at, "target": 34962 }),
-                serde_json::json!({ "buffer": 0, "byteOffset": normals_at, "byteLength": uvs_at - normals_at, "target": 34962 }),
-                serde_json::json!({ "buffer": 0, "byteOffset": uvs_at, "byteLength": indices_at - uvs_at, "target": 34962 }),
-                serde_json::json!({ "buffer": 0, "byteOffset": indices_at, "byteLength": triangles.len() * 4, "target": 34963 }),
-            ]);
+        doc["accessors"] = mesh.accessors.into();
+        doc["bufferViews"] = mesh.buffer_views.into();
+        buffers = mesh.buffers;
+        if !mesh.extensions.is_empty() {
+            doc["extensionsUsed"] = serde_json::json!(mesh.extensions);
+            doc["extensionsRequired"] = serde_json::json!(mesh.extensions);
         }
-        doc["accessors"] = serde_json::json!([
-            { "bufferView": 1, "componentType": 5126, "count": count, "type": "VEC3",
-              "min": lo.to_array(), "max": hi.to_array() },
-            { "bufferView": 2, "componentType": 5126, "count": count, "type": "VEC3" },
-            { "bufferView": 3, "componentType": 5126, "count": count, "type": "VEC2" },
-            { "bufferView": 4, "componentType": 5125, "count": triangles.len(), "type": "SCALAR" }
-        ]);
     }
+    let image_at = bin.len().next_multiple_of(4);
+    bin.resize(image_at, 0);
+    bin.extend_from_slice(&png);
+    let image = serde_json::json!({ "buffer": 0, "byteOffset": image_at, "byteLength": png.len() });
+    if let Some(views) = doc["bufferViews"].as_array_mut() {
+        views.insert(0, image);
+    }
+    buffers.insert(0, serde_json::json!({ "byteLength": bin.len() }));
+    doc["buffers"] = buffers.into();
     doc["nodes"] = serde_json::json!([node]);
-    let json = serde_json::to_vec(&doc).map_err(|e| ::gltf::Error::Io(std::io::Error::other(e)))?;
+    let json = serde_json::to_vec(&doc).map_err(|e| other(e.to_string()))?;
     crate::geom::io::glb_bytes(json, bin)
 }
 
 /// Writes `out` (a `.glb`) from the impostor whose sidecar is `json` (its maps checked on load
-/// as `impostor::file::load` checks them).
-pub fn export(json: &Path, out: &Path) -> Result<(), ImpostorFileError> {
+/// as `impostor::file::load` checks them), its surface stored as `encoding` says.
+pub fn export(
+    json: &Path,
+    out: &Path,
+    encoding: GeometryEncoding,
+) -> Result<(), ImpostorFileError> {
     let impostor = super::file::load(json)?;
     let io = |path: &Path| {
         let path = path.to_path_buf();
@@ -221,6 +218,7 @@ pub fn export(json: &Path, out: &Path) -> Result<(), ImpostorFileError> {
     let bytes = surface_glb(
         &grid,
         &impostor.color_image(),
+        encoding,
         ("trompe_impostor", sidecar),
         &generator,
     )
@@ -253,7 +251,7 @@ mod tests {
         let json = dir.join("ball.json");
         crate::impostor::file::save(&impostor, &json).unwrap();
         let glb = dir.join("ball.glb");
-        export(&json, &glb).unwrap();
+        export(&json, &glb, GeometryEncoding::Float).unwrap();
         let (doc, buffers, images) = ::gltf::import(&glb).unwrap();
         assert_eq!((images[0].width, images[0].height), (64, 64));
         let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
@@ -279,5 +277,84 @@ mod tests {
             serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         assert_eq!(extras["trompe_impostor"], sidecar);
         assert_eq!(extras["trompe_impostor"]["camera"]["type"], "spoc");
+    }
+
+    #[test]
+    fn a_compressed_surface_loads_back_as_the_float_one_within_its_quantization() {
+        let mesh = crate::geom::icosphere(3);
+        let camera = ImpostorCamera::around(
+            ViewCamera::Spoc(None),
+            Vec3::new(0.0, 0.5, 1.5),
+            Vec3::ZERO,
+            0.5,
+            0.5,
+            48,
+        )
+        .unwrap();
+        let impostor = crate::impostor::build(camera, &mesh, 0, &|_| Vec3::ONE).unwrap();
+        let dir = crate::test_scratch::scratch("impostor_glb_compressed");
+        let json = dir.join("ball.json");
+        crate::impostor::file::save(&impostor, &json).unwrap();
+        let (plain, packed) = (dir.join("plain.glb"), dir.join("packed.glb"));
+        export(&json, &plain, GeometryEncoding::Float).unwrap();
+        export(&json, &packed, GeometryEncoding::Compressed).unwrap();
+        let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+        assert!(
+            size(&packed) * 3 < size(&plain),
+            "{} against {}",
+            size(&packed),
+            size(&plain)
+        );
+        // trompe's own loader decodes the extensions the `gltf` crate refuses.
+        let a = crate::geom::io::load(&plain).unwrap().mesh;
+        let b = crate::geom::io::load(&packed).unwrap().mesh;
+        assert_eq!(a.triangles.len(), b.triangles.len());
+        // Every decoded vertex is a written one, within half a 16-bit step of the longest side
+        // (one step of slack for the float arithmetic), with its UV and normal.
+        let side = (0..3)
+            .map(|k| {
+                let c = a.positions.iter().map(|p| p[k]);
+                c.clone().fold(f32::MIN, f32::max) - c.fold(f32::MAX, f32::min)
+            })
+            .fold(0.0, f32::max);
+        let tolerance = side / 65535.0 * 1.5;
+        let a_uvs = a.uvs.as_ref().unwrap();
+        let b_uvs = b.uvs.as_ref().unwrap();
+        let matched: Vec<usize> = b
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let (j, d) = a
+                    .positions
+                    .iter()
+                    .map(|q| q.distance(*p))
+                    .enumerate()
+                    .min_by(|x, y| x.1.total_cmp(&y.1))
+                    .unwrap();
+                assert!(
+                    d <= tolerance,
+                    "vertex {i} is {d} from the nearest written one"
+                );
+                assert!((a_uvs[j] - b_uvs[i]).abs().max_element() <= 1.0 / 65535.0);
+                assert!(a.normals[j].dot(b.normals[i]) > 0.9999 - 1.0 / 127.0);
+                j
+            })
+            .collect();
+        // The same triangles, in another order.
+        let sorted = |t: [u32; 3]| {
+            let mut t = t;
+            t.sort_unstable();
+            t
+        };
+        let mut written: Vec<_> = a.triangles.iter().map(|t| sorted(*t)).collect();
+        let mut read: Vec<_> = b
+            .triangles
+            .iter()
+            .map(|t| sorted(t.map(|i| matched[i as usize] as u32)))
+            .collect();
+        written.sort_unstable();
+        read.sort_unstable();
+        assert_eq!(written, read);
     }
 }

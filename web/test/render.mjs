@@ -4,13 +4,12 @@
 //   node web/test/render.mjs --glb BAKE.glb --views views.json --out DIR
 //
 // views.json: a list of views as render.html reads them. Prints the WebGL renderer's name.
-// Chromium as web/test/browser.mjs starts it.
+// Chromium as web/test/browser.mjs starts it, the files as web/test/serve.mjs serves them.
 
-import { createServer } from 'node:http';
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
-import { extname, join, normalize, resolve, dirname } from 'node:path';
-import { fileURLToPath } from 'node:url';
+import { join } from 'node:path';
 import { launch } from './browser.mjs';
+import { serve } from './serve.mjs';
 
 const args = Object.fromEntries(
   process.argv.slice(2).reduce((pairs, a, i, all) => (a.startsWith('--') ? [...pairs, [a.slice(2), all[i + 1]]] : pairs), []),
@@ -21,28 +20,7 @@ for (const need of ['glb', 'views', 'out']) {
     process.exit(2);
   }
 }
-const web = resolve(dirname(fileURLToPath(import.meta.url)), '..');
-const types = {
-  '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript',
-  '.glb': 'model/gltf-binary', '.wasm': 'application/wasm',
-};
-
-// The runtime, three.js from node_modules, and the bake at /bake.glb; nothing else.
-const server = createServer(async (req, res) => {
-  try {
-    const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
-    const file = path === '/bake.glb' ? resolve(args.glb) : join(web, normalize(path));
-    if (path !== '/bake.glb' && !file.startsWith(web)) throw new Error('outside');
-    const body = await readFile(file);
-    res.writeHead(200, { 'content-type': types[extname(file)] || 'application/octet-stream' });
-    res.end(body);
-  } catch {
-    res.writeHead(404);
-    res.end();
-  }
-});
-await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
-const url = `http://127.0.0.1:${server.address().port}`;
+const { server, url } = await serve(args.glb);
 
 const browser = await launch();
 let failed = false;

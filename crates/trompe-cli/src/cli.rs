@@ -309,6 +309,12 @@ pub struct BakeArgs {
     /// instead of PNG.
     #[arg(long)]
     ktx2: bool,
+    /// Without --octahedral: how the .glb stores the surface — compressed (16-bit positions,
+    /// 8-bit normals, meshopt codecs: glTF's KHR_mesh_quantization and EXT_meshopt_compression,
+    /// which three.js, Babylon.js, glTFast and Godot read) or float (plain glTF every reader
+    /// loads).
+    #[arg(long, value_enum, default_value_t = GeometryArg::Compressed)]
+    geometry: GeometryArg,
     /// With --octahedral and -o NAME.json or a batch: also write the normal and depth maps as
     /// 32-bit float OpenEXR files (NAME-normal.exr, NAME-depth.exr), for pipelines that want
     /// them unquantized.
@@ -324,6 +330,24 @@ pub struct BakeArgs {
     /// the first layer's texels).
     #[arg(long, default_value = "1")]
     layers: trompe::impostor::Layers,
+}
+
+/// `--geometry` of `impostor bake` and `impostor export`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum GeometryArg {
+    /// Quantized and meshopt-compressed.
+    Compressed,
+    /// 32-bit floats.
+    Float,
+}
+
+impl From<GeometryArg> for trompe::impostor::gltf::GeometryEncoding {
+    fn from(arg: GeometryArg) -> Self {
+        match arg {
+            GeometryArg::Compressed => Self::Compressed,
+            GeometryArg::Float => Self::Float,
+        }
+    }
 }
 
 /// `--camera` of `impostor`.
@@ -550,7 +574,7 @@ impl BakeArgs {
             bake(&subject, &settings, &self.output)
         })?;
         if self.glb {
-            trompe::impostor::gltf::export(&self.output, &glb)
+            trompe::impostor::gltf::export(&self.output, &glb, self.geometry.into())
                 .with_context(|| format!("writing {}", glb.display()))?;
             crate::output::note(format_args!("wrote {}", glb.display()));
         }

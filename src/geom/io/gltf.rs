@@ -16,6 +16,8 @@ use std::sync::Arc;
 /// Loads a `.gltf` or `.glb` file.
 pub fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
     let bytes = read_file(path)?;
+    // Compressed geometry (quantized, meshopt) becomes plain glTF first: the crate refuses it.
+    let bytes = super::compressed::decode_glb(path, &bytes)?.unwrap_or(bytes);
     check_references(path, &bytes)?;
     // The last line of defence: a decoder panic on a file no check above foresaw becomes an
     // error naming the file, not an abort.

@@ -5,6 +5,7 @@
 //! as stored, and warnings. Nothing here panics on bad input, and no allocation is sized by a
 //! count the file declares without first checking the file holds that much data.
 
+pub mod compressed;
 mod gltf;
 mod obj;
 mod ply;

@@ -52,6 +52,10 @@ pub struct ExportArgs {
     /// The .glb to write.
     #[arg(short, long)]
     output: PathBuf,
+    /// For an impostor's surface: compressed (16-bit positions, 8-bit normals, meshopt codecs:
+    /// KHR_mesh_quantization and EXT_meshopt_compression) or float (plain glTF).
+    #[arg(long, value_enum, default_value_t = super::GeometryArg::Compressed)]
+    geometry: super::GeometryArg,
 }
 
 impl ExportArgs {
@@ -71,7 +75,8 @@ impl ExportArgs {
         let exported = if octahedral {
             trompe::octahedral::gltf::export(&self.input, &self.output).map_err(anyhow::Error::from)
         } else {
-            trompe::impostor::gltf::export(&self.input, &self.output).map_err(anyhow::Error::from)
+            trompe::impostor::gltf::export(&self.input, &self.output, self.geometry.into())
+                .map_err(anyhow::Error::from)
         };
         exported.with_context(|| format!("exporting {}", self.input.display()))?;
         crate::output::note(format_args!("wrote {}", self.output.display()));

@@ -65,6 +65,12 @@ fn main() {
             web::NEEDS,
         ),
         trial(
+            "web::a_compressed_surface_reads_in_threejs_as_trompe_reads_it",
+            web::a_compressed_surface_reads_in_threejs_as_trompe_reads_it,
+            web::ready(),
+            web::NEEDS,
+        ),
+        trial(
             "gpu::info_names_the_adapter_it_opens",
             info_names_the_adapter_it_opens,
             adapter,

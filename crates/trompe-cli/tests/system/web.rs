@@ -5,7 +5,8 @@
 //! is scored by FLIP against trompe's CPU reference of the same bake and camera
 //! (`OctahedralAtlas::render_cutout` of the file loaded back) and against the exact render of
 //! the mesh. A distant view checks that the mip levels help: nearer the supersampled reference
-//! with them than without.
+//! with them than without. An impostor's compressed surface (quantized, meshopt) reads in
+//! three.js as trompe reads it.
 
 use super::common::{root, scratch};
 use glam::{Quat, Vec3};
@@ -281,4 +282,83 @@ pub fn distant_impostors_sample_their_mip_levels() {
         );
         assert!(with < without, "view {k}: mips {with} vs level 0 {without}");
     }
+}
+
+/// The SPOC bunny's surface exported compressed (`KHR_mesh_quantization`,
+/// `EXT_meshopt_compression`) and float: three.js's GLTFLoader with its meshopt decoder reads the
+/// compressed file's vertices where trompe's loader puts them, and both files hold the same
+/// triangles; the compressed one is at least 4 × smaller.
+pub fn a_compressed_surface_reads_in_threejs_as_trompe_reads_it() {
+    let dir = scratch("web_meshopt");
+    let mut sizes = Vec::new();
+    for geometry in ["float", "compressed"] {
+        let json = dir.join(format!("bunny-{geometry}.json"));
+        let out = super::common::trompe(&[
+            "impostor",
+            "bake",
+            "assets/meshes/bunny.obj",
+            "--resolution",
+            "256",
+            "--glb",
+            "--geometry",
+            geometry,
+            "-o",
+            json.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        sizes.push(std::fs::metadata(json.with_extension("glb")).unwrap().len());
+    }
+    println!(
+        "bunny's SPOC surface at 256²: {} bytes float, {} bytes compressed ({:.1} × smaller)",
+        sizes[0],
+        sizes[1],
+        sizes[0] as f64 / sizes[1] as f64
+    );
+    assert!(sizes[1] * 4 <= sizes[0], "{sizes:?}");
+    let read = |name: &str| -> serde_json::Value {
+        let glb = dir.join(format!("bunny-{name}.glb"));
+        let out_json = dir.join(format!("three-{name}.json"));
+        let run = std::process::Command::new("node")
+            .arg(root().join("web/test/mesh.mjs"))
+            .arg("--glb")
+            .arg(&glb)
+            .arg("--out")
+            .arg(&out_json)
+            .output()
+            .expect("node runs");
+        assert!(
+            run.status.success(),
+            "{}{}",
+            String::from_utf8_lossy(&run.stdout),
+            String::from_utf8_lossy(&run.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(out_json).unwrap()).unwrap()
+    };
+    let (float, compressed) = (read("float"), read("compressed"));
+    assert_eq!(float["triangles"], compressed["triangles"]);
+    let ours = trompe::geom::io::load(&dir.join("bunny-compressed.glb"))
+        .unwrap()
+        .mesh;
+    let theirs: Vec<f32> = serde_json::from_value(compressed["positions"].clone()).unwrap();
+    let uvs: Vec<f32> = serde_json::from_value(compressed["uvs"].clone()).unwrap();
+    assert_eq!(theirs.len(), ours.positions.len() * 3);
+    assert_eq!(compressed["triangles"], ours.triangles.len());
+    let ours_uv = ours.uvs.as_ref().unwrap();
+    let mut worst = (0.0f32, 0.0f32);
+    for (i, p) in ours.positions.iter().enumerate() {
+        let q = Vec3::from_slice(&theirs[3 * i..3 * i + 3]);
+        worst.0 = worst.0.max(p.distance(q));
+        // three.js keeps glTF's UV origin (top left) as trompe's loader does.
+        let uv = glam::Vec2::from_slice(&uvs[2 * i..2 * i + 2]);
+        worst.1 = worst.1.max((uv - ours_uv[i]).abs().max_element());
+    }
+    println!(
+        "three.js against trompe: positions {:.2e} apart, UVs {:.2e}",
+        worst.0, worst.1
+    );
+    assert!(worst.0 < 1e-5 && worst.1 < 1e-6, "{worst:?}");
 }
