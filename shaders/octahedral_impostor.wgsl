@@ -15,6 +15,9 @@
 // `vs_main` with `fs_depth` (the depth alone: a shadow map seen from a light's eye, or a depth
 // pre-pass), which keeps exactly the pixels fs_main keeps, at the same depth.
 //
+// Cross-fade: between the layout's `cross_fade` distances the impostor keeps a 4 × 4 dithered share
+// of its pixels (`lod_impostor_draws`, which an engine's mesh shader calls to keep the others).
+//
 // Bindings: the colour atlas (NAME.png, an sRGB texture: coverage in alpha) and the normal-depth
 // atlas (NAME-normal-depth.png, linear: rgb = n·½ + ½, a = depth), as the .glb embeds them, with
 // or without mip levels; a linear sampler; two uniforms. Mip levels are chosen from each pixel's
@@ -45,6 +48,10 @@ struct Impostor {
     // 0 for orthographic frames; else pinhole frames, the eye this many radii from the centre
     // (the sidecar's `projection`).
     distance: f32,
+    // The layout's `cross_fade` (start, end): the impostor draws a dithered share of the pixels
+    // between the two distances, all of them past the end (0, 0: always all).
+    fade_start: f32,
+    fade_end: f32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -196,6 +203,25 @@ fn lookup(frame: vec2<u32>, o: vec3<f32>, dir: vec3<f32>, lod: f32) -> Lookup {
     return out;
 }
 
+// The share of pixels the impostor draws `distance` from the eye (the bake's units: a world
+// distance over the instance's scale) — src/octahedral/lod.rs `impostor_share`.
+fn lod_share(distance: f32) -> f32 {
+    if (impostor.fade_end <= impostor.fade_start) {
+        return select(0.0, 1.0, distance >= impostor.fade_start);
+    }
+    return clamp((distance - impostor.fade_start) / (impostor.fade_end - impostor.fade_start), 0.0, 1.0);
+}
+
+// Whether the impostor draws the fragment at `frag` (its @builtin(position).xy) `distance` from
+// the eye: its 4 × 4 Bayer threshold below the share. An engine's mesh shader for the same object
+// discards exactly where this is true, so every pixel is drawn once across the fade.
+fn lod_impostor_draws(frag: vec2<f32>, distance: f32) -> bool {
+    let bayer = array<u32, 16>(0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
+    let p = vec2<u32>(floor(frag)) % vec2<u32>(4u);
+    let threshold = (f32(bayer[p.y * 4u + p.x]) + 0.5) / 16.0;
+    return threshold < lod_share(distance);
+}
+
 // Unit quaternion q (x, y, z, w) applied to v.
 fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     let u = cross(q.xyz, v) + q.w * v;
@@ -218,8 +244,10 @@ struct VertexOut {
     @location(4) @interpolate(flat) offset_scale: vec4<f32>,
 };
 
-// A camera-facing card of the bounding sphere's diameter; `corner` in [-1, 1]²; per instance,
-// its offset, object id, rotation (a unit quaternion) and scale.
+// A camera-facing card within the bounding sphere's diameter: `corner` in [-1, 1]², the card's
+// outline (the layout's `card`, counter-clockwise, drawn as a triangle strip in the order
+// 0, 1, n−1, 2, n−2, …; the square's four corners without one) in units of the radius; per
+// instance, its offset, object id, rotation (a unit quaternion) and scale.
 @vertex
 fn vs_main(
     @location(0) corner: vec2<f32>,
@@ -247,7 +275,9 @@ fn vs_main(
         let right = frame_right(-forward);
         let up = cross(-forward, right);
         let d = 4.0 * camera.near;
-        let world = camera.eye + forward * d + (right * corner.x + up * corner.y) * (100.0 * d);
+        // The outline's corners pushed onto the square's edge: wide enough whatever its shape.
+        let c = corner / max(max(abs(corner.x), abs(corner.y)), 1e-6);
+        let world = camera.eye + forward * d + (right * c.x + up * c.y) * (100.0 * d);
         local = unrotate(rotation, world - offset) / scale;
     }
     var out: VertexOut;
@@ -339,7 +369,11 @@ struct FragmentOut {
 
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {
-    let found = find(in, footprint_lod(in.local));
+    let lod = footprint_lod(in.local);
+    if (!lod_impostor_draws(in.clip.xy, length(in.eye - impostor.centre))) {
+        discard;
+    }
+    let found = find(in, lod);
     if (!found.keep) {
         discard;
     }
@@ -354,7 +388,11 @@ fn fs_main(in: VertexOut) -> FragmentOut {
 // The depth alone: a shadow map or a depth pre-pass (no colour target).
 @fragment
 fn fs_depth(in: VertexOut) -> @builtin(frag_depth) f32 {
-    let found = find(in, footprint_lod(in.local));
+    let lod = footprint_lod(in.local);
+    if (!lod_impostor_draws(in.clip.xy, length(in.eye - impostor.centre))) {
+        discard;
+    }
+    let found = find(in, lod);
     if (!found.keep) {
         discard;
     }

@@ -11,18 +11,21 @@
 // RGBA texture (linear: rgb = n·½ + ½ in the object's space, a = depth behind the frame's front
 // plane over the sphere's diameter) and occlusion-roughness-metalness.
 //
-// Instances carry any translation, rotation and uniform scale (an InstancedMesh's matrices,
-// times the mesh's own). Mip levels are chosen from each pixel's footprint and kept inside
+// The card is cut to the layout's `card` outline, which holds every view's silhouette, so the
+// pixels round the object where no frame can find it are never shaded. Instances carry any
+// translation, rotation and uniform scale (an InstancedMesh's matrices, times the mesh's own). Mip levels are chosen from each pixel's footprint and kept inside
 // their frame; trompe dilates every frame whole so coarse levels never pull in the background.
 
 import {
+  BufferGeometry,
+  Float32BufferAttribute,
   GLSL3,
   InstancedMesh,
   NoColorSpace,
-  PlaneGeometry,
   SRGBColorSpace,
   ShaderMaterial,
   Sphere,
+  Vector2,
   Vector3,
   Box3,
 } from 'three';
@@ -66,6 +69,26 @@ export async function loadOctahedralAtlas(url, loader) {
   return readOctahedralAtlas(await loader.loadAsync(url));
 }
 
+/**
+ * GLSL of the layout's dithered cross-fade (src/octahedral/lod.rs, conventions §8.5): between
+ * `uFade.x` and `uFade.y` (distances from the eye to the bounding sphere's centre, the bake's
+ * units) the impostor draws a share of the pixels chosen by a 4 × 4 Bayer matrix on
+ * gl_FragCoord, the mesh the others; `uFade = (0, 0)` gives every pixel to the impostor.
+ */
+export const CROSS_FADE_GLSL = `
+uniform vec2 uFade;
+float lodShare(float distance) {
+  if (uFade.y <= uFade.x) return distance >= uFade.x ? 1.0 : 0.0;
+  return clamp((distance - uFade.x) / (uFade.y - uFade.x), 0.0, 1.0);
+}
+bool lodImpostorDraws(vec2 fragCoord, float distance) {
+  const float bayer[16] = float[16](0.0, 8.0, 2.0, 10.0, 12.0, 4.0, 14.0, 6.0,
+                                    3.0, 11.0, 1.0, 9.0, 15.0, 7.0, 13.0, 5.0);
+  ivec2 p = ivec2(floor(fragCoord)) % 4;
+  return (bayer[p.y * 4 + p.x] + 0.5) / 16.0 < lodShare(distance);
+}
+`;
+
 const vertexShader = /* glsl */ `
 uniform vec3 uCentre;
 uniform float uRadius;
@@ -104,7 +127,9 @@ void main() {
     vec3 right = frameRight(-forward);
     vec3 up = cross(-forward, right);
     float d = 4.0 * uNear;
-    vec3 world = cameraPosition + forward * d + (right * corner.x + up * corner.y) * (100.0 * d);
+    // The outline's corners pushed onto the square's edge: wide enough whatever its shape.
+    vec2 c = corner / max(max(abs(corner.x), abs(corner.y)), 1e-6);
+    vec3 world = cameraPosition + forward * d + (right * c.x + up * c.y) * (100.0 * d);
     object = (toObject * vec4(world, 1.0)).xyz;
   }
   vModel = model;
@@ -135,7 +160,7 @@ uniform float uMaxLod;
 uniform vec3 uSunDirection;
 uniform vec3 uSunIrradiance;
 uniform vec3 uAmbient;
-
+${CROSS_FADE_GLSL}
 flat in mat4 vModel;
 flat in vec3 vEye;
 in vec3 vObject;
@@ -236,6 +261,7 @@ void main() {
   // of level L spans 2^(L+1) texels, so a footprint of w texels takes level log2(w) - 1.
   float footprint = max(length(dFdx(vObject)), length(dFdy(vObject)));
   float lod = clamp(log2(footprint * uFrameSize / (2.0 * uRadius)) - 1.0, 0.0, uMaxLod);
+  if (!lodImpostorDraws(gl_FragCoord.xy, length(vEye - uCentre))) discard;
   vec3 o = vEye;
   vec3 dir = normalize(vObject - o);
   // Only rays through the bounding sphere meet the object.
@@ -291,7 +317,9 @@ void main() {
  * The impostor's material. `options`: `sunDirection` (world, toward the sun), `sunIrradiance`
  * (a Vector3: the irradiance on a surface facing the sun, W/m², as trompe's scenes give it),
  * `ambient` (a Vector3: the radiance of a constant sky), `parallaxSteps` (4), `alphaTest` (0.5),
- * `mipmaps` (true: levels chosen by each pixel's footprint; false: level 0 only).
+ * `mipmaps` (true: levels chosen by each pixel's footprint; false: level 0 only), `crossFade`
+ * (false: every pixel; true: the layout's dithered share of them across its fade, the mesh
+ * drawing the rest through `crossFadeMaterial`).
  */
 export class OctahedralImpostorMaterial extends ShaderMaterial {
   constructor(atlas, options = {}) {
@@ -321,10 +349,63 @@ export class OctahedralImpostorMaterial extends ShaderMaterial {
         uSunDirection: { value: (options.sunDirection ?? new Vector3(0.3, 1, 0.5)).clone().normalize() },
         uSunIrradiance: { value: options.sunIrradiance ?? new Vector3(3, 3, 3) },
         uAmbient: { value: options.ambient ?? new Vector3(0.3, 0.3, 0.3) },
+        uFade: { value: fadeRange(l, options.crossFade) },
       },
     });
     this.atlas = atlas;
   }
+}
+
+/** `uFade` for a layout: its cross-fade when asked for and written, else every pixel. */
+function fadeRange(layout, crossFade) {
+  const f = layout.cross_fade;
+  return crossFade && f ? new Vector2(f.start, f.end) : new Vector2(0, 0);
+}
+
+/**
+ * Makes `material` — one of three's built-in materials, on the mesh an impostor stands for —
+ * draw exactly the pixels the impostor leaves across the layout's cross-fade (an impostor made
+ * with `crossFade: true`), so that every pixel is drawn once as the object recedes. The distance
+ * is the mesh's (or its instance's) matrix applied to the bake's bounding sphere. Returns the
+ * material.
+ */
+export function crossFadeMaterial(material, atlas) {
+  const l = atlas.layout;
+  const uniforms = { uFade: { value: fadeRange(l, true) }, uFadeCentre: { value: new Vector3(...l.centre) } };
+  material.onBeforeCompile = (shader) => {
+    Object.assign(shader.uniforms, uniforms);
+    shader.vertexShader = shader.vertexShader
+      .replace('#include <common>', '#include <common>\nuniform vec3 uFadeCentre;\nflat varying float vFadeDistance;')
+      .replace('#include <project_vertex>', `#include <project_vertex>
+  {
+    mat4 fadeModel = modelMatrix;
+#ifdef USE_INSTANCING
+    fadeModel = fadeModel * instanceMatrix;
+#endif
+    vFadeDistance = length(cameraPosition - (fadeModel * vec4(uFadeCentre, 1.0)).xyz) / length(fadeModel[0].xyz);
+  }`);
+    shader.fragmentShader = shader.fragmentShader
+      .replace('#include <common>', `#include <common>\nflat varying float vFadeDistance;\n${CROSS_FADE_GLSL}`)
+      .replace('#include <clipping_planes_fragment>',
+        '#include <clipping_planes_fragment>\n  if (lodImpostorDraws(gl_FragCoord.xy, vFadeDistance)) discard;');
+  };
+  material.customProgramCacheKey = () => 'trompe-cross-fade';
+  material.needsUpdate = true;
+  return material;
+}
+
+/**
+ * The card's geometry: the layout's cut-out outline (convex, counter-clockwise, units of the
+ * radius) as a fan of triangles, or the square of the sphere's diameter where it has none.
+ */
+export function cardGeometry(outline) {
+  const points = outline ?? [[-1, -1], [1, -1], [1, 1], [-1, 1]];
+  const geometry = new BufferGeometry();
+  geometry.setAttribute('position', new Float32BufferAttribute(points.flatMap(([x, y]) => [x, y, 0]), 3));
+  const fan = [];
+  for (let k = 1; k + 1 < points.length; k++) fan.push(0, k, k + 1);
+  geometry.setIndex(fan);
+  return geometry;
 }
 
 /**
@@ -333,8 +414,8 @@ export class OctahedralImpostorMaterial extends ShaderMaterial {
  */
 export class OctahedralImpostor extends InstancedMesh {
   constructor(atlas, count = 1, options = {}) {
-    const geometry = new PlaneGeometry(2, 2);
     const l = atlas.layout;
+    const geometry = cardGeometry(l.card);
     const centre = new Vector3(...l.centre);
     geometry.boundingSphere = new Sphere(centre.clone(), l.radius);
     geometry.boundingBox = new Box3().setFromCenterAndSize(centre, new Vector3().setScalar(2 * l.radius));

@@ -173,6 +173,8 @@ pub struct OctahedralAtlas {
     pub depth: Image<f32>,
     /// Linear occlusion (1: nothing occludes), roughness and metalness — glTF's ORM packing.
     pub orm: Image<Vec3>,
+    /// The card's outline round every view of the object ([`super::card`]).
+    pub card: super::Card,
 }
 
 /// Ambient-occlusion rays traced from every vertex.
@@ -364,6 +366,7 @@ pub fn bake(
             }
         }
     }
+    let card = super::Card::around(mesh.positions.iter().copied(), centre, radius, s);
     Ok(OctahedralAtlas {
         settings,
         centre,
@@ -372,6 +375,7 @@ pub fn bake(
         normal,
         depth,
         orm,
+        card,
     })
 }
 

@@ -43,6 +43,10 @@ pub struct Sidecar {
     /// `2·atan(1/√(D² − 1))`); orthographic when absent.
     #[serde(default)]
     pub projection: super::FrameProjection,
+    /// The card's outline ([`super::card`]): 3 to 8 points `[x, y]` in units of the radius,
+    /// counter-clockwise in the card's axes; the whole square when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub card: Option<Vec<[f32; 2]>>,
     /// Base colour + coverage (PNG, sRGB).
     pub color: String,
     /// Normal and depth packed in one linear RGBA8 PNG ([`super::packing`]); absent before
@@ -363,6 +367,7 @@ pub fn sidecar_of(atlas: &OctahedralAtlas, json: &Path, floats: FloatMaps) -> Si
         centre: atlas.centre.to_array(),
         radius: atlas.radius,
         projection: atlas.settings.projection,
+        card: Some(atlas.card.outline().to_vec()),
         color: name(&color),
         normal_depth: Some(name(&normal_depth)),
         normal: exr.then(|| name(&normal)),
@@ -395,6 +400,9 @@ pub struct OctahedralReport {
     /// Distance (in object units) from which one atlas texel covers one pixel of a 1080-row,
     /// 60° view: where a renderer can switch from the mesh to the impostor.
     pub switch_distance: f32,
+    /// The cut-out card's vertices and its share of the square card's area: the share of the
+    /// square's fragments a runtime still shades.
+    pub card: (usize, f64),
 }
 
 impl OctahedralReport {
@@ -414,6 +422,7 @@ impl OctahedralReport {
             bake_time,
             bytes,
             switch_distance: switch_distance(atlas.radius, atlas.settings.frame_size),
+            card: (atlas.card.outline().len(), atlas.card.area_share()),
         }
     }
 }
@@ -430,6 +439,7 @@ impl serde::Serialize for OctahedralReport {
             "files": files,
             "bake_seconds": self.bake_time.as_secs_f64(),
             "switch_distance": self.switch_distance,
+            "card": { "vertices": self.card.0, "area_share": self.card.1 },
         })
         .serialize(s)
     }
@@ -454,6 +464,13 @@ impl std::fmt::Display for OctahedralReport {
         for (path, bytes) in self.files.iter().zip(&self.bytes) {
             writeln!(f, "  {} ({:.1} MB)", path.display(), *bytes as f64 / 1e6)?;
         }
+        writeln!(
+            f,
+            "cut-out card: {} vertices, {:.0} % of the square card's area ({:.0} % fewer fragments)",
+            self.card.0,
+            100.0 * self.card.1,
+            100.0 * (1.0 - self.card.1)
+        )?;
         write!(
             f,
             "switch distance: {:.2} units (one texel a pixel at 1080 rows, 60° field of view)",

@@ -41,11 +41,19 @@ pub struct Layout {
     /// How each frame sees the object (as the sidecar says).
     #[serde(default)]
     pub projection: FrameProjection,
+    /// The card's outline ([`super::card`]): 3 to 8 points `[x, y]` in units of the radius,
+    /// counter-clockwise in the card's axes; the whole square when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub card: Option<Vec<[f32; 2]>>,
     /// The glTF texture indices of the maps.
     pub textures: Textures,
     /// Distance (object units) from which one atlas texel covers one pixel of a 1080-row, 60°
     /// view: where a renderer can switch from the mesh to the impostor.
     pub switch_distance: f32,
+    /// The dithered cross-fade from the mesh to the impostor ([`super::lod`]); none in files
+    /// written before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cross_fade: Option<super::CrossFade>,
 }
 
 /// Indices into the file's `textures` of the three maps.
@@ -152,8 +160,10 @@ pub fn glb(sidecar: &Sidecar, maps: EncodedMaps) -> Result<Vec<u8>, ::gltf::Erro
         centre: sidecar.centre,
         radius: sidecar.radius,
         projection: sidecar.projection,
+        card: sidecar.card.clone(),
         textures,
         switch_distance: super::file::switch_distance(sidecar.radius, sidecar.frame_size),
+        cross_fade: Some(super::CrossFade::of(sidecar.radius, sidecar.frame_size)),
     };
     let layout = serde_json::to_value(layout).unwrap_or(serde_json::Value::Null);
     let doc = serde_json::json!({
@@ -433,11 +443,22 @@ impl std::fmt::Display for Layout {
             "  bounding sphere: centre ({:.4}, {:.4}, {:.4}), radius {:.4}",
             self.centre[0], self.centre[1], self.centre[2], self.radius
         )?;
+        if let Some(card) = &self.card {
+            writeln!(f, "  cut-out card: {} vertices", card.len())?;
+        }
         write!(
             f,
             "  switch distance: {:.2} units (one texel a pixel at 1080 rows, 60° field of view)",
             self.switch_distance
-        )
+        )?;
+        if let Some(fade) = &self.cross_fade {
+            write!(
+                f,
+                "\n  cross-fade: from {:.2} to {:.2} units, dithered 4 × 4",
+                fade.start, fade.end
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -522,6 +543,16 @@ pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {
     let orm = sized(image(t.orm)?, "ORM")?;
     let (normal, depth) = super::packing::unpack(&packed)?;
     let orm = orm.map(|o| o.truncate());
+    let card = match layout.card {
+        None => super::Card::default(),
+        Some(outline) => super::Card::from_outline(outline).ok_or_else(|| {
+            invalid(
+                "the card's outline is not 3 to 8 points in [-1, 1]², convex, \
+                 counter-clockwise, round the centre"
+                    .into(),
+            )
+        })?,
+    };
     Ok(OctahedralAtlas {
         settings,
         centre,
@@ -530,6 +561,7 @@ pub fn load(path: &Path) -> Result<OctahedralAtlas, OctahedralFileError> {
         normal,
         depth,
         orm,
+        card,
     })
 }
 

@@ -10,8 +10,10 @@
 
 pub mod bake;
 pub mod batch;
+pub mod card;
 pub mod file;
 pub mod gltf;
+pub mod lod;
 pub mod mapping;
 pub mod mips;
 pub mod packing;
@@ -22,5 +24,7 @@ pub mod turntable;
 pub use bake::{
     BakeError, BakeSettings, DEFAULT_DILATION, FrameCamera, FrameProjection, OctahedralAtlas, bake,
 };
+pub use card::Card;
+pub use lod::CrossFade;
 pub use mapping::{Coverage, Grid};
 pub use turntable::{TurntableView, turntable};

@@ -117,9 +117,31 @@ impl OctahedralAtlas {
         }
     }
 
+    /// Whether the ray from `eye` along `dir` crosses the card ([`super::card`]) where the
+    /// runtimes draw it: tangent to the bounding sphere on the eye's side, facing the eye, its
+    /// axes those of [`super::mapping::frame_basis`]. An eye inside the sphere sees the card
+    /// across the whole view.
+    pub fn crosses_card(&self, eye: DVec3, dir: DVec3) -> bool {
+        let centre = self.centre.as_dvec3();
+        let r = f64::from(self.radius);
+        let to_eye = eye - centre;
+        if to_eye.length() <= r {
+            return true;
+        }
+        let v = to_eye.normalize();
+        let (right, up) = super::mapping::frame_basis(v);
+        let facing = dir.dot(v);
+        if facing >= 0.0 {
+            return false;
+        }
+        let q = eye + dir * ((centre + v * r - eye).dot(v) / facing) - (centre + v * r);
+        self.card.contains(q.dot(right) / r, q.dot(up) / r)
+    }
+
     /// [`OctahedralAtlas::render`] as engines' impostor materials draw: a pixel keeps the
-    /// surface where the blended coverage passes the alpha test ([`ALPHA_TEST`]), whole, and
-    /// shows the environment elsewhere — the reference of the runtimes in `shaders/` and `web/`.
+    /// surface where its ray crosses the card ([`OctahedralAtlas::crosses_card`]) and the
+    /// blended coverage passes the alpha test ([`ALPHA_TEST`]), whole, and shows the
+    /// environment elsewhere — the reference of the runtimes in `shaders/` and `web/`.
     pub fn render_cutout(
         &self,
         camera: &Pinhole,
@@ -134,8 +156,9 @@ impl OctahedralAtlas {
             .map(|k| {
                 let (x, y) = (k % w as usize, k / w as usize);
                 let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
+                let on_card = self.crosses_card(camera.position(), ray.dir.as_dvec3());
                 match self.blend(&frames, ray, parallax) {
-                    Some(b) if b.alpha >= ALPHA_TEST && b.t > 0.0 => {
+                    Some(b) if on_card && b.alpha >= ALPHA_TEST && b.t > 0.0 => {
                         lambert(b.albedo, b.normal, lighting, |_| true).extend(1.0)
                     }
                     _ => lighting.environment.radiance(ray.dir).extend(1.0),

@@ -386,3 +386,92 @@ fn a_field_that_cannot_be_is_refused_by_its_key() {
         "{e}"
     );
 }
+
+/// The cut-out card spares pixels without losing any: from every side, the poles and their
+/// neighbourhoods included, near and far, with orthographic and pinhole frames, over the sphere
+/// and the upper hemisphere, the atlas drawn on its outline keeps exactly the pixels it keeps
+/// on the whole square.
+#[test]
+fn the_cut_out_card_loses_no_pixel_the_square_card_draws() {
+    use trompe::camera::Pinhole;
+    use trompe::glam::{Mat4, Quat};
+    use trompe::octahedral::Card;
+    // The Duck, and a tall thin post leaning over (its outline far from the square).
+    let post = trompe::geom::cube().transformed(
+        &(Mat4::from_quat(Quat::from_rotation_z(0.4))
+            * Mat4::from_scale(Vec3::new(0.1, 1.0, 0.15))),
+    );
+    let cases = [
+        (
+            "duck",
+            duck(),
+            Coverage::Sphere,
+            FrameProjection::Orthographic,
+        ),
+        (
+            "post",
+            post.clone(),
+            Coverage::Sphere,
+            FrameProjection::Orthographic,
+        ),
+        (
+            "post, hemisphere",
+            post.clone(),
+            Coverage::Hemisphere,
+            FrameProjection::Orthographic,
+        ),
+        (
+            "post, pinhole frames",
+            post,
+            Coverage::Sphere,
+            FrameProjection::Pinhole { distance: 3.0 },
+        ),
+    ];
+    for (name, mesh, coverage, projection) in cases {
+        let settings = BakeSettings {
+            grid: Grid { n: 8, coverage },
+            projection,
+            ..settings(8, 64, 2)
+        };
+        let cut = bake(&mesh, &Surface::Diffuse(None), settings).unwrap();
+        let mut square = cut.clone();
+        square.card = Card::default();
+        let share = cut.card.area_share();
+        let (mut pixels, mut drawn) = (0usize, 0usize);
+        let lowest = if coverage == Coverage::Sphere { -90 } else { 0 };
+        for elevation in [
+            -90.0, -89.5, -88.0, -60.0, -20.0, 0.0, 20.0, 60.0, 88.0, 89.5, 90.0f32,
+        ] {
+            if elevation < lowest as f32 {
+                continue;
+            }
+            for azimuth in (0..16).map(|k| k as f32 * 22.5 + 3.0) {
+                for (distance, fov) in [(1.6f32, 90.0f64), (4.0, 32.0)] {
+                    let (a, e) = (azimuth.to_radians(), elevation.to_radians());
+                    let d = Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
+                    let up = if d.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+                    let eye = cut.centre + d * (distance * cut.radius);
+                    let camera = Pinhole::look_at(eye, cut.centre, up, fov, 48, 48).unwrap();
+                    let light = lighting();
+                    let a = cut.render_cutout(&camera, &light, 4);
+                    let b = square.render_cutout(&camera, &light, 4);
+                    let background = light.environment.radiance(Vec3::Y).extend(1.0);
+                    for (p, q) in a.pixels().iter().zip(b.pixels()) {
+                        pixels += 1;
+                        drawn += usize::from(*q != background);
+                        assert_eq!(
+                            p, q,
+                            "{name}: a pixel lost from ({azimuth}°, {elevation}°) at {distance} radii"
+                        );
+                    }
+                }
+            }
+        }
+        println!(
+            "{name}: the outline has {} vertices, {:.0} % of the square's area; {drawn} of {pixels} pixels drawn, none lost",
+            cut.card.outline().len(),
+            100.0 * share
+        );
+        assert!(share < 1.0, "{name}: {share}");
+    }
+}

@@ -17,7 +17,7 @@ use glam::{DVec3, DVec4, Quat, Vec3, Vec4};
 use trompe::camera::Pinhole;
 use trompe::frame::{Frame, Image, NO_OBJECT};
 use trompe::octahedral::scene::SceneAtlases;
-use trompe::octahedral::{Coverage, FrameProjection, OctahedralAtlas};
+use trompe::octahedral::{Coverage, CrossFade, FrameProjection, OctahedralAtlas};
 use trompe::scene::{Lighting, RenderSettings};
 
 /// The engines' octahedral impostor shader, as the repository ships it.
@@ -55,6 +55,9 @@ struct GpuImpostor {
     frame_size: u32,
     coverage: u32,
     distance: f32,
+    /// The cross-fade's start and end (0, 0: the impostor draws every pixel).
+    fade: [f32; 2],
+    pad: [f32; 2],
 }
 
 /// One copy drawn: its offset, object id, rotation and scale (vertex locations 1–4, one a
@@ -107,6 +110,11 @@ pub enum Entry {
 /// An atlas on the device: its three maps, its uniform, and the copies it draws.
 struct UploadedAtlas {
     group: wgpu::BindGroup,
+    /// Its uniform (binding 1), and what it holds.
+    uniform: wgpu::Buffer,
+    impostor: GpuImpostor,
+    /// Its card's outline as a triangle strip, in the corners buffer.
+    card: std::ops::Range<u32>,
     instances: std::ops::Range<u32>,
 }
 
@@ -119,7 +127,7 @@ pub struct GpuAtlases<'a> {
     placed: Vec<GpuInstance>,
     shade: wgpu::ComputePipeline,
     atlases: Vec<UploadedAtlas>,
-    /// The card's four corners, and every copy of every atlas, atlas by atlas.
+    /// Every atlas's card outline, and every copy of every atlas, atlas by atlas.
     corners: wgpu::Buffer,
     instances: wgpu::Buffer,
     /// The camera's uniform, rewritten each frame (binding 0 of every atlas's group).
@@ -156,6 +164,7 @@ impl<'a> GpuAtlases<'a> {
         let placed = atlases.placed();
         let mut instances = Vec::with_capacity(placed.len());
         let mut uploaded = Vec::new();
+        let mut corners: Vec<[f32; 2]> = Vec::new();
         for (index, atlas) in atlases.atlases().enumerate() {
             let first = instances.len() as u32;
             instances.extend(
@@ -170,16 +179,19 @@ impl<'a> GpuAtlases<'a> {
                         scale: 1.0,
                     }),
             );
-            let group = upload_atlas(gpu, atlas, (&camera, &sampler))?;
-            uploaded.push(UploadedAtlas {
-                group,
-                instances: first..instances.len() as u32,
-            });
+            let mut upload = upload_atlas(gpu, atlas, (&camera, &sampler))?;
+            let card = corners.len() as u32;
+            corners.extend(atlas.card.strip());
+            upload.card = card..corners.len() as u32;
+            upload.instances = first..instances.len() as u32;
+            uploaded.push(upload);
         }
         if instances.is_empty() {
             instances.push(GpuInstance::zeroed());
         }
-        let corners: [[f32; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [1.0, 1.0]];
+        if corners.is_empty() {
+            corners.extend(trompe::octahedral::Card::default().strip());
+        }
         let surfaces: Vec<_> = atlases.surfaces().map(GpuMaterial::specular).collect();
         let materials: Vec<GpuMaterial> = placed
             .iter()
@@ -209,6 +221,16 @@ impl<'a> GpuAtlases<'a> {
             texels: gpu.storage_with("texels", texels.bytes()),
             uniform,
         })
+    }
+
+    /// Draws every atlas with the dithered cross-fade `fade` from now on (distances in each
+    /// bake's units), as an engine hands objects from their meshes to their impostors
+    /// (`trompe::octahedral::lod`); `None`, as made, draws every pixel the impostor finds.
+    pub fn cross_fade(&mut self, fade: Option<CrossFade>) {
+        for atlas in &mut self.atlases {
+            atlas.impostor.fade = fade.map_or([0.0; 2], |f| [f.start, f.end]);
+            (self.gpu.queue).write_buffer(&atlas.uniform, 0, bytemuck::bytes_of(&atlas.impostor));
+        }
     }
 
     /// Draws every copy through `similarity` from now on (the scene's placement first).
@@ -306,7 +328,7 @@ impl<'a> GpuAtlases<'a> {
             pass.set_vertex_buffer(1, self.instances.slice(..));
             for atlas in &self.atlases {
                 pass.set_bind_group(0, &atlas.group, &[]);
-                pass.draw(0..4, atlas.instances.clone());
+                pass.draw(atlas.card.clone(), atlas.instances.clone());
             }
         }
         Ok((encoder, g))
@@ -494,7 +516,7 @@ fn upload_atlas(
     gpu: &Gpu,
     atlas: &OctahedralAtlas,
     (camera, sampler): (&wgpu::Buffer, &wgpu::Sampler),
-) -> Result<wgpu::BindGroup, GpuError> {
+) -> Result<UploadedAtlas, GpuError> {
     let side = atlas.side();
     gpu.check_texture("an octahedral atlas", side, side)?;
     let to_half = half::f16::from_f32;
@@ -554,13 +576,16 @@ fn upload_atlas(
             FrameProjection::Orthographic => 0.0,
             FrameProjection::Pinhole { distance } => distance,
         },
+        fade: [0.0; 2],
+        pad: [0.0; 2],
     };
+    let impostor = uniform;
     let uniform = gpu.uniform_with("impostor", bytemuck::bytes_of(&uniform));
     let texture = |binding, view| wgpu::BindGroupEntry {
         binding,
         resource: wgpu::BindingResource::TextureView(view),
     };
-    Ok(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("octahedral atlas"),
         layout: &atlas_group_layout(gpu),
         entries: &[
@@ -579,7 +604,14 @@ fn upload_atlas(
                 resource: wgpu::BindingResource::Sampler(sampler),
             },
         ],
-    }))
+    });
+    Ok(UploadedAtlas {
+        group,
+        uniform,
+        impostor,
+        card: 0..0,
+        instances: 0..0,
+    })
 }
 
 /// `camera` as the shader's world-to-clip matrix: `x, y` from its pixel rows, `w` the ray

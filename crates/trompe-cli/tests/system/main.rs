@@ -65,6 +65,12 @@ fn main() {
             web::NEEDS,
         ),
         trial(
+            "web::the_threejs_cross_fade_shares_the_pixels_by_the_layouts_rule",
+            web::the_threejs_cross_fade_shares_the_pixels_by_the_layouts_rule,
+            web::ready(),
+            web::NEEDS,
+        ),
+        trial(
             "web::a_compressed_surface_reads_in_threejs_as_trompe_reads_it",
             web::a_compressed_surface_reads_in_threejs_as_trompe_reads_it,
             web::ready(),

@@ -362,3 +362,68 @@ pub fn a_compressed_surface_reads_in_threejs_as_trompe_reads_it() {
     );
     assert!(worst.0 < 1e-5 && worst.1 < 1e-6, "{worst:?}");
 }
+
+/// The three.js runtime's dithered cross-fade: halfway through the layout's fade, the impostor
+/// (`crossFade: true`) keeps exactly the pixels of its whole picture that the 4 × 4 Bayer rule
+/// gives it, and a mesh under `crossFadeMaterial` (a sphere standing for the Duck) exactly the
+/// others.
+pub fn the_threejs_cross_fade_shares_the_pixels_by_the_layouts_rule() {
+    let dir = scratch("web_threejs_fade");
+    let glb = dir.join("duck.glb");
+    let atlas = bake(&glb, &[]);
+    let (layout, _) = trompe::octahedral::gltf::read_layout(&glb)
+        .unwrap()
+        .unwrap();
+    let fade = layout.cross_fade.expect("the layout has a cross-fade");
+    let halfway = (fade.start + fade.end) / 2.0;
+    let lighting = lighting();
+    let (eye, target, up) = around(&atlas, (45.0, 20.0), halfway / atlas.radius);
+    let view = |impostor: bool, fade_impostor: bool, sphere: Option<bool>| {
+        let mut v = view_json((eye, target, up), &lighting);
+        v["fov_y"] = serde_json::json!(6.0);
+        v["impostor"] = serde_json::json!(impostor);
+        v["cross_fade"] = serde_json::json!(fade_impostor);
+        if let Some(faded) = sphere {
+            v["sphere"] = serde_json::json!({ "radius": 0.6 * atlas.radius, "cross_fade": faded });
+        }
+        v
+    };
+    let views = [
+        view(true, true, None),
+        view(true, false, None),
+        view(false, false, Some(true)),
+        view(false, false, Some(false)),
+    ];
+    let pictures = browser(&glb, &views, &dir);
+    let backgrounds: Vec<Rgba> = pictures.iter().map(|p| p.get(0, 0)).collect();
+    let drawn = |k: usize, x: u32, y: u32| pictures[k].get(x, y) != backgrounds[k];
+    let impostor = |x, y| drawn(0, x, y);
+    let whole = |x, y| drawn(1, x, y);
+    let sphere = |x, y| drawn(2, x, y);
+    let solid = |x, y| drawn(3, x, y);
+    let (mut counts, distance) = ([0usize; 4], eye.distance(atlas.centre));
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            // gl_FragCoord counts rows from the bottom.
+            let rule = fade.impostor_draws((x, SIZE - 1 - y), distance);
+            assert_eq!(
+                impostor(x, y),
+                whole(x, y) && rule,
+                "impostor at ({x}, {y})"
+            );
+            assert_eq!(sphere(x, y), solid(x, y) && !rule, "mesh at ({x}, {y})");
+            for (c, on) in
+                counts
+                    .iter_mut()
+                    .zip([impostor(x, y), whole(x, y), sphere(x, y), solid(x, y)])
+            {
+                *c += usize::from(on);
+            }
+        }
+    }
+    println!(
+        "cross-fade halfway ({distance:.2} units, fade {:.2}..{:.2}): the impostor keeps {} of {} pixels, the mesh {} of {}",
+        fade.start, fade.end, counts[0], counts[1], counts[2], counts[3]
+    );
+    assert!(counts[1] > 1000 && counts[3] > 1000, "{counts:?}");
+}

@@ -98,6 +98,10 @@ fn main() {
             octahedral::instances_moved_turned_and_scaled_and_the_depth_only_entry_draw_what_the_scene_draws,
         ),
         on_gpu(
+            "octahedral::the_cross_fade_draws_each_copys_share_of_the_bayer_pattern",
+            octahedral::the_cross_fade_draws_each_copys_share_of_the_bayer_pattern,
+        ),
+        on_gpu(
             "trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_traces_on_the_gpu_as_on_the_cpu,
         ),

@@ -141,3 +141,75 @@ pub fn instances_moved_turned_and_scaled_and_the_depth_only_entry_draw_what_the_
     let elsewhere = atlases.frame(&camera(Similarity::IDENTITY)).unwrap();
     assert!(elsewhere.object_id != here.object_id);
 }
+
+/// The WGSL runtime's dithered cross-fade (`lod_impostor_draws`) on `scenes/field.toml`, its
+/// copies spread over the fade band: a pixel shows a copy only where the 4 × 4 Bayer rule gives
+/// it to the impostor at that copy's distance, and every pixel the rule gives to the copy that
+/// is in front without the fade still shows it.
+pub fn the_cross_fade_draws_each_copys_share_of_the_bayer_pattern(gpu: &Gpu) {
+    use trompe::frame::NO_OBJECT;
+    use trompe::octahedral::CrossFade;
+    use trompe::octahedral::lod::Dither;
+    use trompe_gpu::octahedral::GpuAtlases;
+    let (_, scene) = shipped_scenes()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("field.toml"))
+        .expect("scenes/field.toml");
+    let t = scene.render.time;
+    let baked =
+        trompe::octahedral::scene::SceneAtlases::bake(&scene, t, small().octahedral_bake(), &())
+            .unwrap();
+    let lighting = trompe::scene::Lighting {
+        environment: trompe::frame::envmap::EnvMap::constant(glam::Vec3::splat(0.3)),
+        light: None,
+    };
+    let mut atlases = GpuAtlases::new(gpu, &baked, &lighting, &scene.render).unwrap();
+    let c = &scene.camera;
+    let camera =
+        trompe::camera::Pinhole::look_at(c.position, c.look_at, c.up, c.fov_y, 320, 240).unwrap();
+    let eye = camera.position().as_vec3();
+    let centres: Vec<_> = baked.atlases().map(|a| a.centre).collect();
+    let distance: Vec<f32> = (baked.placed().iter())
+        .map(|p| eye.distance(centres[p.atlas] + p.offset))
+        .collect();
+    let near = distance.iter().copied().fold(f32::MAX, f32::min);
+    let far = distance.iter().copied().fold(0.0, f32::max);
+    let fade = CrossFade {
+        start: near,
+        end: far,
+        dither: Dither::Bayer4,
+    };
+    let whole = atlases.frame(&camera).unwrap();
+    atlases.cross_fade(Some(fade));
+    let faded = atlases.frame(&camera).unwrap();
+    let w = whole.object_id.width();
+    let (mut shown, mut kept) = (0usize, 0usize);
+    for (k, (&before, &after)) in (whole.object_id.pixels().iter())
+        .zip(faded.object_id.pixels())
+        .enumerate()
+    {
+        let pixel = ((k % w as usize) as u32, (k / w as usize) as u32);
+        if after != NO_OBJECT {
+            shown += 1;
+            let d = distance[after as usize];
+            assert!(
+                fade.impostor_draws(pixel, d),
+                "object {after} drawn at {pixel:?}"
+            );
+        }
+        if before != NO_OBJECT && fade.impostor_draws(pixel, distance[before as usize]) {
+            kept += 1;
+            assert_eq!(after, before, "at {pixel:?}");
+        }
+    }
+    let all = whole
+        .object_id
+        .pixels()
+        .iter()
+        .filter(|&&id| id != NO_OBJECT)
+        .count();
+    println!(
+        "cross-fade over {near:.2}..{far:.2}: {shown} of {all} pixels drawn, {kept} kept by the rule"
+    );
+    assert!(shown < all && kept > all / 10, "{shown}, {kept}, {all}");
+}
