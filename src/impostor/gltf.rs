@@ -234,8 +234,9 @@ mod tests {
     use super::*;
     use crate::impostor::{ImpostorCamera, ViewCamera};
 
-    #[test]
-    fn an_impostor_exports_as_its_surface_and_loads_back_with_its_camera() {
+    /// A SPOC impostor of a ball (radius ½), `side` texels a side, saved in the scratch folder
+    /// `name` as `ball.json`: the impostor, the folder and the sidecar.
+    fn ball(side: u32, name: &str) -> (Impostor, std::path::PathBuf, std::path::PathBuf) {
         let mesh = crate::geom::icosphere(3);
         let camera = ImpostorCamera::around(
             ViewCamera::Spoc(None),
@@ -243,13 +244,19 @@ mod tests {
             Vec3::ZERO,
             0.5,
             0.5,
-            64,
+            side,
         )
         .unwrap();
         let impostor = crate::impostor::build(camera, &mesh, 0, &|_| Vec3::ONE).unwrap();
-        let dir = crate::test_scratch::scratch("impostor_glb");
+        let dir = crate::test_scratch::scratch(name);
         let json = dir.join("ball.json");
         crate::impostor::file::save(&impostor, &json).unwrap();
+        (impostor, dir, json)
+    }
+
+    #[test]
+    fn an_impostor_exports_as_its_surface_and_loads_back_with_its_camera() {
+        let (impostor, dir, json) = ball(64, "impostor_glb");
         let glb = dir.join("ball.glb");
         export(&json, &glb, GeometryEncoding::Float).unwrap();
         let (doc, buffers, images) = ::gltf::import(&glb).unwrap();
@@ -281,20 +288,7 @@ mod tests {
 
     #[test]
     fn a_compressed_surface_loads_back_as_the_float_one_within_its_quantization() {
-        let mesh = crate::geom::icosphere(3);
-        let camera = ImpostorCamera::around(
-            ViewCamera::Spoc(None),
-            Vec3::new(0.0, 0.5, 1.5),
-            Vec3::ZERO,
-            0.5,
-            0.5,
-            48,
-        )
-        .unwrap();
-        let impostor = crate::impostor::build(camera, &mesh, 0, &|_| Vec3::ONE).unwrap();
-        let dir = crate::test_scratch::scratch("impostor_glb_compressed");
-        let json = dir.join("ball.json");
-        crate::impostor::file::save(&impostor, &json).unwrap();
+        let (_, dir, json) = ball(48, "impostor_glb_compressed");
         let (plain, packed) = (dir.join("plain.glb"), dir.join("packed.glb"));
         export(&json, &plain, GeometryEncoding::Float).unwrap();
         export(&json, &packed, GeometryEncoding::Compressed).unwrap();

@@ -158,7 +158,8 @@ fn bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
-/// The `Impostor` uniform: centre, radius, frames, frame size, coverage, pinhole distance.
+/// The `Impostor` uniform: centre, radius, frames, frame size, coverage, pinhole distance, and
+/// no cross-fade (start and end 0, two floats of padding).
 fn uniform(
     centre: [f32; 3],
     radius: f32,
@@ -170,6 +171,7 @@ fn uniform(
         u.extend(v.to_le_bytes());
     }
     u.extend(distance.to_le_bytes());
+    u.extend(bytes(&[0.0; 4]));
     u
 }
 

@@ -14,3 +14,10 @@ export function launch() {
     ],
   });
 }
+
+/** The command line's `--name value` pairs, as an object. */
+export function parseArgs(argv = process.argv.slice(2)) {
+  return Object.fromEntries(
+    argv.reduce((pairs, a, i, all) => (a.startsWith('--') ? [...pairs, [a.slice(2), all[i + 1]]] : pairs), []),
+  );
+}

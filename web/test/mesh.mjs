@@ -6,12 +6,10 @@
 // Chromium as web/test/browser.mjs starts it, the files as web/test/serve.mjs serves them.
 
 import { writeFile } from 'node:fs/promises';
-import { launch } from './browser.mjs';
+import { launch, parseArgs } from './browser.mjs';
 import { serve } from './serve.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((pairs, a, i, all) => (a.startsWith('--') ? [...pairs, [a.slice(2), all[i + 1]]] : pairs), []),
-);
+const args = parseArgs();
 if (!args.glb || !args.out) {
   console.error('mesh.mjs: usage: --glb MESH.glb --out MESH.json');
   process.exit(2);

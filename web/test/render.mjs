@@ -8,12 +8,10 @@
 
 import { readFile, writeFile, mkdir } from 'node:fs/promises';
 import { join } from 'node:path';
-import { launch } from './browser.mjs';
+import { launch, parseArgs } from './browser.mjs';
 import { serve } from './serve.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((pairs, a, i, all) => (a.startsWith('--') ? [...pairs, [a.slice(2), all[i + 1]]] : pairs), []),
-);
+const args = parseArgs();
 for (const need of ['glb', 'views', 'out']) {
   if (!args[need]) {
     console.error(`render.mjs: --${need} is missing (usage: --glb BAKE.glb --views views.json --out DIR)`);

@@ -26,10 +26,7 @@ pub fn every_shipped_scene_draws_octahedral_impostors_on_the_gpu_as_on_the_cpu(g
 /// each copy with its own id, and the frame is the same on repeated runs; kept across frames
 /// while nothing moves.
 pub fn a_field_of_instances_is_one_atlas_drawn_once_a_copy_on_the_gpu(gpu: &Gpu) {
-    let (_, scene) = shipped_scenes()
-        .into_iter()
-        .find(|(p, _)| p.ends_with("field.toml"))
-        .expect("scenes/field.toml");
+    let scene = field();
     let t = scene.render.time;
     let mut renderer =
         DeviceRenderer::new(&scene, MethodKind::Octahedral, small(), Some(gpu)).unwrap();
@@ -69,10 +66,7 @@ pub fn instances_moved_turned_and_scaled_and_the_depth_only_entry_draw_what_the_
     use trompe::frame::NO_OBJECT;
     use trompe::scene::{Light, Lighting};
     use trompe_gpu::octahedral::{Entry, GpuAtlases, Similarity};
-    let (_, scene) = shipped_scenes()
-        .into_iter()
-        .find(|(p, _)| p.ends_with("field.toml"))
-        .expect("scenes/field.toml");
+    let scene = field();
     let t = scene.render.time;
     let baked =
         trompe::octahedral::scene::SceneAtlases::bake(&scene, t, small().octahedral_bake(), &())
@@ -151,10 +145,7 @@ pub fn the_cross_fade_draws_each_copys_share_of_the_bayer_pattern(gpu: &Gpu) {
     use trompe::octahedral::CrossFade;
     use trompe::octahedral::lod::Dither;
     use trompe_gpu::octahedral::GpuAtlases;
-    let (_, scene) = shipped_scenes()
-        .into_iter()
-        .find(|(p, _)| p.ends_with("field.toml"))
-        .expect("scenes/field.toml");
+    let scene = field();
     let t = scene.render.time;
     let baked =
         trompe::octahedral::scene::SceneAtlases::bake(&scene, t, small().octahedral_bake(), &())
@@ -212,4 +203,13 @@ pub fn the_cross_fade_draws_each_copys_share_of_the_bayer_pattern(gpu: &Gpu) {
         "cross-fade over {near:.2}..{far:.2}: {shown} of {all} pixels drawn, {kept} kept by the rule"
     );
     assert!(shown < all && kept > all / 10, "{shown}, {kept}, {all}");
+}
+
+/// `scenes/field.toml`: twelve ducks, a mirror ball, a ground.
+fn field() -> trompe::scene::Scene {
+    let (_, scene) = shipped_scenes()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("field.toml"))
+        .expect("scenes/field.toml");
+    scene
 }
