@@ -13,8 +13,11 @@
 //
 // The card is cut to the layout's `card` outline, which holds every view's silhouette, so the
 // pixels round the object where no frame can find it are never shaded. Instances carry any
-// translation, rotation and uniform scale (an InstancedMesh's matrices, times the mesh's own). Mip levels are chosen from each pixel's footprint and kept inside
-// their frame; trompe dilates every frame whole so coarse levels never pull in the background.
+// translation, rotation and uniform scale (an InstancedMesh's matrices, times the mesh's own).
+// Mip levels are chosen from each pixel's footprint and kept inside their frame; trompe dilates
+// every frame whole so coarse levels never pull in the background. Across the layout's
+// `cross_fade` the impostor and the mesh share the pixels by a dithered rule (`crossFade`,
+// `crossFadeMaterial`).
 
 import {
   BufferGeometry,

@@ -15,7 +15,7 @@
 //! cap where `frame_basis` changes reference. The extent over that band is exact per vertex (the
 //! band's best direction is the vertex's own direction, clamped into the band), plus a margin of
 //! [`MARGIN_TEXELS`] frame texels for coverage that the frames' filtering spreads past the true
-//! silhouette. docs/conventions.md §8.
+//! silhouette. docs/conventions.md §8.5.
 //!
 //! Invariants: the outline is convex, counter-clockwise, holds the card's centre, and lies in the
 //! square `[-1, 1]²` the whole card spans.
