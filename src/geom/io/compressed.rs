@@ -593,10 +593,13 @@ fn dequantize(path: &Path, root: &mut Value, bin: &mut Vec<u8>) -> Result<(), Me
             .get(v)
             .ok_or_else(|| bad(format!("bufferView {v} does not exist")))?;
         let stride = usize_at(view, "byteStride").unwrap_or(size * width);
-        let start = usize_at(view, "byteOffset").unwrap_or(0)
-            + usize_at(&accessor, "byteOffset").unwrap_or(0);
-        let end =
-            usize_at(view, "byteOffset").unwrap_or(0) + usize_at(view, "byteLength").unwrap_or(0);
+        let at = |value: &Value| usize_at(value, "byteOffset").unwrap_or(0);
+        let (Some(start), Some(end)) = (
+            at(view).checked_add(at(&accessor)),
+            at(view).checked_add(usize_at(view, "byteLength").unwrap_or(0)),
+        ) else {
+            return Err(bad(format!("bufferView {v}'s offsets overflow")));
+        };
         let need = count
             .checked_sub(1)
             .map_or(Some(0), |n| {
