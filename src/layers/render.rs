@@ -7,14 +7,18 @@
 //! Invariants: no geometry is subdivided; a view sees a surface point only through the layer
 //! that holds the point's triangle, and only where that layer knows the texel (alpha ≥ ½) and
 //! the texel is that surface (the layer's own depth, so an object's far side is not painted with
-//! its near side); from an input viewpoint that view alone colours every point it shows.
+//! its near side) — or, where no view sees it so, at the layer's edge (the rule of
+//! [`crate::views::visibility`] on the layer's depth); from an input viewpoint that view alone
+//! colours every point it shows.
 
 use super::LayerSet;
 use crate::camera::Pinhole;
 use crate::frame::{FrameError, Image, Rgba};
 use crate::geom::Mesh;
-use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
+use crate::texturing::{Blend, BlendSettings, Sight, Source, SurfacePoint};
 use crate::views::CalibratedView;
+use crate::views::blend::{SAME_SURFACE, nearest_where};
+use crate::views::visibility::{on_surface, sight_in};
 use glam::{DVec2, DVec3};
 
 /// A layer set as a texturing source: each view answers through the layer that holds the
@@ -25,20 +29,52 @@ struct Layered<'a> {
     tolerance: f64,
 }
 
+impl<'a> Layered<'a> {
+    /// The layer of `view` that holds `at`'s triangle (its image and depth), and where `at`
+    /// lands in it: texel and depth.
+    fn texel(
+        &self,
+        view: usize,
+        at: &SurfacePoint,
+    ) -> Option<(&'a Image<Rgba>, &'a Image<f32>, DVec2, f64)> {
+        let vl = &self.set.layers[view];
+        let l = vl.assignment.get(at.object)?.layer(at.triangle)? as usize;
+        let (tx, z) = self.set.projectors[view][l].texel(at.position)?;
+        Some((&vl.layers[l].image, &vl.depth[l], tx, z))
+    }
+}
+
 impl Source for Layered<'_> {
     fn centres(&self) -> &[DVec3] {
         &self.centres
     }
 
-    fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
-        self.colour(view, at).is_some()
+    fn sight(&self, view: usize, at: &SurfacePoint) -> Sight {
+        let Some((image, depth, tx, z)) = self.texel(view, at) else {
+            return Sight::Hidden;
+        };
+        if sample_layer(image, depth, tx, z, self.tolerance).is_some() {
+            return Sight::Seen;
+        }
+        // The layer saw nothing where it holds no texel (alpha below ½).
+        let known = |x, y| {
+            if image.get(x, y).w >= 0.5 {
+                depth.get(x, y)
+            } else {
+                0.0
+            }
+        };
+        match sight_in(depth.size(), known, tx, z, self.tolerance) {
+            Sight::Hidden => Sight::Hidden,
+            _ if edge_colour(image, depth, tx, z).is_some() => Sight::Edge,
+            _ => Sight::Hidden,
+        }
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
-        let vl = &self.set.layers[view];
-        let l = vl.assignment.get(at.object)?.layer(at.triangle)? as usize;
-        let (tx, z) = self.set.projectors[view][l].texel(at.position)?;
-        sample_layer(&vl.layers[l].image, &vl.depth[l], tx, z, self.tolerance)
+        let (image, depth, tx, z) = self.texel(view, at)?;
+        sample_layer(image, depth, tx, z, self.tolerance)
+            .or_else(|| edge_colour(image, depth, tx, z))
     }
 
     fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {
@@ -57,8 +93,11 @@ impl Source for Photographs<'_> {
         &self.centres
     }
 
-    fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
-        self.colour(view, at).is_some()
+    fn sight(&self, view: usize, at: &SurfacePoint) -> Sight {
+        match self.colour(view, at) {
+            Some(_) => Sight::Seen,
+            None => Sight::Hidden,
+        }
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
@@ -107,6 +146,16 @@ pub fn render_projective(
 
 /// A bilinear lookup of a layer at texel `tx` that takes only taps the layer knows (alpha ≥ ½)
 /// and whose surface is at depth `z` (within `tolerance`); `None` when no tap qualifies.
+/// The colour of a layer at texel `tx` for a point at depth `z` that the layer sees only at its
+/// edge ([`Sight::Edge`]): its texels that the layer holds (alpha ≥ ½) and whose depth is the
+/// point's surface, bilinear, else the nearest of them around `tx`.
+fn edge_colour(img: &Image<Rgba>, depth: &Image<f32>, tx: DVec2, z: f64) -> Option<Rgba> {
+    let surface =
+        |x: u32, y: u32, c: Rgba| c.w >= 0.5 && on_surface(depth.get(x, y), z, SAME_SURFACE);
+    img.sample_bilinear_where(tx, surface)
+        .or_else(|| nearest_where(img, tx, surface))
+}
+
 fn sample_layer(
     img: &Image<Rgba>,
     depth: &Image<f32>,

@@ -1,5 +1,5 @@
 //! The view-independent bake (beyond paper 5: what mvs-texturing users expect): per face, the
-//! view that sees it largest (projected area) with every texel of the face seen, its texels
+//! view that sees it largest (projected area) with every texel of the face seen clearly, its texels
 //! copied from that view's master texture; a face no view sees whole takes, texel by texel, the
 //! mean of the views that see it. Built while the views stream past, so only one master
 //! texture is in memory at a time. Then **levelled**: each view's texels are scaled by one gain
@@ -24,9 +24,14 @@ pub struct Baker {
     chosen: Image<Rgba>,
     /// Per texel: the view `chosen` took it from (`u32::MAX`: none).
     from: Vec<u32>,
-    /// Per texel: the sum of every view's colour that sees it (alpha: how many).
+    /// Per texel: the weighted sum of every view's colour that sees it (alpha: the weights'
+    /// sum; [`EDGE_WEIGHT`] for a view that sees it only at its edge, 1 otherwise).
     sum: Image<Rgba>,
 }
+
+/// The weight of a texel a view sees only at its edge ([`super::EDGE_ALPHA`]) in the
+/// texel-by-texel mean: small enough that it counts only where no view sees the texel clearly.
+const EDGE_WEIGHT: f32 = 1e-3;
 
 impl Baker {
     /// An empty bake over `atlas`.
@@ -51,8 +56,10 @@ impl Baker {
     ) {
         let (w, _) = atlas.size();
         for (s, m) in self.sum.pixels_mut().iter_mut().zip(master.pixels()) {
+            // A texel seen only at the view's edge counts where no view sees it clearly.
+            let weight = if m.w >= 1.0 { 1.0 } else { EDGE_WEIGHT };
             if m.w > 0.0 {
-                *s += m.truncate().extend(1.0);
+                *s += (m.truncate() * weight).extend(weight);
             }
         }
         for (t, place) in atlas.layout.faces.iter().enumerate() {
@@ -64,7 +71,7 @@ impl Baker {
             if self.best[t].is_some_and(|(_, a)| area <= a) {
                 continue;
             }
-            // Whole: every texel inside the triangle seen.
+            // Whole: every texel inside the triangle seen clearly.
             let [bx, by, bw, bh] = place.bbox;
             let inside = |x: u32, y: u32| {
                 let i = (y * w + x) as usize;
@@ -77,7 +84,7 @@ impl Baker {
             let mut whole = true;
             'scan: for y in by..by + bh {
                 for x in bx..bx + bw {
-                    if inside(x, y) && master.pixels()[(y * w + x) as usize].w == 0.0 {
+                    if inside(x, y) && master.pixels()[(y * w + x) as usize].w < 1.0 {
                         whole = false;
                         break 'scan;
                     }

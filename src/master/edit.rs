@@ -81,7 +81,7 @@ pub fn propagate(
                     Apply::Add => (t.truncate() + d.truncate()).max(glam::Vec3::ZERO),
                     Apply::Replace => a.truncate(),
                 };
-                *t = c.extend(1.0);
+                *t = c.extend(t.w);
                 changed += 1;
             }
         }

@@ -1,5 +1,5 @@
 //! Storage of a Master Texture encoding, engine-neutral: one PNG per view (`master_NNNN.png`,
-//! alpha = the view sees the texel), the packing map and the one UV set as JSON (`masters.json`),
+//! alpha = the view sees the texel, ½ at its edge), the packing map and the one UV set as JSON (`masters.json`),
 //! and the mesh with that single UV set as glTF 2.0 binary (`mesh.glb`: one primitive of
 //! unwelded corners, three a face in face order, its texture embedded) — written with
 //! `serde_json` and the `gltf` crate's GLB container, and read back by the `gltf` crate to

@@ -26,7 +26,8 @@ pub mod render;
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{FrameError, Image, Rgba};
 use crate::geom::Mesh;
-use crate::views::visibility::DepthMap;
+use crate::texturing::Sight;
+use crate::views::visibility::{DepthMap, sight_at};
 use glam::{DVec2, Vec3, Vec4};
 use layout::{Layout, MAX_FACE_SIDE};
 use rayon::prelude::*;
@@ -227,6 +228,10 @@ fn clamp_to_triangle((b1, b2): (f64, f64)) -> (f64, f64) {
 /// Relative depth tolerance of the visibility test while encoding (as the views module's).
 pub const TOLERANCE: f64 = crate::views::visibility::DEFAULT_TOLERANCE;
 
+/// A master texel's alpha where its view sees the surface only at the edge of what it saw
+/// ([`Sight::Edge`]); 1 where it sees it clearly, 0 where it does not see it.
+pub const EDGE_ALPHA: f32 = 0.5;
+
 /// Encodes one view — `image` seen through `camera` (undistorted), with `depth` its depth map
 /// of the mesh — into a master texture: each texel the colour the view shows at the texel's
 /// surface point, filtered over the view's pixels of that surface; alpha 0 where the view does
@@ -240,7 +245,6 @@ pub fn encode(
     let (w, h) = atlas.size();
     let mut out = Image::new(w, h, Vec4::ZERO)?;
     let gd = depth.gd();
-    let (gw, gh) = gd.size();
     out.pixels_mut()
         .par_chunks_mut(w as usize)
         .enumerate()
@@ -250,22 +254,18 @@ pub fn encode(
                 if atlas.face[i] == u32::MAX {
                     continue;
                 }
-                // Projected once: the visibility test of `DepthMap::sees` (the depth map's
-                // texel under the point, the point at most TOLERANCE behind it), then the
+                // Projected once: the visibility test of `DepthMap::sees`, then the
                 // surface-aware lookup.
                 let p = atlas.point[i].as_dvec3();
                 let Some(q) = camera.project(p) else { continue };
-                let (u, v) = (q.uv.x, q.uv.y);
-                if !(u >= 0.0 && v >= 0.0 && u < gw as f64 && v < gh as f64) {
-                    continue;
-                }
-                let stored = gd.pixels()[v as usize * gw as usize + u as usize] as f64;
                 let z = 1.0 / q.gd;
-                if stored <= 0.0 || z > (1.0 / stored) * (1.0 + TOLERANCE) {
-                    continue;
-                }
+                let alpha = match sight_at(gd, q.uv, z, TOLERANCE) {
+                    Sight::Seen => 1.0,
+                    Sight::Edge => EDGE_ALPHA,
+                    Sight::Hidden => continue,
+                };
                 let c = crate::views::blend::sample_on_surface(image, gd, q.uv, z);
-                *texel = c.truncate().extend(1.0);
+                *texel = c.truncate().extend(alpha);
             }
         });
     Ok(out)
@@ -454,18 +454,22 @@ mod tests {
         let mut masters = enc.masters.clone();
         let changed = edit::propagate(&mut masters, &d, &after0, edit::Apply::Add).unwrap();
         assert!(changed > 500, "{changed}");
-        // Against each view's own edited image encoded, where both views see the surface.
+        // Against each view's own edited image encoded, where both views see the surface
+        // clearly (a texel seen only at a view's edge holds a colour up to a pixel away).
         for v in 1..set.views.len() {
             let (_, cam) = &enc.cameras[v];
             let depth = DepthMap::through(cam, &mesh).unwrap();
             let truth = encode(&enc.atlas, cam, &edited[v], &depth).unwrap();
+            let clear = |i: usize| {
+                d.pixels()[i].w > 0.0
+                    && enc.masters[0].pixels()[i].w >= 1.0
+                    && truth.pixels()[i].w >= 1.0
+                    && masters[v].pixels()[i].w >= 1.0
+            };
             let (mut n, mut err) = (0usize, 0.0f64);
             let mut abs = Vec::new();
             for i in 0..truth.pixels().len() {
-                if d.pixels()[i].w > 0.0
-                    && truth.pixels()[i].w > 0.0
-                    && masters[v].pixels()[i].w > 0.0
-                {
+                if clear(i) {
                     let e = (truth.pixels()[i] - masters[v].pixels()[i]).truncate();
                     err += e.length_squared() as f64 / 3.0;
                     n += 1;
@@ -478,10 +482,7 @@ mod tests {
             // Without the edit propagated: how far the view was from its edited self.
             let mut base = 0.0f64;
             for i in 0..truth.pixels().len() {
-                if d.pixels()[i].w > 0.0
-                    && truth.pixels()[i].w > 0.0
-                    && masters[v].pixels()[i].w > 0.0
-                {
+                if clear(i) {
                     base += (truth.pixels()[i] - enc.masters[v].pixels()[i])
                         .truncate()
                         .length_squared() as f64

@@ -1,8 +1,8 @@
 //! Rendering from master textures (paper 5 §4): the mesh drawn through a new camera by the
 //! projective-texturing renderer ([`crate::texturing`]), each view answering from its master
 //! texture at the point's one texture coordinate. A view sees a point where its master
-//! texture's texel there has alpha (the encoder marked occlusion), so no depth map is needed at
-//! render time; every weighting works, the per-face ones asking the same texels at each
+//! texture's texel there has alpha (the encoder marked occlusion, and a view's edges with
+//! alpha ½), so no depth map is needed at render time; every weighting works, the per-face ones asking the same texels at each
 //! triangle's centroid.
 //!
 //! Invariant: the same camera, masters and settings give the same pixels on any thread count.
@@ -11,7 +11,7 @@ use super::MasterError;
 use super::layout::Layout;
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
-use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
+use crate::texturing::{Blend, BlendSettings, Sight, Source, SurfacePoint};
 use glam::{DVec2, DVec3};
 
 /// Colour of `master` at atlas point `p`, bilinear over the texels that hold a colour (alpha),
@@ -20,11 +20,19 @@ pub fn lookup(master: &Image<Rgba>, p: DVec2) -> Option<Rgba> {
     master.sample_bilinear_where(p, |_, _, c| c.w > 0.0)
 }
 
-/// Whether `master` holds the surface at atlas point `p` (its nearest texel has alpha).
-fn holds(master: &Image<Rgba>, p: DVec2) -> bool {
+/// How `master`'s view saw the surface at atlas point `p`, by its nearest texel's alpha (1:
+/// clearly, [`super::EDGE_ALPHA`]: at an edge, 0: not at all).
+fn sight(master: &Image<Rgba>, p: DVec2) -> Sight {
     let (w, h) = master.size();
     let (x, y) = (p.x.floor(), p.y.floor());
-    x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64 && master.get(x as u32, y as u32).w > 0.0
+    if !(x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64) {
+        return Sight::Hidden;
+    }
+    match master.get(x as u32, y as u32).w {
+        a if a >= 1.0 => Sight::Seen,
+        a if a > 0.0 => Sight::Edge,
+        _ => Sight::Hidden,
+    }
 }
 
 /// Master textures as a texturing source: one a view, all laid out by one layout.
@@ -47,8 +55,8 @@ impl Source for Masters<'_> {
         &self.centres
     }
 
-    fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
-        holds(&self.masters[view], self.atlas_point(at))
+    fn sight(&self, view: usize, at: &SurfacePoint) -> Sight {
+        sight(&self.masters[view], self.atlas_point(at))
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {

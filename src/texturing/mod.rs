@@ -10,9 +10,15 @@
 //! answers through each object's layer), "Master Texture" §4 (a source that answers from one
 //! texture coordinate a point).
 //!
+//! A view sees a point clearly ([`Sight::Seen`]) or only at the edge of what it saw
+//! ([`Sight::Edge`]: within a texel of a silhouette, where the render's pixel grid and the view's
+//! disagree). A pixel is blended from the views that see it clearly; only where none does are the
+//! edge views blended instead, so a boundary pixel is coloured rather than left a hole, and an
+//! edge view never pulls a clearly seen pixel toward an occluder's colour.
+//!
 //! Invariants: a view contributes to a pixel only if its source says it sees the pixel's surface
-//! point; the weights of a pixel sum to one; the same inputs give the same pixels on any thread
-//! count.
+//! point (clearly, or at the edge when no view sees it clearly); the weights of a pixel sum to
+//! one; the same inputs give the same pixels on any thread count.
 
 pub mod faces;
 pub mod view_map;
@@ -41,15 +47,31 @@ pub struct SurfacePoint {
     pub position: DVec3,
 }
 
+/// How a view sees a surface point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sight {
+    /// Outside the view, behind it, or hidden by another surface.
+    Hidden,
+    /// Not at the view's sample under the point, but between samples of which one saw the
+    /// point's surface or nothing: the point is within a texel of a silhouette the view saw.
+    Edge,
+    /// The view's sample under the point is the point's surface.
+    Seen,
+}
+
 /// What textures a projective render: a set of views, each of which may see a surface point
 /// and, when it does, gives it a colour.
 pub trait Source: Sync {
     /// Each view's centre of projection (the views are `0..centres().len()`).
     fn centres(&self) -> &[DVec3];
-    /// Whether view `view` sees `at`.
-    fn sees(&self, view: usize, at: &SurfacePoint) -> bool;
-    /// The colour view `view` gives `at`, where it sees it; `None` drops the view from the
-    /// pixel's blend (the others are renormalized).
+    /// How view `view` sees `at`.
+    fn sight(&self, view: usize, at: &SurfacePoint) -> Sight;
+    /// Whether view `view` sees `at` clearly.
+    fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
+        self.sight(view, at) == Sight::Seen
+    }
+    /// The colour view `view` gives `at`, where it sees it (clearly or at the edge); `None`
+    /// drops the view from the pixel's blend (the others are renormalized).
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba>;
     /// Where world point `p` lands in view `view`'s image, in pixels (the best-face weighting
     /// compares projected areas); `None` behind the view.
@@ -65,6 +87,13 @@ pub struct Blend {
     pub covered: usize,
     /// Of those, pixels no view sees.
     pub holes: usize,
+}
+
+impl Blend {
+    /// The share of the mesh's pixels no view sees (0 when none shows the mesh).
+    pub fn unseen_share(&self) -> f64 {
+        self.holes as f64 / self.covered.max(1) as f64
+    }
 }
 
 /// Renders `meshes` through `camera`, textured by `source`'s views.
@@ -100,28 +129,36 @@ pub fn render(
                     bary: f.bary,
                     position: (c[0] * f.bary.x + c[1] * f.bary.y + c[2] * f.bary.z).as_dvec3(),
                 };
-                let sees = |i: usize| source.sees(i, &at);
-                let ws = match &faces {
-                    FaceWeights::PerPoint => weights(
-                        at.position,
-                        eye,
-                        centres,
-                        sees,
-                        settings.weighting,
-                        settings.k,
-                    ),
-                    FaceWeights::BestFace(table) => table[o][t]
-                        .filter(|&i| sees(i))
-                        .map_or_else(Vec::new, |i| vec![(i, 1.0)]),
-                    FaceWeights::ViewMap(maps) => {
-                        let mut ws = maps[o].weights(t, (eye - at.position).normalize());
-                        ws.retain(|&(i, _)| sees(i));
-                        let sum: f64 = ws.iter().map(|w| w.1).sum();
-                        ws.iter_mut().for_each(|w| w.1 /= sum);
-                        ws
-                    }
-                };
-                match blend(source, &at, &ws) {
+                // The views that see the point clearly; failing them, those at an edge.
+                let colour = [true, false].into_iter().find_map(|clearly| {
+                    let sees = |i: usize| match source.sight(i, &at) {
+                        Sight::Seen => true,
+                        Sight::Edge => !clearly,
+                        Sight::Hidden => false,
+                    };
+                    let ws = match &faces {
+                        FaceWeights::PerPoint => weights(
+                            at.position,
+                            eye,
+                            centres,
+                            sees,
+                            settings.weighting,
+                            settings.k,
+                        ),
+                        FaceWeights::BestFace(table) => table[o][t]
+                            .filter(|&i| sees(i))
+                            .map_or_else(Vec::new, |i| vec![(i, 1.0)]),
+                        FaceWeights::ViewMap(maps) => {
+                            let mut ws = maps[o].weights(t, (eye - at.position).normalize());
+                            ws.retain(|&(i, _)| sees(i));
+                            let sum: f64 = ws.iter().map(|w| w.1).sum();
+                            ws.iter_mut().for_each(|w| w.1 /= sum);
+                            ws
+                        }
+                    };
+                    blend(source, &at, &ws)
+                });
+                match colour {
                     Some(colour) => *out = colour.truncate().extend(1.0),
                     None => {
                         holes += 1;

@@ -7,10 +7,10 @@
 //! Invariant: a view without a loaded image or a depth map, or the one left out, sees nothing.
 
 use super::CalibratedView;
-use super::visibility::DepthMap;
+use super::visibility::{DepthMap, on_surface};
 use crate::frame::{FrameError, Image, Rgba, pixel_centre};
 use crate::geom::Mesh;
-use crate::texturing::{Blend, BlendSettings, Source, SurfacePoint};
+use crate::texturing::{Blend, BlendSettings, Sight, Source, SurfacePoint};
 use glam::{DVec2, DVec3, Vec2, Vec4};
 use rayon::prelude::*;
 
@@ -48,13 +48,13 @@ impl Source for ViewSource<'_> {
         &self.centres
     }
 
-    fn sees(&self, view: usize, at: &SurfacePoint) -> bool {
-        Some(view) != self.exclude
-            && self.views[view].image.is_some()
-            && self
-                .depth
-                .get(view)
-                .is_some_and(|d| d.sees(at.position, self.tolerance))
+    fn sight(&self, view: usize, at: &SurfacePoint) -> Sight {
+        match self.depth.get(view) {
+            Some(d) if Some(view) != self.exclude && self.views[view].image.is_some() => {
+                d.sight(at.position, self.tolerance)
+            }
+            _ => Sight::Hidden,
+        }
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
@@ -90,19 +90,51 @@ pub fn render(
 
 /// How far (relative depth) a texel's surface may be from the sampled point and still be the
 /// same surface, for [`sample_on_surface`].
-const SAME_SURFACE: f64 = 0.05;
+pub(crate) const SAME_SURFACE: f64 = 0.05;
 
 /// A bilinear lookup of a view's image at `px` that takes only the texels whose depth says
 /// they show the surface at depth `z`: at a silhouette, plain bilinear filtering would mix the
 /// background (or an occluder) into the surface's colour. The depth map `gd` is on the image's
-/// own pixel grid (a view without distortion). Falls back to the nearest texel when no tap is on
-/// the surface.
+/// own pixel grid (a view without distortion). When no tap is on the surface (a point the
+/// visibility test keeps at the view's edge), the nearest texel around the point that is on the
+/// surface answers; failing that, the nearest texel.
 pub(crate) fn sample_on_surface(img: &Image<Rgba>, gd: &Image<f32>, px: DVec2, z: f64) -> Rgba {
-    img.sample_bilinear_where(px, |x, y, _| {
-        let g = gd.get(x, y) as f64;
-        g > 0.0 && (1.0 / g - z).abs() <= SAME_SURFACE * z
-    })
-    .unwrap_or_else(|| img.sample_nearest(Vec2::new(px.x as f32, px.y as f32)))
+    let surface = |x: u32, y: u32, _: Rgba| on_surface(gd.get(x, y), z, SAME_SURFACE);
+    img.sample_bilinear_where(px, surface)
+        .or_else(|| nearest_where(img, px, surface))
+        .unwrap_or_else(|| img.sample_nearest(Vec2::new(px.x as f32, px.y as f32)))
+}
+
+/// The colour of the texel nearest `px`, among the 3 × 3 around the texel under it, that
+/// `keep` accepts; ties go to the first in row order.
+pub(crate) fn nearest_where(
+    img: &Image<Rgba>,
+    px: DVec2,
+    keep: impl Fn(u32, u32, Rgba) -> bool,
+) -> Option<Rgba> {
+    let (w, h) = img.size();
+    if !px.is_finite() {
+        return None;
+    }
+    let (cx, cy) = (px.x.floor() as i64, px.y.floor() as i64);
+    let mut best: Option<(f64, Rgba)> = None;
+    for y in cy - 1..=cy + 1 {
+        for x in cx - 1..=cx + 1 {
+            if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+                continue;
+            }
+            let (x, y) = (x as u32, y as u32);
+            let c = img.get(x, y);
+            if !keep(x, y, c) {
+                continue;
+            }
+            let d = (pixel_centre(x as f64, y as f64) - px).length_squared();
+            if best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, c));
+            }
+        }
+    }
+    best.map(|(_, c)| c)
 }
 
 /// `view`'s image resampled to its undistorted pinhole ([`CalibratedView::pinhole`]); the image

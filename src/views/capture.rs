@@ -209,6 +209,7 @@ pub fn capture_of(
         views,
         image_folder: PathBuf::new(),
         warnings: Vec::new(),
+        summary: Default::default(),
     })
 }
 

@@ -2,7 +2,8 @@
 //! and written (text). Formats as COLMAP documents them (colmap.github.io, "Output format");
 //! the fixtures under `tests/fixtures/colmap/` are written by COLMAP itself (pycolmap).
 //!
-//! Rigs and frames (COLMAP 3.12 and later) are not read: every image's pose is in `images`.
+//! Rigs and frames (COLMAP 3.12 and later, [`super::rig`]) are read when the model has them,
+//! and pose every image a frame holds; `images` poses the others.
 
 use super::{CalibratedView, CameraModel, Intrinsics, Pose, ViewsError};
 use glam::{DQuat, DVec3};
@@ -22,6 +23,10 @@ pub fn model_files(dir: &Path) -> Vec<std::path::PathBuf> {
         "points3D.txt",
         "cameras.bin",
         "images.bin",
+        "rigs.txt",
+        "frames.txt",
+        "rigs.bin",
+        "frames.bin",
     ]
     .into_iter()
     .map(|f| dir.join(f))
@@ -31,7 +36,56 @@ pub fn model_files(dir: &Path) -> Vec<std::path::PathBuf> {
 /// Reads the model in `dir`: text when `cameras.txt` is there, else binary. Returns the views in
 /// image-id order and warnings for what was skipped.
 pub fn read_model(dir: &Path) -> Result<(Vec<CalibratedView>, Vec<String>), ViewsError> {
-    let (cameras, images) = if dir.join("cameras.txt").is_file() {
+    read_model_summarized(dir).map(|(views, warnings, _)| (views, warnings))
+}
+
+/// What a model held, for a verbose report.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ModelSummary {
+    /// Text (`.txt`) or binary (`.bin`).
+    pub text: bool,
+    /// Cameras read.
+    pub cameras: usize,
+    /// Images read.
+    pub images: usize,
+    /// Rigs read (0 for a model from before COLMAP 3.12).
+    pub rigs: usize,
+    /// Frames read.
+    pub frames: usize,
+    /// Images posed through a frame.
+    pub posed_by_frame: usize,
+    /// Of the images posed through a frame, those through a sensor offset from the rig's
+    /// reference.
+    pub posed_by_offset: usize,
+}
+
+impl std::fmt::Display for ModelSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} model: {} cameras, {} images",
+            if self.text { "text" } else { "binary" },
+            self.cameras,
+            self.images
+        )?;
+        if self.rigs + self.frames == 0 {
+            return write!(f, "; no rigs or frames (every pose from images)");
+        }
+        write!(
+            f,
+            "; {} rigs, {} frames: {} images posed by their frame, {} of them through a \
+             sensor's offset in its rig",
+            self.rigs, self.frames, self.posed_by_frame, self.posed_by_offset
+        )
+    }
+}
+
+/// [`read_model`], with a summary of what was read.
+pub fn read_model_summarized(
+    dir: &Path,
+) -> Result<(Vec<CalibratedView>, Vec<String>, ModelSummary), ViewsError> {
+    let text = dir.join("cameras.txt").is_file();
+    let (cameras, mut images) = if text {
         (
             read_cameras_text(&dir.join("cameras.txt"))?,
             read_images_text(&dir.join("images.txt"))?,
@@ -44,12 +98,54 @@ pub fn read_model(dir: &Path) -> Result<(Vec<CalibratedView>, Vec<String>), View
     } else {
         return Err(ViewsError::NoModel(dir.to_path_buf()));
     };
+    let mut summary = ModelSummary {
+        text,
+        cameras: cameras.len(),
+        images: images.len(),
+        ..ModelSummary::default()
+    };
+    let mut rig_warnings = Vec::new();
+    if let Some(rigs) = super::rig::Rigs::read(dir, text)? {
+        summary.rigs = rigs.rigs.len();
+        summary.frames = rigs.frames.len();
+        let posed = rigs.image_poses()?;
+        let mut disagree = 0;
+        for im in &mut images {
+            let Some(p) = posed.get(&im.id) else { continue };
+            if p.camera != im.camera {
+                return Err(ViewsError::Malformed {
+                    path: im.file.clone(),
+                    element: im.element.clone(),
+                    reason: format!(
+                        "its camera is {}, but its frame holds it as camera {}'s",
+                        im.camera, p.camera
+                    ),
+                });
+            }
+            let (a, b) = (&im.pose, &p.pose);
+            if a.rotation.dot(b.rotation).abs() < 1.0 - 1e-9
+                || (a.translation - b.translation).length() > 1e-6 * (1.0 + b.translation.length())
+            {
+                disagree += 1;
+            }
+            im.pose = p.pose;
+            summary.posed_by_frame += 1;
+            summary.posed_by_offset += p.offset as usize;
+        }
+        if disagree > 0 {
+            rig_warnings.push(format!(
+                "{disagree} images' poses in the images file disagree with their frames'; the \
+                 frames' (rig pose and sensor offset) are used"
+            ));
+        }
+    }
     let (views, mut warnings) = assemble(dir, cameras, images)?;
+    warnings.extend(rig_warnings);
     let points = dir.join("points3D.txt");
     if points.is_file() {
         warnings.extend(check_points_text(&points, &views)?);
     }
-    Ok((views, warnings))
+    Ok((views, warnings, summary))
 }
 
 /// The sanity check `points3D.txt` allows: every observation of a 3-D point must see it in
@@ -163,7 +259,7 @@ fn assemble(
     Ok((views, warnings))
 }
 
-fn read_bounded(path: &Path) -> Result<Vec<u8>, ViewsError> {
+pub(super) fn read_bounded(path: &Path) -> Result<Vec<u8>, ViewsError> {
     use std::io::Read as _;
     let io = |source| ViewsError::Io {
         path: path.to_path_buf(),
@@ -180,7 +276,11 @@ fn read_bounded(path: &Path) -> Result<Vec<u8>, ViewsError> {
     Ok(bytes)
 }
 
-fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>) -> ViewsError {
+pub(super) fn malformed(
+    path: &Path,
+    element: impl Into<String>,
+    reason: impl Into<String>,
+) -> ViewsError {
     ViewsError::Malformed {
         path: path.to_path_buf(),
         element: element.into(),
@@ -188,7 +288,7 @@ fn malformed(path: &Path, element: impl Into<String>, reason: impl Into<String>)
     }
 }
 
-fn pose_of(q: [f64; 4], t: [f64; 3]) -> Result<Pose, String> {
+pub(super) fn pose_of(q: [f64; 4], t: [f64; 3]) -> Result<Pose, String> {
     if !q.iter().chain(&t).all(|v| v.is_finite()) {
         return Err("the pose is not finite".into());
     }
@@ -204,18 +304,18 @@ fn pose_of(q: [f64; 4], t: [f64; 3]) -> Result<Pose, String> {
 }
 
 /// Lines that hold data: trimmed, neither empty nor comments, with their 1-based numbers.
-fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+pub(super) fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
     text.lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
 }
 
-fn text_of(path: &Path) -> Result<String, ViewsError> {
+pub(super) fn text_of(path: &Path) -> Result<String, ViewsError> {
     String::from_utf8(read_bounded(path)?).map_err(|_| malformed(path, "file", "not UTF-8 text"))
 }
 
-fn parse<T: std::str::FromStr>(
+pub(super) fn parse<T: std::str::FromStr>(
     path: &Path,
     line: usize,
     what: &str,
@@ -320,14 +420,14 @@ fn read_images_text(path: &Path) -> Result<Vec<ImageRecord>, ViewsError> {
 }
 
 /// A little-endian reader over a binary model that names the file in every error.
-struct Binary<'a> {
-    path: &'a Path,
-    bytes: &'a [u8],
-    at: usize,
+pub(super) struct Binary<'a> {
+    pub(super) path: &'a Path,
+    pub(super) bytes: &'a [u8],
+    pub(super) at: usize,
 }
 
 impl Binary<'_> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&[u8], ViewsError> {
+    pub(super) fn take(&mut self, n: usize, what: &str) -> Result<&[u8], ViewsError> {
         let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
         let Some(end) = end else {
             return Err(malformed(
@@ -340,20 +440,20 @@ impl Binary<'_> {
         self.at = end;
         Ok(s)
     }
-    fn u64(&mut self, what: &str) -> Result<u64, ViewsError> {
+    pub(super) fn u64(&mut self, what: &str) -> Result<u64, ViewsError> {
         let b = self.take(8, what)?;
         Ok(u64::from_le_bytes(b.try_into().unwrap_or_default()))
     }
-    fn u32(&mut self, what: &str) -> Result<u32, ViewsError> {
+    pub(super) fn u32(&mut self, what: &str) -> Result<u32, ViewsError> {
         let b = self.take(4, what)?;
         Ok(u32::from_le_bytes(b.try_into().unwrap_or_default()))
     }
-    fn f64(&mut self, what: &str) -> Result<f64, ViewsError> {
+    pub(super) fn f64(&mut self, what: &str) -> Result<f64, ViewsError> {
         let b = self.take(8, what)?;
         Ok(f64::from_le_bytes(b.try_into().unwrap_or_default()))
     }
     /// A count of records of at least `each` bytes, checked against the bytes left.
-    fn count(&mut self, each: usize, what: &str) -> Result<usize, ViewsError> {
+    pub(super) fn count(&mut self, each: usize, what: &str) -> Result<usize, ViewsError> {
         let n = self.u64(what)?;
         let left = (self.bytes.len() - self.at) as u64;
         if n.saturating_mul(each as u64) > left {

@@ -2,7 +2,8 @@
 //! input of view-dependent texturing, layered projective textures (paper 4: "Layered
 //! view-dependent projective textures") and the Master Texture (paper 5: "Master Texture Space").
 //!
-//! A [`ViewSet`] reads and writes COLMAP models ([`colmap`]); each [`CalibratedView`] has its
+//! A [`ViewSet`] reads and writes COLMAP models ([`colmap`], with COLMAP 4's rigs and frames:
+//! [`rig`]); each [`CalibratedView`] has its
 //! intrinsics with lens distortion ([`intrinsics`]), its pose and its image. [`visibility`]
 //! gives each view's depth map of a mesh; [`blend`] makes the views a source of
 //! [`crate::texturing`], which renders the mesh at a new viewpoint from them; [`capture`] renders synthetic captures whose
@@ -15,6 +16,7 @@ pub mod blend;
 pub mod capture;
 pub mod colmap;
 pub mod intrinsics;
+pub mod rig;
 pub mod score;
 pub mod visibility;
 
@@ -191,13 +193,15 @@ pub struct ViewSet {
     pub image_folder: PathBuf,
     /// What the model held that was skipped (a camera no image uses, …).
     pub warnings: Vec<String>,
+    /// What the model held: cameras, images, rigs and frames.
+    pub summary: colmap::ModelSummary,
 }
 
 impl ViewSet {
     /// Reads the COLMAP model in `model` (text or binary); images are looked for in
     /// `image_folder` (default: `model` itself, then its `images/` subfolder).
     pub fn load(model: &Path, image_folder: Option<&Path>) -> Result<ViewSet, ViewsError> {
-        let (views, warnings) = colmap::read_model(model)?;
+        let (views, warnings, summary) = colmap::read_model_summarized(model)?;
         let image_folder = image_folder.map_or_else(
             || {
                 let beside = model.join("images");
@@ -212,6 +216,7 @@ impl ViewSet {
             views,
             image_folder,
             warnings,
+            summary,
         })
     }
 

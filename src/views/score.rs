@@ -128,7 +128,7 @@ pub fn leave_one_out(
             report.views.push(ViewScore {
                 name: view.name.clone(),
                 scores,
-                holes: b.holes as f64 / b.covered.max(1) as f64,
+                holes: b.unseen_share(),
             });
         }
         progress.advance(1);

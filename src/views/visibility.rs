@@ -3,15 +3,21 @@
 //! saw there. Occluded and out-of-frame points are refused, so a blend never copies an
 //! occluder's pixels onto what it hides.
 //!
-//! Invariant: a point is visible in a view when it projects inside the image and its depth along
-//! the pixel's ray is within a relative tolerance of the depth map's.
+//! Invariant: a point is seen ([`Sight::Seen`]) when it projects inside the image and the
+//! depth map's texel under it does not hide it (the point at most a relative tolerance behind
+//! the stored surface). Failing that, it is at the view's edge ([`Sight::Edge`]) when it is not
+//! behind all four texels of its bilinear footprint (an empty texel being infinitely far) by
+//! more than the tolerance plus half their depth range (beyond the image, as on an empty
+//! texel, the view saw nothing): a surface the view saw is then not lost
+//! where a render's pixel grid is not the view's, a fraction of a texel from a silhouette.
 
 use super::CalibratedView;
 use crate::camera::Projection;
 use crate::frame::{FrameError, Image};
 use crate::geom::Mesh;
 use crate::raster::{NoAttributes, rasterize};
-use glam::{DVec2, DVec3, Vec2};
+use crate::texturing::Sight;
+use glam::{DVec2, DVec3};
 
 pub use crate::texturing::DEFAULT_TOLERANCE;
 
@@ -54,24 +60,75 @@ impl DepthMap {
     }
 
     /// Whether `world` is the surface this view saw at its pixel, within `tolerance` (relative
-    /// depth). Points outside the frame, behind the camera or where the view saw nothing are
-    /// not visible.
+    /// depth; the module's rule). Points outside the frame, behind the camera or where the view
+    /// saw nothing near them are not visible.
     pub fn sees(&self, world: DVec3, tolerance: f64) -> bool {
-        let Some(p) = self.camera.project(world) else {
-            return false;
-        };
-        let (w, h) = self.gd.size();
-        let uv: DVec2 = p.uv;
-        if !(uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64) {
-            return false;
-        }
-        let stored = self.gd.sample_nearest(Vec2::new(uv.x as f32, uv.y as f32)) as f64;
-        if stored <= 0.0 {
-            return false;
-        }
-        // Depth z = 1/gd; the point passes when it is not behind the stored surface by more
-        // than the tolerance.
-        let (z, z_map) = (1.0 / p.gd, 1.0 / stored);
-        z <= z_map * (1.0 + tolerance)
+        self.sight(world, tolerance) == Sight::Seen
     }
+
+    /// How the view sees `world` (the module's rule), within `tolerance` (relative depth).
+    pub fn sight(&self, world: DVec3, tolerance: f64) -> Sight {
+        match self.camera.project(world) {
+            Some(p) => sight_at(&self.gd, p.uv, 1.0 / p.gd, tolerance),
+            None => Sight::Hidden,
+        }
+    }
+}
+
+/// The module's visibility rule for a point of depth `z` projecting at `uv` in the depth map
+/// `gd` (generalized depth `1/z`, zero where nothing was drawn).
+pub(crate) fn sight_at(gd: &Image<f32>, uv: DVec2, z: f64, tolerance: f64) -> Sight {
+    sight_in(gd.size(), |x, y| gd.get(x, y), uv, z, tolerance)
+}
+
+/// [`sight_at`] in a `w` × `h` depth map given texel by texel (`gd(x, y)`, zero where nothing
+/// was seen).
+pub(crate) fn sight_in(
+    (w, h): (u32, u32),
+    gd: impl Fn(u32, u32) -> f32,
+    uv: DVec2,
+    z: f64,
+    tolerance: f64,
+) -> Sight {
+    if !(uv.is_finite() && z.is_finite()) {
+        return Sight::Hidden;
+    }
+    if uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64 {
+        let stored = gd(uv.x as u32, uv.y as u32) as f64;
+        if stored > 0.0 && z <= (1.0 / stored) * (1.0 + tolerance) {
+            return Sight::Seen;
+        }
+    }
+    // The bilinear footprint: the texel centres on either side of `uv` in each axis. The
+    // surface the view saw passes between them, so the point is hidden only when it is behind
+    // all of them — by more than the tolerance and, as a shadow map's slope-scaled bias, half
+    // the depth range they span (a crease between them is deeper than any of them). A texel
+    // where the view saw nothing is infinitely far, but one at least must have seen something
+    // (a point between four empty texels is a sliver the view missed).
+    let (x0, y0) = ((uv.x - 0.5).floor() as i64, (uv.y - 0.5).floor() as i64);
+    let (mut nearest, mut farthest) = (f64::INFINITY, 0.0f64);
+    for (x, y) in [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)] {
+        // Beyond the image, as on an empty texel, the view saw nothing.
+        let inside = x >= 0 && y >= 0 && x < w as i64 && y < h as i64;
+        let g = if inside {
+            gd(x as u32, y as u32) as f64
+        } else {
+            0.0
+        };
+        let depth = if g > 0.0 { 1.0 / g } else { f64::INFINITY };
+        nearest = nearest.min(depth);
+        farthest = farthest.max(depth);
+    }
+    if nearest.is_finite() && z <= farthest * (1.0 + tolerance) + 0.5 * (farthest - nearest) {
+        Sight::Edge
+    } else {
+        Sight::Hidden
+    }
+}
+
+/// Whether the stored generalized depth `g` is the surface at depth `z`, within `tolerance`
+/// (relative to `z`).
+pub(crate) fn on_surface(g: f32, z: f64, tolerance: f64) -> bool {
+    let g = g as f64;
+    g > 0.0 && (1.0 / g - z).abs() <= tolerance * z
 }

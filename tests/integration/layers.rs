@@ -369,6 +369,7 @@ fn a_colmap_model_of_the_scene_builds_the_same_layers_as_the_capture_it_came_fro
         views: views.clone(),
         image_folder: PathBuf::new(),
         warnings: Vec::new(),
+        summary: Default::default(),
     };
     trompe::views::capture::write_capture(&model, &set).expect("written");
     let loaded = {

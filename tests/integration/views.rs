@@ -217,3 +217,228 @@ fn a_capture_is_reproduced_at_its_views_and_rebuilt_when_one_is_left_out() {
         );
     }
 }
+
+#[test]
+fn a_render_on_a_finer_grid_than_its_only_view_leaves_no_boundary_holes() {
+    // One view of the teapot, rendered back from its own viewpoint on a pixel grid 1.375 times
+    // finer: every surface point the render shows is one the view saw, but most of the render's
+    // pixel centres fall between the view's, and along every silhouette a texel centre under
+    // such a point may have missed the mesh or hit an occluder's edge.
+    let teapot = common::asset("meshes/teapot.obj");
+    let settings = trompe::views::capture::CaptureSettings {
+        count: 24,
+        size: (256, 192),
+        ..Default::default()
+    };
+    let set = trompe::views::capture::capture(&teapot, &settings, &()).unwrap();
+    let mesh = trompe::geom::io::load(&teapot).unwrap().mesh;
+    let only = &set.views[5..6];
+    let depth = DepthMap::of_all(only, &mesh).unwrap();
+    let (a, b, c) = only[0].pinhole().mcmillan();
+    let s = 1.375;
+    let camera =
+        trompe::camera::Pinhole::from_mcmillan(only[0].pose.centre(), a / s, b / s, c, 352, 264);
+    let blend = blend::render(
+        &camera,
+        &mesh,
+        only,
+        &depth,
+        &BlendSettings::default(),
+        None,
+    )
+    .unwrap();
+    let unseen = blend.unseen_share();
+    eprintln!(
+        "{} pixels show the teapot, {} unseen ({:.3} %)",
+        blend.covered,
+        blend.holes,
+        100.0 * unseen
+    );
+    assert!(blend.covered > 5_000, "{} pixels", blend.covered);
+    assert_eq!(blend.holes, 0, "{:.3} % unseen", 100.0 * unseen);
+    // The same view encoded as a master texture: its texels carry the same visibility.
+    let enc = trompe::master::encode_views(&mesh, only, 2.0, &()).unwrap();
+    let masters = trompe::master::render::render(
+        &camera,
+        &mesh,
+        &enc.atlas.layout,
+        &enc.pinholes(),
+        &enc.masters,
+        &BlendSettings::default(),
+    )
+    .unwrap();
+    eprintln!("master texture: {} unseen", masters.holes);
+    assert_eq!(masters.covered, blend.covered);
+    assert_eq!(masters.holes, 0, "{} unseen", masters.holes);
+}
+
+/// Copies the rig fixture's text model to a scratch folder, for a test to change one file.
+fn rig_copy(name: &str) -> PathBuf {
+    let dir = common::scratch(name);
+    for f in [
+        "cameras.txt",
+        "images.txt",
+        "points3D.txt",
+        "rigs.txt",
+        "frames.txt",
+    ] {
+        std::fs::copy(fixtures().join("rig/text").join(f), dir.join(f)).unwrap();
+    }
+    dir
+}
+
+#[test]
+fn rig_and_frame_poses_equal_pycolmaps_image_poses() {
+    let expected: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fixtures().join("rig/poses.json")).unwrap()).unwrap();
+    let points: Vec<DVec3> = expected["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let p: Vec<f64> = serde_json::from_value(p.clone()).unwrap();
+            DVec3::new(p[0], p[1], p[2])
+        })
+        .collect();
+    // The images file's own poses replaced by the identity: a reader that took them would be
+    // wrong, and the frames' must win.
+    let blanked = rig_copy("rig-blanked-images");
+    let images = std::fs::read_to_string(blanked.join("images.txt")).unwrap();
+    let mut lines = Vec::new();
+    let mut pose_line = true;
+    for l in images.lines() {
+        if l.starts_with('#') {
+            lines.push(l.to_string());
+            continue;
+        }
+        if pose_line {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            lines.push(format!("{} 1 0 0 0 0 0 0 {} {}", f[0], f[8], f[9]));
+        } else {
+            lines.push(l.to_string());
+        }
+        pose_line = !pose_line;
+    }
+    std::fs::write(blanked.join("images.txt"), lines.join("\n") + "\n").unwrap();
+
+    for (dir, disagree) in [
+        (fixtures().join("rig/text"), false),
+        (fixtures().join("rig/binary"), false),
+        (blanked, true),
+    ] {
+        let set = ViewSet::load(&dir, None).unwrap();
+        assert_eq!(set.views.len(), 9, "{}", dir.display());
+        let s = &set.summary;
+        assert_eq!(
+            (s.rigs, s.frames, s.posed_by_frame, s.posed_by_offset),
+            (1, 3, 9, 6),
+            "{}: {s}",
+            dir.display()
+        );
+        assert_eq!(
+            set.warnings.iter().any(|w| w.contains("disagree")),
+            disagree,
+            "{}: {:?}",
+            dir.display(),
+            set.warnings
+        );
+        for v in &set.views {
+            let want = &expected["images"][v.image_id.to_string()];
+            assert_eq!(want["name"], v.name.as_str());
+            let q: Vec<f64> = serde_json::from_value(want["q_wxyz"].clone()).unwrap();
+            let t: Vec<f64> = serde_json::from_value(want["t"].clone()).unwrap();
+            let r = v.pose.rotation;
+            let dq = (r.w - q[0])
+                .abs()
+                .max((r.x - q[1]).abs())
+                .max((r.y - q[2]).abs())
+                .max((r.z - q[3]).abs());
+            let dq_flipped = (r.w + q[0])
+                .abs()
+                .max((r.x + q[1]).abs())
+                .max((r.y + q[2]).abs())
+                .max((r.z + q[3]).abs());
+            let dt = (v.pose.translation - DVec3::new(t[0], t[1], t[2])).length();
+            assert!(
+                dq.min(dq_flipped) < 1e-6 && dt < 1e-6,
+                "{}: image {}: rotation off by {dq}, translation by {dt}",
+                dir.display(),
+                v.image_id
+            );
+            for (p, px) in points.iter().zip(want["pixels"].as_array().unwrap()) {
+                let (Some(ours), Some(theirs)) = (v.project(*p), px.as_array()) else {
+                    continue;
+                };
+                let theirs = DVec2::new(theirs[0].as_f64().unwrap(), theirs[1].as_f64().unwrap());
+                assert!(
+                    (ours.0 - theirs).length() < 1e-6,
+                    "image {}: {:?} against COLMAP's {theirs:?}",
+                    v.image_id,
+                    ours.0
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_rig_or_frame_that_cannot_pose_its_images_is_an_error_naming_it() {
+    let replace = |dir: &Path, file: &str, from: &str, to: &str| {
+        let p = dir.join(file);
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains(from), "{file} lacks {from:?}");
+        std::fs::write(&p, text.replacen(from, to, 1)).unwrap();
+    };
+    let cases: [(&str, &str, &str, &str, &[&str]); 4] = [
+        // The third camera's offset in the rig not calibrated.
+        (
+            "rig-uncalibrated",
+            "rigs.txt",
+            "CAMERA 3 1 1 0 0 0 -0.29999999999999999 0.050000000000000003 0",
+            "CAMERA 3 0",
+            &["rigs.txt", "rig 1", "CAMERA 3", "no calibrated pose"],
+        ),
+        // A frame of a rig the model does not hold.
+        (
+            "rig-unknown",
+            "frames.txt",
+            "\n2 1 ",
+            "\n2 7 ",
+            &["frames.txt", "frame 2", "rig 7"],
+        ),
+        // A frame holding an image through a camera its rig does not have.
+        (
+            "rig-foreign-sensor",
+            "frames.txt",
+            "CAMERA 3 3",
+            "CAMERA 4 3",
+            &[
+                "frames.txt",
+                "frame 1",
+                "CAMERA 4",
+                "not a sensor of its rig 1",
+            ],
+        ),
+        // A garbled pose.
+        (
+            "rig-garbled",
+            "rigs.txt",
+            "CAMERA 2 1 ",
+            "CAMERA 2 1 x",
+            &["rigs.txt", "line 4", "is not a number"],
+        ),
+    ];
+    for (name, file, from, to, expect) in cases {
+        let dir = rig_copy(name);
+        replace(&dir, file, from, to);
+        let err = ViewSet::load(&dir, None).unwrap_err().to_string();
+        for e in expect {
+            assert!(err.contains(e), "{name}: {err:?} lacks {e:?}");
+        }
+    }
+    // Frames without their rigs.
+    let dir = rig_copy("rig-no-rigs");
+    std::fs::remove_file(dir.join("rigs.txt")).unwrap();
+    let err = ViewSet::load(&dir, None).unwrap_err().to_string();
+    assert!(err.contains("rigs.txt") && err.contains("missing"), "{err}");
+}

@@ -25,9 +25,9 @@ pub enum LayersCommand {
 }
 
 impl LayersCommand {
-    pub(super) fn run(&self) -> Result<()> {
+    pub(super) fn run(&self, verbose: bool) -> Result<()> {
         match self {
-            LayersCommand::Build(args) => args.build(),
+            LayersCommand::Build(args) => args.build(verbose),
             LayersCommand::Render(args) => args.render(),
         }
     }
@@ -83,7 +83,7 @@ pub struct BuildArgs {
 }
 
 impl BuildArgs {
-    fn build(&self) -> Result<()> {
+    fn build(&self, verbose: bool) -> Result<()> {
         let out = &self.output;
         let scene = Scene::load(&self.scene)?;
         let mut plan = OutputPlan::new();
@@ -93,7 +93,7 @@ impl BuildArgs {
             .creating_folders();
         let model = match &self.model {
             Some(m) => {
-                let set = trompe::views::ViewSet::load(m, self.images.as_deref())?;
+                let set = super::views::load_views(m, self.images.as_deref(), verbose)?;
                 plan.reads(trompe::views::colmap::model_files(m))
                     .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)));
                 Some(set)
@@ -225,7 +225,7 @@ impl RenderArgs {
             self.output.display(),
             blend.covered,
             blend.holes,
-            100.0 * blend.holes as f64 / blend.covered.max(1) as f64
+            100.0 * blend.unseen_share()
         );
         Ok(())
     }

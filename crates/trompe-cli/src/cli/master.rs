@@ -25,9 +25,9 @@ pub enum MasterCommand {
 
 impl MasterCommand {
     /// Runs the subcommand.
-    pub(super) fn run(&self) -> Result<()> {
+    pub(super) fn run(&self, verbose: bool) -> Result<()> {
         match self {
-            MasterCommand::Encode(args) => args.encode(),
+            MasterCommand::Encode(args) => args.encode(verbose),
             MasterCommand::Render(args) => args.render(),
             MasterCommand::Edit(args) => args.edit(),
         }
@@ -101,11 +101,11 @@ pub struct MasterEditArgs {
 }
 
 impl MasterEncodeArgs {
-    fn encode(&self) -> Result<()> {
+    fn encode(&self, verbose: bool) -> Result<()> {
         if !(self.scale.is_finite() && (0.25..=16.0).contains(&self.scale)) {
             bail!("--scale {}: must be between 0.25 and 16", self.scale);
         }
-        let set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
+        let set = super::views::load_views(&self.model, self.images.as_deref(), verbose)?;
         let mut plan = OutputPlan::new();
         let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
         plan.reads(trompe::views::colmap::model_files(&self.model))
@@ -147,10 +147,11 @@ impl MasterRenderArgs {
         let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
         io::write_color(&self.output, &b.image)?;
         println!(
-            "wrote {}: {} pixels show the mesh, {} of them seen by no view",
+            "wrote {}: {} pixels show the mesh, {} of them seen by no view ({:.2} %)",
             self.output.display(),
             b.covered,
-            b.holes
+            b.holes,
+            100.0 * b.unseen_share()
         );
         Ok(())
     }

@@ -185,12 +185,26 @@ impl CaptureArgs {
     }
 }
 
+/// Reads a COLMAP model, printing what was skipped as warnings and, with `--verbose`, what the
+/// model held (cameras, images, rigs, frames).
+pub(super) fn load_views(
+    model: &std::path::Path,
+    images: Option<&std::path::Path>,
+    verbose: bool,
+) -> Result<trompe::views::ViewSet> {
+    let set = trompe::views::ViewSet::load(model, images)?;
+    for w in &set.warnings {
+        eprintln!("warning: {w}");
+    }
+    if verbose {
+        eprintln!("{}: {}", model.display(), set.summary);
+    }
+    Ok(set)
+}
+
 impl ScoreArgs {
-    pub(super) fn score(&self) -> Result<()> {
-        let mut set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
-        for w in &set.warnings {
-            eprintln!("warning: {w}");
-        }
+    pub(super) fn score(&self, verbose: bool) -> Result<()> {
+        let mut set = load_views(&self.model, self.images.as_deref(), verbose)?;
         set.load_images()?;
         let mesh = load_mesh(&self.mesh)?;
         let weights = if self.weights.is_empty() {
@@ -237,10 +251,10 @@ impl ScoreArgs {
 }
 
 impl ViewsRenderArgs {
-    pub(super) fn render(&self) -> Result<()> {
+    pub(super) fn render(&self, verbose: bool) -> Result<()> {
         let mut plan = OutputPlan::new();
         let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
-        let mut set = trompe::views::ViewSet::load(&self.model, self.images.as_deref())?;
+        let mut set = load_views(&self.model, self.images.as_deref(), verbose)?;
         plan.reads([&self.scene])
             .reads(trompe::views::colmap::model_files(&self.model))
             .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)))
@@ -254,10 +268,11 @@ impl ViewsRenderArgs {
         let b = trompe::views::blend::render(&camera, &mesh, &set.views, &depth, &settings, None)?;
         io::write_color(&self.output, &b.image)?;
         println!(
-            "wrote {}: {} pixels show the mesh, {} of them seen by no view",
+            "wrote {}: {} pixels show the mesh, {} of them seen by no view ({:.2} %)",
             self.output.display(),
             b.covered,
-            b.holes
+            b.holes,
+            100.0 * b.unseen_share()
         );
         Ok(())
     }

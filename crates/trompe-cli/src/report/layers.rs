@@ -149,7 +149,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
                 method.to_string(),
                 format!("{:.1} dB", metrics::psnr(&exact, &b.image, Some(&mask))?),
                 format!("{:.4}", metrics::flip(&exact, &b.image, Some(&mask))?),
-                format!("{:.2} %", 100.0 * b.holes as f64 / b.covered.max(1) as f64),
+                format!("{:.2} %", 100.0 * b.unseen_share()),
             ]);
             if c == 0 {
                 let file = format!("layers-novel-{k}.png");

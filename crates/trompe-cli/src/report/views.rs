@@ -130,10 +130,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
                 format!("{:.2}", sc.psnr),
                 format!("{:.4}", sc.ssim),
                 format!("{:.4}", sc.flip),
-                format!(
-                    "{:.2} %",
-                    100.0 * bl.holes as f64 / bl.covered.max(1) as f64
-                ),
+                format!("{:.2} %", 100.0 * bl.unseen_share()),
             ]);
             if k == 0 && matches!(w, Weighting::Ulr { .. }) {
                 io::write_png(&out.join("views-novel-exact.png"), &frame.color)?;

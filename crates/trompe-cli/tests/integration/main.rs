@@ -14,3 +14,4 @@ mod peeling;
 mod publish;
 mod relief;
 mod viewer;
+mod views;
