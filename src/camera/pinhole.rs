@@ -52,6 +52,42 @@ impl Pinhole {
         Ok(Self::from_mcmillan(eye, a, b, c, width, height))
     }
 
+    /// A camera at `position` looking at `look_at`, `up` roughly up, with pixel intrinsics: focal
+    /// lengths `fx`, `fy` and principal point `(cx, cy)` in pixels, `(0, 0)` the top-left
+    /// corner of the top-left pixel (COLMAP's PINHOLE model; `docs/conventions.md` §1.1).
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_intrinsics(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        [fx, fy, cx, cy]: [f64; 4],
+        width: u32,
+        height: u32,
+    ) -> Result<Self, CameraError> {
+        crate::frame::check_size(width as u64, height as u64)?;
+        if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
+            return Err(CameraError::Degenerate(
+                "focal lengths must be positive and finite",
+            ));
+        }
+        if !(cx.is_finite() && cy.is_finite()) {
+            return Err(CameraError::Degenerate(
+                "the principal point must be finite",
+            ));
+        }
+        let (eye, target, up) = (position.as_dvec3(), look_at.as_dvec3(), up.as_dvec3());
+        if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
+            return Err(CameraError::Degenerate(
+                "position, look_at and up must be finite",
+            ));
+        }
+        let [forward, right, true_up] = super::look_at_basis(eye, target, up)?;
+        let a = right / fx;
+        let b = -true_up / fy;
+        let c = forward - a * cx - b * cy;
+        Ok(Self::from_mcmillan(eye, a, b, c, width, height))
+    }
+
     /// A camera from McMillan's parameters directly (`a`, `b`, `c` as in docs/conventions.md §1.1).
     pub fn from_mcmillan(
         c_pos: DVec3,

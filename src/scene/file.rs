@@ -32,8 +32,16 @@ pub struct CameraFile {
     /// Up vector (default `+y`).
     #[serde(default = "up")]
     pub up: [f32; 3],
-    /// Full vertical field of view, degrees.
-    pub fov_y: f64,
+    /// Full vertical field of view, degrees (or the pixel intrinsics below).
+    pub fov_y: Option<f64>,
+    /// Focal length along x, pixels (with `fy`, `cx` and `cy`, instead of `fov_y`).
+    pub fx: Option<f64>,
+    /// Focal length along y, pixels.
+    pub fy: Option<f64>,
+    /// Principal point, pixels from the image's left edge.
+    pub cx: Option<f64>,
+    /// Principal point, pixels from the image's top edge.
+    pub cy: Option<f64>,
     /// `[width, height]` in pixels.
     pub resolution: [u64; 2],
     /// Near-plane distance (default 1e-3 × the scene's size).

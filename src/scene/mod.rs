@@ -204,6 +204,9 @@ pub struct CameraSpec {
     pub up: Vec3,
     /// Full vertical field of view, degrees.
     pub fov_y: f64,
+    /// Pixel intrinsics `[fx, fy, cx, cy]` (focal lengths and principal point, pixels): when
+    /// set, they replace `fov_y` and the centred principal point (a real camera's).
+    pub intrinsics: Option<[f64; 4]>,
     /// Pixels.
     pub width: u32,
     /// Pixels.
@@ -394,6 +397,33 @@ impl Scene {
         if !(near > 0.0 && near.is_finite()) {
             return Err(invalid("camera.near", format!("{near} must be positive")));
         }
+        // Either a field of view or a real camera's pixel intrinsics.
+        let (fov_y, intrinsics) = match (c.fov_y, [c.fx, c.fy, c.cx, c.cy]) {
+            (Some(fov_y), [None, None, None, None]) => (fov_y, None),
+            (None, [Some(fx), Some(fy), Some(cx), Some(cy)]) => {
+                finite("camera.fx", &[fx as f32, fy as f32, cx as f32, cy as f32])?;
+                if !(fx > 0.0 && fy > 0.0) {
+                    return Err(invalid(
+                        "camera.fx",
+                        format!("focal lengths fx = {fx}, fy = {fy} must be positive"),
+                    ));
+                }
+                let fov_y = 2.0 * (height as f64 * 0.5 / fy).atan().to_degrees();
+                (fov_y, Some([fx, fy, cx, cy]))
+            }
+            (Some(_), _) => {
+                return Err(invalid(
+                    "camera.fov_y",
+                    "give either fov_y or the pixel intrinsics fx, fy, cx and cy, not both".into(),
+                ));
+            }
+            (None, _) => {
+                return Err(invalid(
+                    "camera",
+                    "needs fov_y, or all four of fx, fy, cx and cy".into(),
+                ));
+            }
+        };
         let mut keys = Vec::new();
         for (k, kf) in c.path.iter().enumerate() {
             let key = format!("camera.path[{k}]");
@@ -411,7 +441,8 @@ impl Scene {
             position: vec3(c.position),
             look_at: vec3(c.look_at),
             up: vec3(c.up),
-            fov_y: c.fov_y,
+            fov_y,
+            intrinsics,
             width,
             height,
             near,
@@ -568,15 +599,20 @@ impl CameraSpec {
                 }
             }
         };
-        Ok(Pinhole::look_at(
-            position,
-            look_at,
-            self.up,
-            self.fov_y,
-            self.width,
-            self.height,
-        )?
-        .with_near(self.near))
+        let camera = match self.intrinsics {
+            Some(k) => {
+                Pinhole::with_intrinsics(position, look_at, self.up, k, self.width, self.height)?
+            }
+            None => Pinhole::look_at(
+                position,
+                look_at,
+                self.up,
+                self.fov_y,
+                self.width,
+                self.height,
+            )?,
+        };
+        Ok(camera.with_near(self.near))
     }
 }
 
@@ -889,6 +925,35 @@ mod tests {
 
     const CAMERA: &str =
         "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\nresolution = [32, 24]\n";
+
+    #[test]
+    fn a_camera_with_pixel_intrinsics_projects_through_its_principal_point() {
+        let camera = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\nfx = 40\nfy = 44\n\
+                      cx = 19.5\ncy = 9.25\nresolution = [32, 24]\n";
+        let s = parse(&format!("{camera}[[object]]\nshape = \"cube\"\n")).unwrap();
+        let pinhole = s.camera.at(0.0).unwrap();
+        // The point looked at lands on the principal point; one unit right at depth 3 lands
+        // fx / 3 pixels right of it.
+        use crate::camera::Projection;
+        let p = pinhole.project(glam::DVec3::ZERO).unwrap().uv;
+        assert!((p - glam::DVec2::new(19.5, 9.25)).length() < 1e-9, "{p}");
+        let q = pinhole.project(glam::DVec3::X).unwrap().uv;
+        assert!((q.x - (19.5 + 40.0 / 3.0)).abs() < 1e-9, "{q}");
+        // Both a field of view and intrinsics, or intrinsics only in part: named errors.
+        for (text, key) in [
+            (
+                camera.replace("fx = 40", "fx = 40\nfov_y = 30"),
+                "camera.fov_y",
+            ),
+            (camera.replace("fx = 40\n", ""), "camera"),
+            (camera.replace("fy = 44", "fy = -44"), "camera.fx"),
+        ] {
+            let err = parse(&format!("{text}[[object]]\nshape = \"cube\"\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(key), "{err}");
+        }
+    }
 
     #[test]
     fn a_minimal_scene_loads() {

@@ -54,6 +54,14 @@ pub enum ViewsError {
         /// What is wrong.
         reason: String,
     },
+    /// A model has no image of that name or id.
+    #[error("{model}: no image named {key:?} or with that id")]
+    NoImage {
+        /// The model's folder.
+        model: PathBuf,
+        /// The name or id asked for.
+        key: String,
+    },
     /// A folder holds neither a text nor a binary COLMAP model.
     #[error("{0}: no COLMAP model here (cameras.txt + images.txt, or cameras.bin + images.bin)")]
     NoModel(PathBuf),
@@ -170,6 +178,28 @@ impl CalibratedView {
         px.x >= 0.0 && px.y >= 0.0 && px.x < w as f64 && px.y < h as f64
     }
 
+    /// This view as a scene's camera: its centre, orientation, image size and undistorted
+    /// intrinsics (the same pinhole as [`CalibratedView::pinhole`], up to the scene camera's
+    /// single precision), still, with near plane `near`.
+    pub fn camera_spec(&self, near: f64) -> crate::scene::CameraSpec {
+        let u = self.intrinsics.undistorted();
+        let ((fx, fy), (cx, cy)) = (u.focal(), u.principal_point());
+        let (width, height) = u.size();
+        let r_inv = self.pose.rotation.inverse();
+        let centre = self.pose.centre();
+        crate::scene::CameraSpec {
+            position: centre.as_vec3(),
+            look_at: (centre + r_inv * DVec3::Z).as_vec3(),
+            up: (r_inv * -DVec3::Y).as_vec3(),
+            fov_y: 2.0 * (height as f64 * 0.5 / fy).atan().to_degrees(),
+            intrinsics: Some([fx, fy, cx, cy]),
+            width,
+            height,
+            near,
+            path: Vec::new(),
+        }
+    }
+
     /// The undistorted pinhole of this view as a trompe camera (for rasterizing through it).
     pub fn pinhole(&self) -> Pinhole {
         let u = self.intrinsics.undistorted();
@@ -182,6 +212,22 @@ impl CalibratedView {
         let c = z - x * (cx / fx) - y * (cy / fy);
         Pinhole::from_mcmillan(self.pose.centre(), a, b, c, w, h)
     }
+}
+
+/// The camera of image `key` (its name, or its id) of the COLMAP model in `model`, as a scene's
+/// camera ([`CalibratedView::camera_spec`], near plane `near`): to render from where a
+/// photograph was taken, at its size, with its intrinsics (undistorted).
+pub fn camera_of(
+    model: &Path,
+    key: &str,
+    near: f64,
+) -> Result<crate::scene::CameraSpec, ViewsError> {
+    let set = ViewSet::load(model, None)?;
+    let view = set.find(key).ok_or_else(|| ViewsError::NoImage {
+        model: model.to_path_buf(),
+        key: key.to_string(),
+    })?;
+    Ok(view.camera_spec(near))
 }
 
 /// A set of calibrated views and the folder their images are in.
@@ -218,6 +264,15 @@ impl ViewSet {
             warnings,
             summary,
         })
+    }
+
+    /// The view whose image is named `key`, or whose image id it is.
+    pub fn find(&self, key: &str) -> Option<&CalibratedView> {
+        let id: Option<u32> = key.parse().ok();
+        self.views
+            .iter()
+            .find(|v| v.name == key)
+            .or_else(|| self.views.iter().find(|v| Some(v.image_id) == id))
     }
 
     /// Loads every view's image, checking its size against its camera.

@@ -1,7 +1,7 @@
 //! `trompe layers build | render`: layered view-dependent projective textures (paper 4) on the
 //! command line — parse, call `trompe::layers`, print its report.
 
-use super::views::{BlendArgs, RigArg, parse_size};
+use super::views::{BlendArgs, CameraArg, RigArg, parse_size};
 use super::{bar, check_plan};
 use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
@@ -187,6 +187,8 @@ pub struct RenderArgs {
     #[arg(long)]
     fill: bool,
     #[command(flatten)]
+    camera: CameraArg,
+    #[command(flatten)]
     blend: BlendArgs,
     /// Output image (.png or .exr); pixels nothing textures are transparent.
     #[arg(short, long)]
@@ -195,9 +197,11 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn render(&self) -> Result<()> {
-        let scene = Scene::load(&self.scene)?;
+        let mut scene = Scene::load(&self.scene)?;
+        self.camera.apply(&mut scene)?;
         let mut plan = OutputPlan::new();
         plan.reads(scene.files.iter().cloned())
+            .reads(self.camera.files()?)
             .reads([self.layers.join(layers::file::PROJECT)])
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;

@@ -1,7 +1,7 @@
 //! `trompe master encode|render|edit`: Master Texture Space (paper 5) on the command line —
 //! parse, call one `trompe::master::job` function, print its summary.
 
-use super::views::BlendArgs;
+use super::views::{BlendArgs, CameraArg};
 use super::{bar, check_plan, load_mesh_read_by};
 use anyhow::{Context, Result, bail};
 use clap::Subcommand;
@@ -62,8 +62,10 @@ pub struct MasterRenderArgs {
     #[arg(long)]
     mesh: PathBuf,
     /// A scene file whose camera to render from (its objects are ignored).
-    #[arg(long)]
-    scene: PathBuf,
+    #[arg(long, required_unless_present = "camera")]
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    camera: CameraArg,
     #[command(flatten)]
     blend: BlendArgs,
     /// Output image (.png or .exr).
@@ -137,12 +139,13 @@ impl MasterRenderArgs {
     fn render(&self) -> Result<()> {
         let mut plan = OutputPlan::new();
         let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
-        plan.reads([&self.scene, &self.encoding])
+        plan.reads(&self.scene)
+            .reads([&self.encoding])
+            .reads(self.camera.files()?)
             .reads(trompe::master::job::files_of(&self.encoding))
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
-        let scene = Scene::load(&self.scene).context("loading the scene")?;
-        let camera = scene.view(scene.render.time)?.camera;
+        let camera = self.camera.pinhole(self.scene.as_deref(), &mesh)?;
         let settings = self.blend.settings();
         let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
         io::write_color(&self.output, &b.image)?;

@@ -25,6 +25,8 @@ pub struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value = "trace")]
     method: MethodArg,
+    #[command(flatten)]
+    camera: super::views::CameraArg,
     /// Where the method runs: the CPU; the GPU (a hardware adapter, else a software one such
     /// as Mesa's lavapipe; refused for a method without a GPU path); or auto (the GPU where
     /// the method has a path and a hardware GPU is present, else the CPU).
@@ -205,10 +207,14 @@ impl RenderArgs {
         }
         plan.check_overwrites()?;
         let mut timings = Timings::default();
-        let s = timings
+        let mut s = timings
             .time("load scene", || Scene::load(&self.scene))
             .context("loading the scene")?;
-        check_plan(plan.reads(s.files.iter().cloned()))?;
+        self.camera.apply(&mut s)?;
+        check_plan(
+            plan.reads(s.files.iter().cloned())
+                .reads(self.camera.files()?),
+        )?;
         s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         let t = self.time.unwrap_or(s.render.time);
         let gpu = trompe_gpu::open_for(self.device.into(), kind).context("opening the GPU")?;
@@ -260,8 +266,12 @@ impl RenderArgs {
             plan.writes(p, &["png", "exr"]);
         }
         plan.check_overwrites()?;
-        let s = Scene::load(&self.scene).context("loading the scene")?;
-        check_plan(plan.reads(s.files.iter().cloned()))?;
+        let mut s = Scene::load(&self.scene).context("loading the scene")?;
+        self.camera.apply(&mut s)?;
+        check_plan(
+            plan.reads(s.files.iter().cloned())
+                .reads(self.camera.files()?),
+        )?;
         s.warnings.iter().for_each(|w| eprintln!("warning: {w}"));
         if let Some(dir) = paths[0].parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)

@@ -132,8 +132,10 @@ pub struct ViewsRenderArgs {
     #[arg(long)]
     images: Option<PathBuf>,
     /// A scene file whose camera to render from (its objects are ignored).
-    #[arg(long)]
-    scene: PathBuf,
+    #[arg(long, required_unless_present = "camera")]
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    camera: CameraArg,
     #[command(flatten)]
     blend: BlendArgs,
     /// Output image (.png or .exr); pixels no view sees are transparent.
@@ -182,6 +184,69 @@ impl CaptureArgs {
             out.display()
         );
         Ok(())
+    }
+}
+
+/// `--camera MODEL:IMAGE`: render from where a photograph was taken.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct CameraArg {
+    /// Render from a photograph's camera: image IMAGE (its name or id) of the COLMAP model in
+    /// the folder MODEL, at its pose and size with its intrinsics (undistorted).
+    #[arg(long, value_name = "MODEL:IMAGE")]
+    pub camera: Option<String>,
+}
+
+impl CameraArg {
+    /// The model's folder and the image's name or id, when given.
+    fn parts(&self) -> Result<Option<(PathBuf, &str)>> {
+        let Some(text) = &self.camera else {
+            return Ok(None);
+        };
+        match text.rsplit_once(':') {
+            Some((model, key)) if !model.is_empty() && !key.is_empty() => {
+                Ok(Some((PathBuf::from(model), key)))
+            }
+            _ => anyhow::bail!(
+                "--camera {text}: expected MODEL:IMAGE (a COLMAP model's folder, then an image's \
+                 name or id)"
+            ),
+        }
+    }
+
+    /// The model's files it reads (for an output plan).
+    pub fn files(&self) -> Result<Vec<PathBuf>> {
+        Ok(self
+            .parts()?
+            .map(|(model, _)| trompe::views::colmap::model_files(&model))
+            .unwrap_or_default())
+    }
+
+    /// Replaces `scene`'s camera by the photograph's, keeping its near plane.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if let Some((model, key)) = self.parts()? {
+            scene.camera = trompe::views::camera_of(&model, key, scene.camera.near)
+                .with_context(|| format!("--camera {}", self.camera.as_deref().unwrap_or("")))?;
+        }
+        Ok(())
+    }
+
+    /// The camera to render `mesh` from: the photograph's when given, else `scene`'s.
+    pub fn pinhole(
+        &self,
+        scene: Option<&std::path::Path>,
+        mesh: &trompe::geom::Mesh,
+    ) -> Result<trompe::camera::Pinhole> {
+        if let Some((model, key)) = self.parts()? {
+            let near = 1e-3 * mesh.bounds().radius().max(1e-6) as f64;
+            let spec = trompe::views::camera_of(&model, key, near)
+                .with_context(|| format!("--camera {}", self.camera.as_deref().unwrap_or("")))?;
+            return Ok(spec.at(0.0)?);
+        }
+        let Some(scene) = scene else {
+            anyhow::bail!("give --scene or --camera MODEL:IMAGE");
+        };
+        let scene = Scene::load(scene).context("loading the scene")?;
+        Ok(scene.view(scene.render.time)?.camera)
     }
 }
 
@@ -255,14 +320,14 @@ impl ViewsRenderArgs {
         let mut plan = OutputPlan::new();
         let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
         let mut set = load_views(&self.model, self.images.as_deref(), verbose)?;
-        plan.reads([&self.scene])
+        plan.reads(&self.scene)
+            .reads(self.camera.files()?)
             .reads(trompe::views::colmap::model_files(&self.model))
             .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)))
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
         set.load_images()?;
-        let scene = Scene::load(&self.scene).context("loading the scene")?;
-        let camera = scene.view(scene.render.time)?.camera;
+        let camera = self.camera.pinhole(self.scene.as_deref(), &mesh)?;
         let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;
         let settings = self.blend.settings();
         let b = trompe::views::blend::render(&camera, &mesh, &set.views, &depth, &settings, None)?;

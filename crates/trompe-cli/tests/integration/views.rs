@@ -25,3 +25,139 @@ fn verbose_reports_the_rigs_and_frames_a_model_holds() {
     );
     assert!(e.contains("frame1_cam1.png"), "{e}");
 }
+
+#[test]
+fn a_photographs_own_camera_renders_it_back() {
+    // A synthetic photograph taken by a camera whose principal point is 30 px right of and
+    // 20 px above the image's centre, with unequal focal lengths; its COLMAP model says so.
+    let dir = common::scratch("views-cli-camera");
+    let duck = common::asset("gltf/Duck.glb");
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[camera]\nposition = [1.2, 1.9, 3.2]\nlook_at = [0.1, 0.85, 0.0]\nfx = 300\nfy = \
+             305\ncx = 190\ncy = 100\nresolution = [320, 240]\n\n[light]\ndirection = [0.4, \
+             1.0, 0.6]\nintensity = 2.5\n\n[[object]]\nmesh = {:?}\n",
+            duck.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let model = dir.join("model");
+    std::fs::create_dir_all(&model).unwrap();
+    let photo = model.join("photo.png");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let run = |args: &[&str]| {
+        let out = common::trompe(args);
+        assert!(out.status.success(), "{}", common::stderr(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    run(&["render", &s(&scene), "-o", &s(&photo)]);
+    let spec = trompe::scene::Scene::load(&scene).unwrap().camera;
+    let pose = trompe::views::Pose::looking_at(
+        spec.position.as_dvec3(),
+        spec.look_at.as_dvec3(),
+        spec.up.as_dvec3(),
+    )
+    .unwrap();
+    let view = trompe::views::CalibratedView {
+        name: "photo.png".into(),
+        image_id: 7,
+        camera_id: 1,
+        intrinsics: trompe::views::Intrinsics::pinhole(320, 240, 300.0, 305.0, 190.0, 100.0),
+        pose,
+        image: None,
+    };
+    trompe::views::colmap::write_text(&model, &[view]).unwrap();
+    let truth = trompe::frame::io::read_color(&photo).unwrap();
+    let at = format!("{}:photo.png", s(&model));
+
+    // The exact tracer from the photograph's camera, named by the image's name.
+    let again = dir.join("again.png");
+    run(&["render", &s(&scene), "--camera", &at, "-o", &s(&again)]);
+    let again = trompe::frame::io::read_color(&again).unwrap();
+    let db = trompe::frame::metrics::psnr(&truth, &again, None).unwrap();
+    assert!(db >= 60.0, "render --camera: {db:.2} dB");
+
+    // The photograph textured back onto the mesh from its own camera, named by the image's id.
+    let by_id = format!("{}:7", s(&model));
+    let novel = dir.join("novel.png");
+    let said = run(&[
+        "views",
+        "render",
+        &s(&model),
+        "--mesh",
+        duck.to_str().unwrap(),
+        "--camera",
+        &by_id,
+        "-o",
+        &s(&novel),
+    ]);
+    assert!(said.contains(" 0 of them seen by no view"), "{said}");
+    let novel = trompe::frame::io::read_color(&novel).unwrap();
+    let mask = novel.map(|c| c.w > 0.0);
+    let covered = mask.pixels().iter().filter(|&&m| m).count();
+    let db = trompe::frame::metrics::psnr(&truth, &novel, Some(&mask)).unwrap();
+    eprintln!("views render --camera: {db:.2} dB over {covered} pixels");
+    assert!(covered > 5_000, "{covered} pixels");
+    assert!(db >= 60.0, "views render --camera: {db:.2} dB");
+
+    // The photograph encoded as a master texture and rendered back from its camera: two
+    // bilinear resamplings (photograph to atlas, atlas to frame) instead of none.
+    let enc = dir.join("enc");
+    run(&[
+        "master",
+        "encode",
+        &s(&model),
+        "--mesh",
+        duck.to_str().unwrap(),
+        "-o",
+        &s(&enc),
+    ]);
+    let from_master = dir.join("master.png");
+    let said = run(&[
+        "master",
+        "render",
+        &s(&enc),
+        "--mesh",
+        duck.to_str().unwrap(),
+        "--camera",
+        &at,
+        "-o",
+        &s(&from_master),
+    ]);
+    assert!(said.contains(" 0 of them seen by no view"), "{said}");
+    let from_master = trompe::frame::io::read_color(&from_master).unwrap();
+    let db = trompe::frame::metrics::psnr(&truth, &from_master, Some(&mask)).unwrap();
+    eprintln!("master render --camera: {db:.2} dB");
+    assert!(db >= 30.0, "master render --camera: {db:.2} dB");
+
+    // A name the model does not hold, and a malformed argument.
+    let out = common::trompe(&[
+        "render",
+        &s(&scene),
+        "--camera",
+        &format!("{}:nope.png", s(&model)),
+        "-o",
+        &s(&dir.join("x.png")),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        common::stderr(&out).contains("no image named \"nope.png\""),
+        "{}",
+        common::stderr(&out)
+    );
+    let out = common::trompe(&[
+        "render",
+        &s(&scene),
+        "--camera",
+        "photo.png",
+        "-o",
+        &s(&dir.join("x.png")),
+    ]);
+    assert!(
+        common::stderr(&out).contains("expected MODEL:IMAGE"),
+        "{}",
+        common::stderr(&out)
+    );
+}
