@@ -113,7 +113,8 @@ pub(crate) fn nearest_where(
     keep: impl Fn(u32, u32, Rgba) -> bool,
 ) -> Option<Rgba> {
     let (w, h) = img.size();
-    if !px.is_finite() {
+    // Beyond two texels outside the image, no texel of the 3 × 3 is in it.
+    if !(px.x > -2.0 && px.y > -2.0 && px.x < w as f64 + 2.0 && px.y < h as f64 + 2.0) {
         return None;
     }
     let (cx, cy) = (px.x.floor() as i64, px.y.floor() as i64);

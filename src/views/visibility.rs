@@ -90,7 +90,9 @@ pub(crate) fn sight_in(
     z: f64,
     tolerance: f64,
 ) -> Sight {
-    if !(uv.is_finite() && z.is_finite()) {
+    // A point more than a texel outside the image has no texel of its footprint in it.
+    let near_image = uv.x > -1.0 && uv.y > -1.0 && uv.x < w as f64 + 1.0 && uv.y < h as f64 + 1.0;
+    if !(near_image && z.is_finite()) {
         return Sight::Hidden;
     }
     if uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64 {
@@ -105,9 +107,20 @@ pub(crate) fn sight_in(
     // the depth range they span (a crease between them is deeper than any of them). A texel
     // where the view saw nothing is infinitely far, but one at least must have seen something
     // (a point between four empty texels is a sliver the view missed).
-    let (x0, y0) = ((uv.x - 0.5).floor() as i64, (uv.y - 0.5).floor() as i64);
+    let (fx, fy) = (uv.x - 0.5, uv.y - 0.5);
+    let (tx, ty) = (fx - fx.floor(), fy - fy.floor());
+    let (x0, y0) = (fx.floor() as i64, fy.floor() as i64);
     let (mut nearest, mut farthest) = (f64::INFINITY, 0.0f64);
-    for (x, y) in [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)] {
+    for (x, y, weight) in [
+        (x0, y0, (1.0 - tx) * (1.0 - ty)),
+        (x0 + 1, y0, tx * (1.0 - ty)),
+        (x0, y0 + 1, (1.0 - tx) * ty),
+        (x0 + 1, y0 + 1, tx * ty),
+    ] {
+        // A texel the bilinear filter gives no weight is not in the footprint.
+        if weight <= 0.0 {
+            continue;
+        }
         // Beyond the image, as on an empty texel, the view saw nothing.
         let inside = x >= 0 && y >= 0 && x < w as i64 && y < h as i64;
         let g = if inside {
@@ -131,4 +144,62 @@ pub(crate) fn sight_in(
 pub(crate) fn on_surface(g: f32, z: f64, tolerance: f64) -> bool {
     let g = g as f64;
     g > 0.0 && (1.0 / g - z).abs() <= tolerance * z
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 × 4 depth map: a surface at depth 2 over the left half, nothing on the right.
+    fn half() -> Image<f32> {
+        let mut gd = Image::new(4, 4, 0.0f32).unwrap();
+        for y in 0..4 {
+            for x in 0..2 {
+                gd.set(x, y, 0.5);
+            }
+        }
+        gd
+    }
+
+    #[test]
+    fn a_point_is_seen_on_its_texel_at_the_edge_beside_it_and_hidden_behind() {
+        let gd = half();
+        let tol = DEFAULT_TOLERANCE;
+        // On a texel that saw its surface, or in front of it.
+        assert_eq!(sight_at(&gd, DVec2::new(1.5, 1.5), 2.0, tol), Sight::Seen);
+        assert_eq!(sight_at(&gd, DVec2::new(1.5, 1.5), 1.0, tol), Sight::Seen);
+        // Past the silhouette by a fraction of a texel: its texel is empty, its footprint
+        // holds its surface.
+        assert_eq!(sight_at(&gd, DVec2::new(2.3, 1.5), 2.0, tol), Sight::Edge);
+        // Behind the surface, on it or beside it: hidden.
+        assert_eq!(sight_at(&gd, DVec2::new(1.5, 1.5), 2.5, tol), Sight::Hidden);
+        assert_eq!(sight_at(&gd, DVec2::new(1.2, 1.5), 2.5, tol), Sight::Hidden);
+        // Two texels past the silhouette: nothing of its footprint saw anything.
+        assert_eq!(sight_at(&gd, DVec2::new(3.5, 1.5), 2.0, tol), Sight::Hidden);
+        // Just outside the image beside the surface: the edge; far outside, or not a number:
+        // hidden, without overflow.
+        assert_eq!(sight_at(&gd, DVec2::new(-0.2, 1.5), 2.0, tol), Sight::Edge);
+        for uv in [
+            DVec2::new(-5.0, 1.0),
+            DVec2::new(1e300, 1.0),
+            DVec2::new(f64::NAN, 1.0),
+        ] {
+            assert_eq!(sight_at(&gd, uv, 2.0, tol), Sight::Hidden, "{uv}");
+        }
+    }
+
+    #[test]
+    fn a_crease_between_texels_is_kept_by_the_slope_of_their_depths() {
+        // Depths 2.0 and 2.4 on either side of a point at 2.3: behind the nearer texel by 15 %
+        // but in front of the farther one, so the view's surface passes between them.
+        let mut gd = Image::new(2, 2, 0.5f32).unwrap();
+        gd.set(1, 0, 1.0 / 2.4);
+        gd.set(1, 1, 1.0 / 2.4);
+        assert_eq!(sight_at(&gd, DVec2::new(0.9, 1.0), 2.3, 0.01), Sight::Edge);
+        // A point behind both by more than the tolerance and half their range is hidden.
+        assert_eq!(
+            sight_at(&gd, DVec2::new(0.9, 1.0), 2.7, 0.01),
+            Sight::Hidden
+        );
+    }
 }
