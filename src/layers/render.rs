@@ -144,8 +144,6 @@ pub fn render_projective(
     crate::texturing::render(camera, meshes, &source, settings)
 }
 
-/// A bilinear lookup of a layer at texel `tx` that takes only taps the layer knows (alpha ≥ ½)
-/// and whose surface is at depth `z` (within `tolerance`); `None` when no tap qualifies.
 /// The colour of a layer at texel `tx` for a point at depth `z` that the layer sees only at its
 /// edge ([`Sight::Edge`]): its texels that the layer holds (alpha ≥ ½) and whose depth is the
 /// point's surface, bilinear, else the nearest of them around `tx`.
@@ -156,6 +154,8 @@ fn edge_colour(img: &Image<Rgba>, depth: &Image<f32>, tx: DVec2, z: f64) -> Opti
         .or_else(|| nearest_where(img, tx, surface))
 }
 
+/// A bilinear lookup of a layer at texel `tx` that takes only taps the layer knows (alpha ≥ ½)
+/// and whose surface is at depth `z` (within `tolerance`); `None` when no tap qualifies.
 fn sample_layer(
     img: &Image<Rgba>,
     depth: &Image<f32>,
