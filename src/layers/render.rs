@@ -72,9 +72,12 @@ impl Source for Layered<'_> {
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
-        let (image, depth, tx, z) = self.texel(view, at)?;
-        sample_layer(image, depth, tx, z, self.tolerance)
-            .or_else(|| edge_colour(image, depth, tx, z))
+        let lookup = |q: &SurfacePoint| {
+            let (image, depth, tx, z) = self.texel(view, q)?;
+            sample_layer(image, depth, tx, z, self.tolerance)
+                .or_else(|| edge_colour(image, depth, tx, z))
+        };
+        crate::texturing::prefiltered(at, |q| self.texel(view, q).map(|t| t.2), lookup)
     }
 
     fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {

@@ -60,7 +60,22 @@ impl Source for Masters<'_> {
     }
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
-        lookup(&self.masters[view], self.atlas_point(at))
+        let master = &self.masters[view];
+        // A point across the footprint may leave the triangle, and its texel the face's part
+        // of the atlas: it is taken at the nearest point of the triangle.
+        let inside = |q: &SurfacePoint| {
+            let b = q.bary.max(glam::Vec3::ZERO);
+            let atlas = |b: glam::Vec3| self.atlas_point(&SurfacePoint { bary: b, ..*q });
+            match b.element_sum() {
+                sum if sum > 0.0 => atlas(b / sum),
+                _ => atlas(at.bary),
+            }
+        };
+        crate::texturing::prefiltered(
+            at,
+            |q| Some(self.atlas_point(q)),
+            |q| lookup(master, inside(q)),
+        )
     }
 
     fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {

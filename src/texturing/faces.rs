@@ -55,6 +55,8 @@ fn centroid_point(object: usize, triangle: usize, position: DVec3) -> SurfacePoi
         triangle,
         bary: Vec3::splat(1.0 / 3.0),
         position,
+        footprint: [DVec3::ZERO; 2],
+        footprint_bary: [Vec3::ZERO; 2],
     }
 }
 

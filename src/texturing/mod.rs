@@ -10,6 +10,10 @@
 //! answers through each object's layer), "Master Texture" §4 (a source that answers from one
 //! texture coordinate a point).
 //!
+//! A render may prefilter each view's image to its pixel ([`prefiltered`]): every surface point
+//! carries the render pixel's footprint on its triangle's plane, and a source that is asked
+//! averages its lookups across it where it spans two or more of its texels.
+//!
 //! A view sees a point clearly ([`Sight::Seen`]) or only at the edge of what it saw
 //! ([`Sight::Edge`]: within a texel of a silhouette, where the render's pixel grid and the view's
 //! disagree). A pixel is blended from the views that see it clearly; only where none does are the
@@ -21,6 +25,7 @@
 //! one; the same inputs give the same pixels on any thread count.
 
 pub mod faces;
+mod fill;
 pub mod view_map;
 pub mod weights;
 
@@ -45,6 +50,28 @@ pub struct SurfacePoint {
     pub bary: Vec3,
     /// World position.
     pub position: DVec3,
+    /// The world steps to the surface points of the next pixel right and the next pixel down,
+    /// on the triangle's plane: the render pixel's footprint on the surface, which a source
+    /// prefilters its image over. Zero when the point is not a render's pixel (a triangle's
+    /// centroid), where the plane is seen edge-on, or where the render does not prefilter
+    /// ([`BlendSettings::prefilter`]).
+    pub footprint: [DVec3; 2],
+    /// The same two steps in barycentric coordinates.
+    pub footprint_bary: [Vec3; 2],
+}
+
+impl SurfacePoint {
+    /// The point `(s, t)` pixel steps from this one along its footprint, on its triangle's
+    /// plane (its barycentric coordinates may leave the triangle).
+    pub fn offset(&self, s: f64, t: f64) -> SurfacePoint {
+        SurfacePoint {
+            position: self.position + self.footprint[0] * s + self.footprint[1] * t,
+            bary: self.bary + self.footprint_bary[0] * s as f32 + self.footprint_bary[1] * t as f32,
+            footprint: [DVec3::ZERO; 2],
+            footprint_bary: [Vec3::ZERO; 2],
+            ..*self
+        }
+    }
 }
 
 /// How a view sees a surface point.
@@ -87,12 +114,31 @@ pub struct Blend {
     pub covered: usize,
     /// Of those, pixels no view sees.
     pub holes: usize,
+    /// Of those, pixels filled from the nearest seen surface ([`Holes::Nearest`]).
+    pub filled: usize,
 }
 
 impl Blend {
     /// The share of the mesh's pixels no view sees (0 when none shows the mesh).
     pub fn unseen_share(&self) -> f64 {
         self.holes as f64 / self.covered.max(1) as f64
+    }
+}
+
+/// "N pixels show the mesh, M of them seen by no view (x %)", and how many were filled.
+impl std::fmt::Display for Blend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} pixels show the mesh, {} of them seen by no view ({:.2} %)",
+            self.covered,
+            self.holes,
+            100.0 * self.unseen_share()
+        )?;
+        if self.filled > 0 {
+            write!(f, ", {} filled from the nearest seen surface", self.filled)?;
+        }
+        Ok(())
     }
 }
 
@@ -110,24 +156,34 @@ pub fn render(
     let centres = source.centres();
     let fragments = target.attributes.pixels();
     let mut image = Image::new(w, h, Vec4::ZERO)?;
+    let mut pixels = vec![fill::Pixel::Background; w as usize * h as usize];
     let counts: Vec<(usize, usize)> = image
         .pixels_mut()
         .par_chunks_mut(w as usize)
+        .zip(pixels.par_chunks_mut(w as usize))
         .enumerate()
-        .map(|(y, row)| {
+        .map(|(y, (row, shown))| {
             let (mut covered, mut holes) = (0, 0);
-            for (x, out) in row.iter_mut().enumerate() {
+            for (x, (out, shown)) in row.iter_mut().zip(shown).enumerate() {
                 let Some(f) = fragments[y * w as usize + x] else {
                     continue;
                 };
                 covered += 1;
                 let (o, t) = (f.item.object as usize, f.item.triangle as usize);
-                let c = meshes[o].corners(t);
+                let c = meshes[o].corners(t).map(|p| p.as_dvec3());
+                let position =
+                    c[0] * f.bary.x as f64 + c[1] * f.bary.y as f64 + c[2] * f.bary.z as f64;
+                let steps = match settings.prefilter {
+                    true => footprint(camera, &c, position, DVec2::new(x as f64, y as f64)),
+                    false => [DVec3::ZERO; 2],
+                };
                 let at = SurfacePoint {
                     object: o,
                     triangle: t,
                     bary: f.bary,
-                    position: (c[0] * f.bary.x + c[1] * f.bary.y + c[2] * f.bary.z).as_dvec3(),
+                    position,
+                    footprint: steps,
+                    footprint_bary: steps.map(|d| bary_step(&c, d)),
                 };
                 // The views that see the point clearly; failing them, those at an edge.
                 let colour = [true, false].into_iter().find_map(|clearly| {
@@ -159,11 +215,15 @@ pub fn render(
                     blend(source, &at, &ws)
                 });
                 match colour {
-                    Some(colour) => *out = colour.truncate().extend(1.0),
+                    Some(colour) => {
+                        *out = colour.truncate().extend(1.0);
+                        *shown = fill::Pixel::Seen;
+                    }
                     None => {
                         holes += 1;
+                        *shown = fill::Pixel::Hole;
                         *out = match settings.holes {
-                            Holes::Transparent => Vec4::ZERO,
+                            Holes::Transparent | Holes::Nearest => Vec4::ZERO,
                             Holes::Fill(c) => c,
                         };
                     }
@@ -175,11 +235,108 @@ pub fn render(
     let (covered, holes) = counts
         .into_iter()
         .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let filled = match settings.holes {
+        Holes::Nearest if holes > 0 => fill::from_nearest(&mut image, &pixels),
+        _ => 0,
+    };
     Ok(Blend {
         image,
         covered,
         holes,
+        filled,
     })
+}
+
+/// The footprint of render pixel `(x, y)` (its top-left corner) on the plane of triangle
+/// `corners` through `p`: the steps from `p` to where the rays through the next pixel's centre
+/// right and down meet that plane; zero where the plane is seen edge-on or the step is not
+/// finite.
+fn footprint(camera: &Pinhole, corners: &[DVec3; 3], p: DVec3, pixel: DVec2) -> [DVec3; 2] {
+    let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+    let (a, b, c) = camera.mcmillan();
+    let eye = camera.position();
+    let along = n.dot(p - eye);
+    let centre = pixel + DVec2::splat(0.5);
+    let step = |d: DVec2| {
+        let uv = centre + d;
+        let ray = a * uv.x + b * uv.y + c;
+        let t = along / n.dot(ray);
+        let q = eye + ray * t;
+        if t > 0.0 && q.is_finite() {
+            q - p
+        } else {
+            DVec3::ZERO
+        }
+    };
+    let (right, down) = (step(DVec2::X), step(DVec2::Y));
+    if right == DVec3::ZERO || down == DVec3::ZERO {
+        return [DVec3::ZERO; 2];
+    }
+    [right, down]
+}
+
+/// The change of barycentric coordinates on triangle `c` along the in-plane step `d`.
+fn bary_step(c: &[DVec3; 3], d: DVec3) -> Vec3 {
+    let (e1, e2) = (c[1] - c[0], c[2] - c[0]);
+    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d20, d21) = (d.dot(e1), d.dot(e2));
+    let det = d00 * d11 - d01 * d01;
+    if det.abs() <= f64::MIN_POSITIVE || !det.is_finite() {
+        return Vec3::ZERO;
+    }
+    let b = (d11 * d20 - d01 * d21) / det;
+    let g = (d00 * d21 - d01 * d20) / det;
+    DVec3::new(-(b + g), b, g).as_vec3()
+}
+
+/// Most lookups along each side of a render pixel's footprint ([`prefiltered`]): a pixel that
+/// covers more than this many texels of an image is sampled at this rate, no finer.
+pub const MAX_FOOTPRINT_TAPS: usize = 8;
+
+/// A source's colour for `at` prefiltered to the render pixel's footprint. `texel` says where
+/// a surface point lands in the image the view samples; where the footprint's longer side
+/// spans `n ≥ 2` of its texels, `lookup` is asked at `n × n` points across the footprint (`n`
+/// at most [`MAX_FOOTPRINT_TAPS`]) and the colours it gives are averaged — a box prefilter of
+/// the image to the pixel — and otherwise once, at `at`. When no point across the footprint
+/// gives a colour, `at`'s own lookup answers.
+pub fn prefiltered(
+    at: &SurfacePoint,
+    texel: impl Fn(&SurfacePoint) -> Option<DVec2>,
+    lookup: impl Fn(&SurfacePoint) -> Option<Rgba>,
+) -> Option<Rgba> {
+    let n = footprint_taps(at, &texel);
+    if n == 1 {
+        return lookup(at);
+    }
+    let (mut sum, mut count) = (Vec4::ZERO, 0usize);
+    for j in 0..n {
+        for i in 0..n {
+            let s = (i as f64 + 0.5) / n as f64 - 0.5;
+            let t = (j as f64 + 0.5) / n as f64 - 0.5;
+            if let Some(c) = lookup(&at.offset(s, t)) {
+                sum += c;
+                count += 1;
+            }
+        }
+    }
+    match count {
+        0 => lookup(at),
+        _ => Some(sum / count as f32),
+    }
+}
+
+/// How many lookups along each side of `at`'s footprint an image whose texel `texel` gives
+/// needs: the footprint's longer side in texels, rounded down, from 1 to
+/// [`MAX_FOOTPRINT_TAPS`].
+pub fn footprint_taps(at: &SurfacePoint, texel: impl Fn(&SurfacePoint) -> Option<DVec2>) -> usize {
+    let Some(p) = texel(at) else { return 1 };
+    let side = |s: f64, t: f64| texel(&at.offset(s, t)).map_or(0.0, |q| (q - p).length());
+    let texels = side(1.0, 0.0).max(side(0.0, 1.0));
+    if texels.is_finite() && texels >= 2.0 {
+        (texels.floor() as usize).min(MAX_FOOTPRINT_TAPS)
+    } else {
+        1
+    }
 }
 
 /// The weighted colours of the views `ws` give `at`; those that give none are dropped and the

@@ -61,6 +61,9 @@ pub enum Holes {
     Transparent,
     /// This colour, alpha 1.
     Fill(Rgba),
+    /// The colour of the nearest pixel of the mesh that a view sees, counted across the mesh's
+    /// pixels ([`super::fill`]); transparent where the hole's patch of the mesh has none.
+    Nearest,
 }
 
 /// Settings of a projective render, whatever textures it: views, layers or master textures.
@@ -74,16 +77,21 @@ pub struct BlendSettings {
     pub tolerance: f64,
     /// Hole policy.
     pub holes: Holes,
+    /// Whether each view's image is prefiltered to the render pixel's footprint
+    /// ([`super::prefiltered`]); without it, one bilinear lookup a view.
+    pub prefilter: bool,
 }
 
 impl Default for BlendSettings {
-    /// ULR with β = 0.1, k = 4, 1 % depth tolerance, transparent holes.
+    /// ULR with β = 0.1, k = 4, 1 % depth tolerance, transparent holes, one bilinear lookup a
+    /// view.
     fn default() -> Self {
         BlendSettings {
             weighting: Weighting::Ulr { beta: 0.1 },
             k: 4,
             tolerance: DEFAULT_TOLERANCE,
             holes: Holes::Transparent,
+            prefilter: false,
         }
     }
 }

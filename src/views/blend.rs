@@ -10,7 +10,7 @@ use super::CalibratedView;
 use super::visibility::{DepthMap, on_surface};
 use crate::frame::{FrameError, Image, Rgba, pixel_centre};
 use crate::geom::Mesh;
-use crate::texturing::{Blend, BlendSettings, Sight, Source, SurfacePoint};
+use crate::texturing::{Blend, BlendSettings, Sight, Source, SurfacePoint, prefiltered};
 use glam::{DVec2, DVec3, Vec2, Vec4};
 use rayon::prelude::*;
 
@@ -59,13 +59,22 @@ impl Source for ViewSource<'_> {
 
     fn colour(&self, view: usize, at: &SurfacePoint) -> Option<Rgba> {
         let v = &self.views[view];
-        let (px, z) = v.project(at.position).unwrap_or((DVec2::ZERO, 0.0));
-        if v.intrinsics.is_undistorted() {
-            let img = v.image.as_ref()?;
-            Some(sample_on_surface(img, self.depth.get(view)?.gd(), px, z))
-        } else {
-            v.colour_at(px)
-        }
+        let img = v.image.as_ref()?;
+        let gd = match v.intrinsics.is_undistorted() {
+            true => Some(self.depth.get(view)?.gd()),
+            false => None,
+        };
+        // Each lookup kept to the point's surface where the depth map is on the image's grid,
+        // plain bilinear through the lens otherwise.
+        let lookup = |q: &SurfacePoint| {
+            let (px, z) = v.project(q.position)?;
+            Some(match gd {
+                Some(gd) => sample_on_surface(img, gd, px, z),
+                None => v.colour_at(px)?,
+            })
+        };
+        let texel = |q: &SurfacePoint| v.project(q.position).map(|p| p.0);
+        prefiltered(at, texel, lookup)
     }
 
     fn pixel(&self, view: usize, p: DVec3) -> Option<DVec2> {

@@ -75,9 +75,10 @@ pub enum Command {
         /// Also write the FLIP heat map here (PNG).
         #[arg(long)]
         heatmap: Option<PathBuf>,
-        /// Only average over pixels where this image is non-black.
+        /// Only average over pixels where this image is non-black (given more than once:
+        /// where every one of them is).
         #[arg(long)]
-        mask: Option<PathBuf>,
+        mask: Vec<PathBuf>,
     },
     /// Describe a mesh file (counts, bounds, materials, textures) or a baked impostor (its
     /// camera, size, coverage and box); with --gpu, the GPU adapters and the one trompe opens.
@@ -525,11 +526,35 @@ fn load_reflector(path: Option<&Path>) -> Result<(Option<trompe::Mesh>, Vec<Path
     Ok((Some(loaded.mesh), loaded.files))
 }
 
-/// Reads the mask of `compare --mask`: pixels where the image is non-black.
-fn read_mask(path: Option<&Path>) -> Result<Option<trompe::Image<bool>>> {
-    let Some(m) = path else { return Ok(None) };
-    let img = io::read_color(m).with_context(|| format!("reading {}", m.display()))?;
-    Ok(Some(img.map(|p| p.truncate().max_element() > 0.0)))
+/// Reads the mask of `compare --mask`: pixels where every image `paths` names is non-black
+/// (`None` when there is none).
+fn read_mask(paths: &[PathBuf]) -> Result<Option<trompe::Image<bool>>> {
+    let mut mask: Option<trompe::Image<bool>> = None;
+    for m in paths {
+        let img = io::read_color(m).with_context(|| format!("reading {}", m.display()))?;
+        let this = img.map(|p| p.truncate().max_element() > 0.0);
+        mask = Some(match mask {
+            None => this,
+            Some(a) if a.size() == this.size() => trompe::Image::from_vec(
+                a.width(),
+                a.height(),
+                a.pixels()
+                    .iter()
+                    .zip(this.pixels())
+                    .map(|(a, b)| *a && *b)
+                    .collect(),
+            )?,
+            Some(a) => anyhow::bail!(
+                "{}: the mask is {} × {}, the first mask {} × {}",
+                m.display(),
+                this.width(),
+                this.height(),
+                a.width(),
+                a.height()
+            ),
+        });
+    }
+    Ok(mask)
 }
 
 impl BakeArgs {
@@ -659,12 +684,12 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
             }
             check_plan(&plan)?;
             let mut images = vec![reference.as_path(), test.as_path()];
-            images.extend(mask.as_deref());
+            images.extend(mask.iter().map(PathBuf::as_path));
             metrics::budget_compare(&images)?;
             let read =
                 |p: &Path| io::read_color(p).with_context(|| format!("reading {}", p.display()));
             let (a, b) = (read(&reference)?, read(&test)?);
-            let mask = read_mask(mask.as_deref())?;
+            let mask = read_mask(&mask)?;
             let s = metrics::compare(&a, &b, mask.as_ref()).with_context(|| {
                 format!(
                     "comparing {} (reference) with {} (test)",

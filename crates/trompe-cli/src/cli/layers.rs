@@ -224,13 +224,7 @@ impl RenderArgs {
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;
         io::write_color(&self.output, &blend.image)?;
-        println!(
-            "{}: {} pixels covered, {} holes ({:.2} %), {ms:.1} ms",
-            self.output.display(),
-            blend.covered,
-            blend.holes,
-            100.0 * blend.unseen_share()
-        );
+        println!("wrote {}: {blend}, {ms:.1} ms", self.output.display());
         Ok(())
     }
 }

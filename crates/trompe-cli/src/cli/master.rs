@@ -149,13 +149,7 @@ impl MasterRenderArgs {
         let settings = self.blend.settings();
         let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
         io::write_color(&self.output, &b.image)?;
-        println!(
-            "wrote {}: {} pixels show the mesh, {} of them seen by no view ({:.2} %)",
-            self.output.display(),
-            b.covered,
-            b.holes,
-            100.0 * b.unseen_share()
-        );
+        println!("wrote {}: {b}", self.output.display());
         Ok(())
     }
 }

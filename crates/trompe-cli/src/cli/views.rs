@@ -85,6 +85,14 @@ pub struct BlendArgs {
     /// Most views blended at a point.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     k: u32,
+    /// Fill the pixels of the mesh no view sees from the nearest pixel one does (counted
+    /// across the mesh's pixels); without it they are transparent.
+    #[arg(long)]
+    fill_holes: bool,
+    /// Prefilter each view's image to the render's pixel: where a pixel covers two or more of
+    /// a view's texels, average lookups across it (a box filter) rather than take one.
+    #[arg(long)]
+    prefilter: bool,
 }
 
 impl BlendArgs {
@@ -93,6 +101,11 @@ impl BlendArgs {
         trompe::texturing::BlendSettings {
             weighting: self.weights.weighting(),
             k: self.k as usize,
+            holes: match self.fill_holes {
+                true => trompe::texturing::Holes::Nearest,
+                false => trompe::texturing::Holes::Transparent,
+            },
+            prefilter: self.prefilter,
             ..Default::default()
         }
     }
@@ -332,13 +345,7 @@ impl ViewsRenderArgs {
         let settings = self.blend.settings();
         let b = trompe::views::blend::render(&camera, &mesh, &set.views, &depth, &settings, None)?;
         io::write_color(&self.output, &b.image)?;
-        println!(
-            "wrote {}: {} pixels show the mesh, {} of them seen by no view ({:.2} %)",
-            self.output.display(),
-            b.covered,
-            b.holes,
-            100.0 * b.unseen_share()
-        );
+        println!("wrote {}: {b}", self.output.display());
         Ok(())
     }
 }

@@ -1,11 +1,13 @@
 //! The command-line tests that need a system package: the viewer's real window under a virtual
 //! X server (Xvfb), `--device gpu` on a GPU adapter (Mesa's lavapipe where there is no GPU),
-//! and the three.js runtime in headless Chromium. A missing package makes its test *ignored* — counted in the summary, the
+//! the three.js runtime in headless Chromium, and real photographs (Debian's opencv-doc, read
+//! by OpenCV's Python). A missing package makes its test *ignored* — counted in the summary, the
 //! reason printed above it — or failed where `TROMPE_REQUIRE_SYSTEM` is set, as `.ci/run` sets
 //! it.
 
 #[path = "../integration/common/mod.rs"]
 mod common;
+mod stereo;
 mod web;
 
 use common::{fails_cleanly, needs, scratch, stderr, trompe};
@@ -51,6 +53,18 @@ fn main() {
             the_headless_viewer_draws_trace_and_raster_on_the_gpu,
             adapter,
             ADAPTER,
+        ),
+        trial(
+            "stereo::at_the_photographs_resolution_the_novel_view_beats_a_forward_warp_on_psnr_and_ssim",
+            stereo::at_the_photographs_resolution_the_novel_view_beats_a_forward_warp_on_psnr_and_ssim,
+            stereo::ready(),
+            stereo::NEEDS,
+        ),
+        trial(
+            "stereo::at_half_the_photographs_resolution_the_prefiltered_novel_view_beats_a_forward_warp",
+            stereo::at_half_the_photographs_resolution_the_prefiltered_novel_view_beats_a_forward_warp,
+            stereo::ready(),
+            stereo::NEEDS,
         ),
         trial(
             "web::the_threejs_runtime_draws_the_ducks_bake_as_trompe_does",
