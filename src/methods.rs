@@ -405,6 +405,22 @@ impl<'a> Renderer<'a> {
             .into());
         }
         settings.relief.validate()?;
+        // Only the exact tracer's own rays go through a lens; a method that draws through a
+        // pinhole would draw another picture.
+        if let Some(lens) = &scene.camera.lens {
+            let refused = match (kind, settings.primary) {
+                (MethodKind::Trace, crate::render::Primary::Traced) => None,
+                (MethodKind::Trace, _) => Some("trace with rasterized primary rays"),
+                (kind, _) => Some(kind.name()),
+            };
+            if let Some(method) = refused {
+                return Err(RenderError::Lens {
+                    lens: lens.model().name(),
+                    method,
+                }
+                .into());
+            }
+        }
         let state = match kind.traced(settings.impostor_resolution) {
             Some(method) => State::Traced(Box::new(Sequence::new(
                 scene,

@@ -14,12 +14,14 @@
 
 mod c3rc;
 mod graph;
+pub mod intrinsics;
 mod orthographic;
 mod pinhole;
 mod spoc;
 
 pub use c3rc::{C3rc, C3rcProjection, real_roots};
 pub use graph::{Frustum, FrustumProjection, GraphCamera, Plane, face_map};
+pub use intrinsics::{CameraModel, Intrinsics};
 pub use orthographic::Orthographic;
 pub use pinhole::Pinhole;
 pub use spoc::{SPOC_STRENGTH_RANGE, Spoc};

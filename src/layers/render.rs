@@ -124,12 +124,22 @@ pub fn render(
     set: &LayerSet,
     settings: &BlendSettings,
 ) -> Result<Blend, FrameError> {
+    render_through((camera, None), set, settings)
+}
+
+/// [`render`] through the `lens` the camera's pixels look through, when it has one
+/// ([`crate::texturing::render_through`]).
+pub fn render_through(
+    (camera, lens): (&Pinhole, Option<&crate::camera::Intrinsics>),
+    set: &LayerSet,
+    settings: &BlendSettings,
+) -> Result<Blend, FrameError> {
     let source = Layered {
         set,
         centres: set.views.iter().map(|v| v.pose.centre()).collect(),
         tolerance: settings.tolerance,
     };
-    crate::texturing::render(camera, &set.mesh_refs(), &source, settings)
+    crate::texturing::render_through(camera, lens, &set.mesh_refs(), &source, settings)
 }
 
 /// Plain projective texturing: each view's whole photograph projected onto everything in its
@@ -140,11 +150,22 @@ pub fn render_projective(
     views: &[CalibratedView],
     settings: &BlendSettings,
 ) -> Result<Blend, FrameError> {
+    render_projective_through((camera, None), meshes, views, settings)
+}
+
+/// [`render_projective`] through the `lens` the camera's pixels look through, when it has one
+/// ([`crate::texturing::render_through`]).
+pub fn render_projective_through(
+    (camera, lens): (&Pinhole, Option<&crate::camera::Intrinsics>),
+    meshes: &[&Mesh],
+    views: &[CalibratedView],
+    settings: &BlendSettings,
+) -> Result<Blend, FrameError> {
     let source = Photographs {
         views,
         centres: views.iter().map(|v| v.pose.centre()).collect(),
     };
-    crate::texturing::render(camera, meshes, &source, settings)
+    crate::texturing::render_through(camera, lens, meshes, &source, settings)
 }
 
 /// The colour of a layer at texel `tx` for a point at depth `z` that the layer sees only at its

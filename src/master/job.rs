@@ -183,12 +183,12 @@ fn finish_folder(
 pub fn render_folder(
     dir: &Path,
     mesh: &Mesh,
-    camera: &Pinhole,
+    camera: (&Pinhole, Option<&crate::camera::Intrinsics>),
     settings: &BlendSettings,
 ) -> Result<Blend, MasterError> {
     let (manifest, masters) = load(dir)?;
     let cameras: Vec<Pinhole> = manifest.views.iter().map(|v| v.pinhole()).collect();
-    super::render::render(camera, mesh, &manifest.layout, &cameras, &masters, settings)
+    super::render::render_through(camera, mesh, &manifest.layout, &cameras, &masters, settings)
 }
 
 /// What an edit changed.

@@ -93,6 +93,19 @@ pub fn render(
     masters: &[Image<Rgba>],
     settings: &BlendSettings,
 ) -> Result<Blend, MasterError> {
+    render_through((camera, None), mesh, layout, cameras, masters, settings)
+}
+
+/// [`render`] through the `lens` the camera's pixels look through, when it has one
+/// ([`crate::texturing::render_through`]).
+pub fn render_through(
+    (camera, lens): (&Pinhole, Option<&crate::camera::Intrinsics>),
+    mesh: &crate::geom::Mesh,
+    layout: &Layout,
+    cameras: &[Pinhole],
+    masters: &[Image<Rgba>],
+    settings: &BlendSettings,
+) -> Result<Blend, MasterError> {
     if layout.faces.len() != mesh.triangle_count() {
         return Err(MasterError::Faces {
             mesh: mesh.triangle_count(),
@@ -111,8 +124,9 @@ pub fn render(
         masters,
         centres: cameras.iter().map(|c| c.position()).collect(),
     };
-    Ok(crate::texturing::render(
+    Ok(crate::texturing::render_through(
         camera,
+        lens,
         &[mesh],
         &source,
         settings,

@@ -63,6 +63,7 @@ pub fn turntable(
             Vec3::Y
         };
         let view = View {
+            lens: None,
             camera: Pinhole::look_at(eye, atlas.centre, up, 30.0, size, size)?,
             meshes: vec![Arc::new(mesh.clone())],
             surfaces: vec![surface.clone()],

@@ -787,6 +787,7 @@ pub fn raster_subset(
     timings: &mut Timings,
 ) -> Result<Frame, ReliefError> {
     let subset = View {
+        lens: None,
         camera: camera.clone(),
         meshes: objects.iter().map(|&o| view.meshes[o].clone()).collect(),
         surfaces: objects.iter().map(|&o| view.surfaces[o].clone()).collect(),

@@ -247,6 +247,7 @@ pub(crate) mod tests {
         let camera =
             Pinhole::look_at(Vec3::new(0.0, 2.0, 6.0), Vec3::Y, Vec3::Y, 40.0, 64, 48).unwrap();
         let view = View {
+            lens: None,
             camera,
             meshes: vec![Arc::new(floor), Arc::new(ball)],
             surfaces: vec![grey.clone(), grey],

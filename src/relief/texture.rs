@@ -158,6 +158,7 @@ mod tests {
         mesh.compute_normals();
         let mesh = mesh.transformed(&glam::Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
         let view = View {
+            lens: None,
             camera: Pinhole::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 30.0, 96, 96)
                 .unwrap(),
             meshes: vec![std::sync::Arc::new(mesh)],

@@ -64,15 +64,22 @@ impl Method {
     }
 }
 
-impl std::fmt::Display for Method {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
+impl Method {
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
             Method::Raster => "raster",
             Method::Trace => "trace",
             Method::Impostor(_) => "impostor",
             Method::PinholeImpostor(_) => "pinhole-impostor",
             Method::EnvMap => "envmap",
-        })
+        }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -163,6 +170,18 @@ pub enum RenderError {
     /// The frame could not be allocated.
     #[error(transparent)]
     Frame(#[from] FrameError),
+    /// The camera has a lens (a real camera's distortion) and the method cannot draw through
+    /// it.
+    #[error(
+        "the camera has {lens} lens distortion, which only the trace method renders (with traced \
+         primary rays); {method} draws through a pinhole"
+    )]
+    Lens {
+        /// The lens's COLMAP model.
+        lens: &'static str,
+        /// What was asked to draw through it.
+        method: &'static str,
+    },
     /// The camera at the requested time is invalid.
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),
@@ -340,6 +359,21 @@ pub fn render_view(
     timings: &mut Timings,
 ) -> Result<Frame, RenderError> {
     check_finite(view)?;
+    if let Some(lens) = &view.lens {
+        let method = match (options.method, options.primary) {
+            (Method::Trace | Method::EnvMap, Primary::Traced) => None,
+            (Method::Trace | Method::EnvMap, Primary::Rasterized) => {
+                Some("rasterized primary rays")
+            }
+            (m, _) => Some(m.name()),
+        };
+        if let Some(method) = method {
+            return Err(RenderError::Lens {
+                lens: lens.model().name(),
+                method,
+            });
+        }
+    }
     let refraction = options.refraction;
     let frame = match options.method {
         Method::Raster => render_raster(view, lighting, settings, progress, timings),

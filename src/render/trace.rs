@@ -13,7 +13,7 @@ use crate::geom::Ray;
 use crate::geom::optics::facing;
 use crate::scene::{Lighting, RenderSettings, View};
 use crate::trace::{Hit, RayQuery, SecondaryQuery};
-use glam::Vec3;
+use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 
 /// A ray tracer over one view: primary rays (and rays that go into glass) answered by `P`,
@@ -154,13 +154,18 @@ pub fn shade_rows<P: RayQuery, S: SecondaryQuery + ?Sized>(
 ) -> Result<Frame, RenderError> {
     let camera = &tracer.view.camera;
     let (w, h) = crate::camera::Projection::resolution(camera);
+    // A pixel looks along the pinhole's ray through where its lens sends it (the pinhole's
+    // own pixel where there is no lens, or where undistortion does not converge, far outside
+    // the lens's field).
+    let lens = tracer.view.lens.as_deref();
+    let through = |px: DVec2| lens.and_then(|l| l.undistorted_pixel_of(px)).unwrap_or(px);
     let mut frame = Frame::new(w, h)?;
     frame
         .par_rows_mut()
         .for_each(|(y, (color, depth, normal, id))| {
             let rays: Vec<(Ray, f32)> = (0..w as usize)
                 .map(|x| {
-                    let ray = camera.ray(crate::frame::pixel_centre(x as f64, y as f64));
+                    let ray = camera.ray(through(crate::frame::pixel_centre(x as f64, y as f64)));
                     (ray, f32::INFINITY)
                 })
                 .collect();
@@ -232,6 +237,7 @@ mod tests {
         let (w, h) = (16u32, 12u32);
         let camera = Pinhole::look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 60.0, w, h).unwrap();
         let view = View {
+            lens: None,
             camera,
             meshes: vec![floor],
             surfaces: vec![Surface::Mirror {

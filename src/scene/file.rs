@@ -42,6 +42,12 @@ pub struct CameraFile {
     pub cx: Option<f64>,
     /// Principal point, pixels from the image's top edge.
     pub cy: Option<f64>,
+    /// A COLMAP camera model whose lens distortion the camera has (with the pixel intrinsics):
+    /// `SIMPLE_RADIAL`, `RADIAL`, `OPENCV` or `FULL_OPENCV`.
+    pub model: Option<String>,
+    /// That model's parameters after its focal length(s) and principal point, in COLMAP's
+    /// order (`OPENCV`: `k1, k2, p1, p2`).
+    pub distortion: Option<Vec<f64>>,
     /// `[width, height]` in pixels.
     pub resolution: [u64; 2],
     /// Near-plane distance (default 1e-3 × the scene's size).

@@ -207,6 +207,9 @@ pub struct CameraSpec {
     /// Pixel intrinsics `[fx, fy, cx, cy]` (focal lengths and principal point, pixels): when
     /// set, they replace `fov_y` and the centred principal point (a real camera's).
     pub intrinsics: Option<[f64; 4]>,
+    /// The lens's distortion, when the camera has one: its intrinsics in full, of the camera's
+    /// size and pixel intrinsics ([`View::lens`]).
+    pub lens: Option<crate::camera::Intrinsics>,
     /// Pixels.
     pub width: u32,
     /// Pixels.
@@ -299,6 +302,11 @@ pub struct Scene {
 pub struct View {
     /// The camera at that time.
     pub camera: Pinhole,
+    /// The lens its pixels look through, when it is not a pinhole (a real camera's distortion,
+    /// [`crate::camera::Intrinsics`] of the camera's size): pixel `p` sees along the camera's
+    /// ray through `lens.undistorted_pixel_of(p)`. Only the exact tracer renders through a
+    /// lens; the other methods refuse it.
+    pub lens: Option<std::sync::Arc<crate::camera::Intrinsics>>,
     /// World-space meshes (object id = index).
     pub meshes: Vec<Arc<Mesh>>,
     /// Surfaces, by object id.
@@ -424,6 +432,38 @@ impl Scene {
                 ));
             }
         };
+        // A lens: a COLMAP model and its distortion, on top of the pixel intrinsics.
+        let lens = match (&c.model, &c.distortion) {
+            (None, None) => None,
+            (Some(name), distortion) => {
+                let Some(k) = intrinsics else {
+                    return Err(invalid(
+                        "camera.model",
+                        "a lens needs the pixel intrinsics fx, fy, cx and cy".into(),
+                    ));
+                };
+                let model = crate::camera::CameraModel::from_name(name).ok_or_else(|| {
+                    invalid(
+                        "camera.model",
+                        format!(
+                            "{name:?} is not a camera model trompe reads ({})",
+                            crate::camera::CameraModel::ALL.map(|m| m.name()).join(", ")
+                        ),
+                    )
+                })?;
+                let distortion = distortion.as_deref().unwrap_or(&[]);
+                let lens =
+                    crate::camera::Intrinsics::with_distortion(model, width, height, k, distortion)
+                        .map_err(|e| invalid("camera.distortion", e))?;
+                (!lens.is_undistorted()).then_some(lens)
+            }
+            (None, Some(_)) => {
+                return Err(invalid(
+                    "camera.distortion",
+                    "needs the camera model it belongs to (model = \"OPENCV\", …)".into(),
+                ));
+            }
+        };
         let mut keys = Vec::new();
         for (k, kf) in c.path.iter().enumerate() {
             let key = format!("camera.path[{k}]");
@@ -443,6 +483,7 @@ impl Scene {
             up: vec3(c.up),
             fov_y,
             intrinsics,
+            lens,
             width,
             height,
             near,
@@ -573,6 +614,7 @@ impl Scene {
             })
             .collect::<Result<_, _>>()?;
         Ok(View {
+            lens: self.camera.lens.clone().map(Arc::new),
             camera,
             meshes,
             surfaces: self.objects.iter().map(|o| o.surface.clone()).collect(),
@@ -953,6 +995,48 @@ mod tests {
                 .to_string();
             assert!(err.contains(key), "{err}");
         }
+    }
+
+    #[test]
+    fn a_camera_may_have_a_colmap_lens_and_a_wrong_one_is_named() {
+        let camera = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\nfx = 40\nfy = 44\n\
+                      cx = 19.5\ncy = 9.25\nresolution = [32, 24]\n";
+        let with = |lens: &str| parse(&format!("{camera}{lens}\n[[object]]\nshape = \"cube\"\n"));
+        let s = with("model = \"OPENCV\"\ndistortion = [-0.1, 0.02, 0.001, 0.0]").unwrap();
+        let lens = s.camera.lens.expect("a lens");
+        assert_eq!(lens.model(), crate::camera::CameraModel::OpenCv);
+        assert_eq!(
+            lens.params(),
+            [40.0, 44.0, 19.5, 9.25, -0.1, 0.02, 0.001, 0.0]
+        );
+        let view = parse(&format!("{camera}model = \"OPENCV\"\ndistortion = [-0.1, 0.0, 0.0, 0.0]\n[[object]]\nshape = \"cube\"\n"))
+            .unwrap()
+            .view(0.0)
+            .unwrap();
+        assert!(view.lens.is_some());
+        // A lens model without distortion is a pinhole.
+        assert!(with("model = \"PINHOLE\"").unwrap().camera.lens.is_none());
+        for (lens, key, says) in [
+            ("model = \"FISHEYE\"", "camera.model", "FISHEYE"),
+            (
+                "model = \"OPENCV\"\ndistortion = [0.1]",
+                "camera.distortion",
+                "takes 4",
+            ),
+            (
+                "model = \"SIMPLE_RADIAL\"\ndistortion = [0.1]",
+                "camera.distortion",
+                "one focal",
+            ),
+            ("distortion = [0.1]", "camera.distortion", "model"),
+        ] {
+            let err = with(lens).unwrap_err().to_string();
+            assert!(err.contains(key) && err.contains(says), "{lens}: {err}");
+        }
+        let fov = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\nfov_y = 40\n\
+                   resolution = [32, 24]\nmodel = \"RADIAL\"\ndistortion = [0.1, 0.0]\n";
+        let err = parse(&format!("{fov}[[object]]\nshape = \"cube\"\n")).unwrap_err();
+        assert!(err.to_string().contains("pixel intrinsics"), "{err}");
     }
 
     #[test]

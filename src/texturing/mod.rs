@@ -31,13 +31,15 @@ pub mod weights;
 
 pub use weights::{BlendSettings, DEFAULT_TOLERANCE, Holes, Weighting, weights};
 
+use crate::camera::Intrinsics;
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{FrameError, Image, Rgba};
 use crate::geom::Mesh;
-use crate::raster::{StoreFragment, rasterize};
+use crate::raster::{Fragment, ItemId, StoreFragment, rasterize};
 use faces::FaceWeights;
 use glam::{DVec2, DVec3, Vec3, Vec4};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// A point of a rendered surface: which object and triangle, where on it, and where in the world.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,12 +151,41 @@ pub fn render(
     source: &impl Source,
     settings: &BlendSettings,
 ) -> Result<Blend, FrameError> {
-    let (target, _) = rasterize(camera, meshes, &StoreFragment, None)?;
+    render_through(camera, None, meshes, source, settings)
+}
+
+/// Renders `meshes` through `camera` and, when given, the `lens` its pixels look through (a
+/// real camera's distortion, [`crate::scene::View::lens`]: each pixel's surface is then found
+/// by tracing its ray, as no rasterizer draws through a lens), textured by `source`'s views.
+pub fn render_through(
+    camera: &Pinhole,
+    lens: Option<&Intrinsics>,
+    meshes: &[&Mesh],
+    source: &impl Source,
+    settings: &BlendSettings,
+) -> Result<Blend, FrameError> {
+    let (a, b, c) = camera.mcmillan();
+    // The direction of the ray through continuous pixel `uv` of the frame.
+    let direction = |uv: DVec2| match lens {
+        None => Some(a * uv.x + b * uv.y + c),
+        Some(lens) => lens.undistorted_pixel_of(uv).map(|u| a * u.x + b * u.y + c),
+    };
+    let traced;
+    let rasterized;
+    let fragments: &[Option<Fragment>] = match lens {
+        None => {
+            rasterized = rasterize(camera, meshes, &StoreFragment, None)?.0;
+            rasterized.attributes.pixels()
+        }
+        Some(_) => {
+            traced = trace_fragments(camera, meshes, &direction)?;
+            &traced
+        }
+    };
     let faces = FaceWeights::build(settings.weighting, meshes, source);
     let (w, h) = camera.resolution();
     let eye = camera.position();
     let centres = source.centres();
-    let fragments = target.attributes.pixels();
     let mut image = Image::new(w, h, Vec4::ZERO)?;
     let mut pixels = vec![fill::Pixel::Background; w as usize * h as usize];
     let counts: Vec<(usize, usize)> = image
@@ -174,7 +205,7 @@ pub fn render(
                 let position =
                     c[0] * f.bary.x as f64 + c[1] * f.bary.y as f64 + c[2] * f.bary.z as f64;
                 let steps = match settings.prefilter {
-                    true => footprint(camera, &c, position, DVec2::new(x as f64, y as f64)),
+                    true => footprint(eye, direction, &c, position, (x, y)),
                     false => [DVec3::ZERO; 2],
                 };
                 let at = SurfacePoint {
@@ -247,19 +278,24 @@ pub fn render(
     })
 }
 
-/// The footprint of render pixel `(x, y)` (its top-left corner) on the plane of triangle
-/// `corners` through `p`: the steps from `p` to where the rays through the next pixel's centre
+/// The footprint of render pixel `(x, y)` on the plane of triangle `corners` through `p`: the
+/// steps from `p` to where the rays from `eye` along `direction` of the next pixel's centre
 /// right and down meet that plane; zero where the plane is seen edge-on or the step is not
 /// finite.
-fn footprint(camera: &Pinhole, corners: &[DVec3; 3], p: DVec3, pixel: DVec2) -> [DVec3; 2] {
+fn footprint(
+    eye: DVec3,
+    direction: impl Fn(DVec2) -> Option<DVec3>,
+    corners: &[DVec3; 3],
+    p: DVec3,
+    (x, y): (usize, usize),
+) -> [DVec3; 2] {
     let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-    let (a, b, c) = camera.mcmillan();
-    let eye = camera.position();
     let along = n.dot(p - eye);
-    let centre = pixel + DVec2::splat(0.5);
+    let centre = crate::frame::pixel_centre(x as f64, y as f64);
     let step = |d: DVec2| {
-        let uv = centre + d;
-        let ray = a * uv.x + b * uv.y + c;
+        let Some(ray) = direction(centre + d) else {
+            return DVec3::ZERO;
+        };
         let t = along / n.dot(ray);
         let q = eye + ray * t;
         if t > 0.0 && q.is_finite() {
@@ -273,6 +309,38 @@ fn footprint(camera: &Pinhole, corners: &[DVec3; 3], p: DVec3, pixel: DVec2) -> 
         return [DVec3::ZERO; 2];
     }
     [right, down]
+}
+
+/// The surfaces `camera`'s pixels see along `direction` (the ray through a continuous pixel),
+/// found by tracing one ray a pixel centre through a BVH of `meshes`, as fragments (their
+/// depth unset).
+fn trace_fragments(
+    camera: &Pinhole,
+    meshes: &[&Mesh],
+    direction: &(impl Fn(DVec2) -> Option<DVec3> + Sync),
+) -> Result<Vec<Option<Fragment>>, FrameError> {
+    let bvh = crate::trace::Bvh::build(meshes.iter().map(|&m| Arc::new(m.clone())).collect())?;
+    let (w, h) = camera.resolution();
+    let eye = camera.position().as_vec3();
+    let pixels: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
+    Ok(pixels
+        .par_iter()
+        .map(|&(x, y)| {
+            let d = direction(crate::frame::pixel_centre(f64::from(x), f64::from(y)))?;
+            let ray = crate::geom::Ray::new(eye, d.normalize().as_vec3());
+            let hit = crate::trace::RayQuery::closest_hit(&bvh, &ray, f32::INFINITY)?;
+            Some(Fragment {
+                x,
+                y,
+                gd: 0.0,
+                bary: Vec3::new(1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y),
+                item: ItemId {
+                    object: hit.object,
+                    triangle: hit.triangle,
+                },
+            })
+        })
+        .collect())
 }
 
 /// The change of barycentric coordinates on triangle `c` along the in-plane step `d`.

@@ -93,8 +93,22 @@ pub fn render(
     settings: &BlendSettings,
     exclude: Option<usize>,
 ) -> Result<Blend, FrameError> {
+    render_through(camera, None, mesh, views, depth, settings, exclude)
+}
+
+/// [`render`] through the `lens` the camera's pixels look through, when it has one
+/// ([`crate::texturing::render_through`]).
+pub fn render_through(
+    camera: &crate::camera::Pinhole,
+    lens: Option<&crate::camera::Intrinsics>,
+    mesh: &Mesh,
+    views: &[CalibratedView],
+    depth: &[DepthMap],
+    settings: &BlendSettings,
+    exclude: Option<usize>,
+) -> Result<Blend, FrameError> {
     let source = ViewSource::new(views, depth, settings.tolerance, exclude);
-    crate::texturing::render(camera, &[mesh], &source, settings)
+    crate::texturing::render_through(camera, lens, &[mesh], &source, settings)
 }
 
 /// How far (relative depth) a texel's surface may be from the sampled point and still be the

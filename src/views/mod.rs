@@ -15,7 +15,7 @@
 pub mod blend;
 pub mod capture;
 pub mod colmap;
-pub mod intrinsics;
+pub use crate::camera::intrinsics;
 pub mod rig;
 pub mod score;
 pub mod visibility;
@@ -182,6 +182,12 @@ impl CalibratedView {
     /// intrinsics (the same pinhole as [`CalibratedView::pinhole`], up to the scene camera's
     /// single precision), still, with near plane `near`.
     pub fn camera_spec(&self, near: f64) -> crate::scene::CameraSpec {
+        self.camera_spec_through(near, false)
+    }
+
+    /// [`CalibratedView::camera_spec`], and with `distort`, its lens too: the scene camera
+    /// renders the photograph's distorted frame ([`crate::scene::View::lens`]).
+    pub fn camera_spec_through(&self, near: f64, distort: bool) -> crate::scene::CameraSpec {
         let u = self.intrinsics.undistorted();
         let ((fx, fy), (cx, cy)) = (u.focal(), u.principal_point());
         let (width, height) = u.size();
@@ -193,6 +199,7 @@ impl CalibratedView {
             up: (r_inv * -DVec3::Y).as_vec3(),
             fov_y: 2.0 * (height as f64 * 0.5 / fy).atan().to_degrees(),
             intrinsics: Some([fx, fy, cx, cy]),
+            lens: (distort && !self.intrinsics.is_undistorted()).then(|| self.intrinsics.clone()),
             width,
             height,
             near,
@@ -215,19 +222,21 @@ impl CalibratedView {
 }
 
 /// The camera of image `key` (its name, or its id) of the COLMAP model in `model`, as a scene's
-/// camera ([`CalibratedView::camera_spec`], near plane `near`): to render from where a
-/// photograph was taken, at its size, with its intrinsics (undistorted).
+/// camera ([`CalibratedView::camera_spec_through`], near plane `near`): to render from where a
+/// photograph was taken, at its size, with its intrinsics — its undistorted frame, or with
+/// `distort` its distorted one, through its lens.
 pub fn camera_of(
     model: &Path,
     key: &str,
     near: f64,
+    distort: bool,
 ) -> Result<crate::scene::CameraSpec, ViewsError> {
     let set = ViewSet::load(model, None)?;
     let view = set.find(key).ok_or_else(|| ViewsError::NoImage {
         model: model.to_path_buf(),
         key: key.to_string(),
     })?;
-    Ok(view.camera_spec(near))
+    Ok(view.camera_spec_through(near, distort))
 }
 
 /// A set of calibrated views and the folder their images are in.

@@ -386,6 +386,7 @@ fn wyman_exit_rays_are_exact_on_a_spheres_centre_line_and_close_near_it() {
     )
     .unwrap();
     let view = View {
+        lens: None,
         camera: camera.clone(),
         meshes: vec![sphere.clone()],
         surfaces: vec![Surface::Glass {
@@ -468,6 +469,7 @@ fn a_planar_mirror_answered_by_a_pinhole_impostor_from_the_mirrored_eye_matches_
             .unwrap();
     let surfaces = vec![Surface::Diffuse(None), Surface::Mirror { tint: Vec3::ONE }];
     let view = View {
+        lens: None,
         camera,
         meshes: vec![duck.clone(), mirror],
         surfaces: surfaces.clone(),
@@ -564,6 +566,7 @@ fn facing_mirrors(size: (u32, u32)) -> (trompe::scene::View, trompe::Image<bool>
     )
     .unwrap();
     let view = trompe::scene::View {
+        lens: None,
         camera,
         meshes: vec![
             Arc::new(duck.transformed(&fit)),

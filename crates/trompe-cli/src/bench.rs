@@ -166,6 +166,7 @@ pub fn plain_raster(
 /// an impostor holds.
 pub fn raster_view(camera: &Pinhole, mesh: &Mesh) -> (View, Lighting) {
     let view = View {
+        lens: None,
         camera: camera.clone(),
         meshes: vec![Arc::new(mesh.clone())],
         surfaces: vec![Surface::Diffuse(None)],

@@ -175,6 +175,14 @@ impl<'a> DeviceRenderer<'a> {
                     }
                     .into());
                 }
+                // The GPU draws through a pinhole: a lens is the CPU tracer's alone.
+                if let Some(lens) = &scene.camera.lens {
+                    return Err(MethodError::from(trompe::render::RenderError::Lens {
+                        lens: lens.model().name(),
+                        method: "the GPU",
+                    })
+                    .into());
+                }
                 // The raster method's glass looks the panorama up: it refracts nothing.
                 let (primary, refraction) = match kind {
                     MethodKind::Raster => (Primary::Rasterized, Refraction::Exact),

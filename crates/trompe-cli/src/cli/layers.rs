@@ -213,13 +213,22 @@ impl RenderArgs {
             crate::output::note(format_args!("filled {n} hidden texels"));
         }
         let camera = scene.camera.at(scene.render.time)?;
+        let lens = scene.camera.lens.as_ref();
         let settings = self.blend.settings();
         let start = std::time::Instant::now();
         let blend = match self.method {
-            TextureArg::Layered => layers::render::render(&camera, &set, &settings)?,
+            TextureArg::Layered => {
+                layers::render::render_through((&camera, lens), &set, &settings)?
+            }
             TextureArg::Projective => {
                 let views = layers::file::photographs(&self.layers, &set)?;
-                layers::render::render_projective(&camera, &set.mesh_refs(), &views, &settings)?
+                let meshes = set.mesh_refs();
+                layers::render::render_projective_through(
+                    (&camera, lens),
+                    &meshes,
+                    &views,
+                    &settings,
+                )?
             }
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;

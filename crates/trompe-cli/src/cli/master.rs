@@ -145,9 +145,14 @@ impl MasterRenderArgs {
             .reads(trompe::master::job::files_of(&self.encoding))
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
-        let camera = self.camera.pinhole(self.scene.as_deref(), &mesh)?;
+        let (camera, lens) = self.camera.camera(self.scene.as_deref(), &mesh)?;
         let settings = self.blend.settings();
-        let b = trompe::master::job::render_folder(&self.encoding, &mesh, &camera, &settings)?;
+        let b = trompe::master::job::render_folder(
+            &self.encoding,
+            &mesh,
+            (&camera, lens.as_ref()),
+            &settings,
+        )?;
         io::write_color(&self.output, &b.image)?;
         println!("wrote {}: {b}", self.output.display());
         Ok(())

@@ -207,6 +207,10 @@ pub struct CameraArg {
     /// the folder MODEL, at its pose and size with its intrinsics (undistorted).
     #[arg(long, value_name = "MODEL:IMAGE")]
     pub camera: Option<String>,
+    /// With --camera: render the photograph's distorted frame, through its lens, rather than
+    /// its undistorted one (each pixel's ray traced; `render` takes it with --method trace).
+    #[arg(long, requires = "camera")]
+    pub distort: bool,
 }
 
 impl CameraArg {
@@ -237,29 +241,33 @@ impl CameraArg {
     /// Replaces `scene`'s camera by the photograph's, keeping its near plane.
     pub fn apply(&self, scene: &mut Scene) -> Result<()> {
         if let Some((model, key)) = self.parts()? {
-            scene.camera = trompe::views::camera_of(&model, key, scene.camera.near)
-                .with_context(|| format!("--camera {}", self.camera.as_deref().unwrap_or("")))?;
+            scene.camera = trompe::views::camera_of(&model, key, scene.camera.near, self.distort)
+                .with_context(|| {
+                format!("--camera {}", self.camera.as_deref().unwrap_or(""))
+            })?;
         }
         Ok(())
     }
 
-    /// The camera to render `mesh` from: the photograph's when given, else `scene`'s.
-    pub fn pinhole(
+    /// The camera to render `mesh` from, and the lens its pixels look through when it has
+    /// one: the photograph's when given, else `scene`'s.
+    pub fn camera(
         &self,
         scene: Option<&std::path::Path>,
         mesh: &trompe::geom::Mesh,
-    ) -> Result<trompe::camera::Pinhole> {
+    ) -> Result<(trompe::camera::Pinhole, Option<trompe::camera::Intrinsics>)> {
         if let Some((model, key)) = self.parts()? {
             let near = 1e-3 * mesh.bounds().radius().max(1e-6) as f64;
-            let spec = trompe::views::camera_of(&model, key, near)
+            let spec = trompe::views::camera_of(&model, key, near, self.distort)
                 .with_context(|| format!("--camera {}", self.camera.as_deref().unwrap_or("")))?;
-            return Ok(spec.at(0.0)?);
+            return Ok((spec.at(0.0)?, spec.lens));
         }
         let Some(scene) = scene else {
             anyhow::bail!("give --scene or --camera MODEL:IMAGE");
         };
         let scene = Scene::load(scene).context("loading the scene")?;
-        Ok(scene.view(scene.render.time)?.camera)
+        let view = scene.view(scene.render.time)?;
+        Ok((view.camera, view.lens.map(|l| (*l).clone())))
     }
 }
 
@@ -340,10 +348,18 @@ impl ViewsRenderArgs {
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
         set.load_images()?;
-        let camera = self.camera.pinhole(self.scene.as_deref(), &mesh)?;
+        let (camera, lens) = self.camera.camera(self.scene.as_deref(), &mesh)?;
         let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;
         let settings = self.blend.settings();
-        let b = trompe::views::blend::render(&camera, &mesh, &set.views, &depth, &settings, None)?;
+        let b = trompe::views::blend::render_through(
+            &camera,
+            lens.as_ref(),
+            &mesh,
+            &set.views,
+            &depth,
+            &settings,
+            None,
+        )?;
         io::write_color(&self.output, &b.image)?;
         println!("wrote {}: {b}", self.output.display());
         Ok(())

@@ -307,6 +307,7 @@ fn mirror_frames(
         texture: None,
     }));
     let view = View {
+        lens: None,
         camera: setup.view.clone(),
         meshes: vec![setup.target.clone(), setup.reflector.clone()],
         surfaces: vec![orange, Surface::Mirror { tint: Vec3::ONE }],

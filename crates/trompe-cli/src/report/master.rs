@@ -249,6 +249,7 @@ fn shadow_edit(
         192,
     )?;
     let view = |with: bool| trompe::scene::View {
+        lens: None,
         camera: camera.clone(),
         meshes: if with {
             vec![Arc::new(mesh.clone()), Arc::new(sphere.clone())]

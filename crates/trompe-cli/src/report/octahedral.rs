@@ -56,6 +56,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
         let eye = atlas.centre + dir.normalize() * atlas.radius * 4.0;
         let camera = Pinhole::look_at(eye, atlas.centre, up, 30.0, 256, 256)?;
         let view = View {
+            lens: None,
             camera,
             meshes: vec![Arc::new(mesh.clone())],
             surfaces: vec![surface.clone()],
@@ -190,6 +191,7 @@ fn interactive_page(
         let dir = Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
         let eye = atlas.centre + dir * atlas.radius * 4.0;
         let view = View {
+            lens: None,
             camera: Pinhole::look_at(eye, atlas.centre, Vec3::Y, 30.0, 192, 192)?,
             meshes: vec![Arc::new(mesh.clone())],
             surfaces: vec![Surface::Diffuse(None)],

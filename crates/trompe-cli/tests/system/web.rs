@@ -175,6 +175,7 @@ fn score(name: &str, glb: &Path, atlas: &OctahedralAtlas, dir: &Path) -> (f64, f
         let camera = pinhole(cam, SIZE);
         let reference = atlas.render_cutout(&camera, &lighting, 4);
         let view = View {
+            lens: None,
             camera,
             meshes: vec![std::sync::Arc::new(mesh.clone())],
             surfaces: vec![Surface::Diffuse(None)],

@@ -1,5 +1,8 @@
 //! COLMAP's camera models: intrinsics, lens distortion applied exactly when projecting, and its
-//! inverse (undistortion) by Newton's method.
+//! inverse (undistortion) by Newton's method. A calibrated view's camera
+//! ([`crate::views::CalibratedView`]), and the lens a render camera's pixels may look through
+//! ([`crate::scene::View::lens`]: each pixel sees along its undistorted pinhole's ray through
+//! [`Intrinsics::undistorted_pixel_of`]).
 //!
 //! Pixel coordinates follow COLMAP and trompe alike: `(0, 0)` is the top-left corner of the
 //! top-left pixel, whose centre is `(0.5, 0.5)`. A camera looks down its `+z`, `x` right, `y`
@@ -264,6 +267,52 @@ impl Intrinsics {
             }
         }
         (self.distort(n) - d).length().lt(&1e-9).then_some(n)
+    }
+
+    /// The camera of `model` with focal lengths and principal point `[fx, fy, cx, cy]` and the
+    /// model's other parameters, `distortion`, in COLMAP's order after those (a model with one
+    /// focal length needs `fx = fy`); `Err` says what is wrong.
+    pub fn with_distortion(
+        model: CameraModel,
+        width: u32,
+        height: u32,
+        [fx, fy, cx, cy]: [f64; 4],
+        distortion: &[f64],
+    ) -> Result<Intrinsics, String> {
+        let mut params = match model {
+            CameraModel::SimplePinhole | CameraModel::SimpleRadial | CameraModel::Radial => {
+                if fx != fy {
+                    return Err(format!(
+                        "{} has one focal length: fx = {fx} and fy = {fy} differ",
+                        model.name()
+                    ));
+                }
+                vec![fx, cx, cy]
+            }
+            CameraModel::Pinhole | CameraModel::OpenCv | CameraModel::FullOpenCv => {
+                vec![fx, fy, cx, cy]
+            }
+        };
+        let focal = params.len();
+        if distortion.len() + focal != model.param_count() {
+            return Err(format!(
+                "{} takes {} distortion parameters, not {}",
+                model.name(),
+                model.param_count() - focal,
+                distortion.len()
+            ));
+        }
+        params.extend_from_slice(distortion);
+        Intrinsics::new(model, width, height, params)
+    }
+
+    /// Where pixel `pixel` of this lens lands in its undistorted pinhole
+    /// ([`Intrinsics::undistorted`]): the pinhole's pixel whose ray it sees along; `None` where
+    /// undistortion does not converge.
+    pub fn undistorted_pixel_of(&self, pixel: DVec2) -> Option<DVec2> {
+        let n = self.normalized_of(pixel)?;
+        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
+        Some(DVec2::new(fx * n.x + cx, fy * n.y + cy))
     }
 
     /// The undistorted pinhole of the same size, focal length and principal point: what a
