@@ -1,6 +1,6 @@
 //! The demo report: `trompe demo` renders the scenes shipped in `scenes/`, measures every method
 //! against the exact one, and writes `index.html` — run metadata, a table of contents, then one
-//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `layers`, `relief`, `master`), each built as data and
+//! `html::Section` per capability (`foundation`, `impostors`, `maze`, `views`, `photographs`, `layers`, `relief`, `master`), each built as data and
 //! written by the one HTML writer in `html`. A new capability adds a section file and one line
 //! in `demo`.
 
@@ -12,6 +12,7 @@ mod layers;
 mod master;
 mod maze;
 mod octahedral;
+mod photographs;
 mod relief;
 mod turn;
 mod views;
@@ -165,6 +166,9 @@ pub fn demo(
     let t = std::time::Instant::now();
     report.sections.push(views::section(inputs, out)?);
     timed("calibrated views", t);
+    let t = std::time::Instant::now();
+    report.sections.push(photographs::section(out)?);
+    timed("real photographs", t);
     let t = std::time::Instant::now();
     report.sections.push(layers::section(inputs, out)?);
     timed("layered projective textures", t);
