@@ -243,6 +243,31 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
         ]),
         "must be a finite number of seconds",
     );
+    // A camera with a lens (a real camera's distortion) is the CPU tracer's alone: the GPU
+    // refuses it by name rather than draw its pinhole.
+    let lens = dir.join("lens.toml");
+    let duck = common::asset("gltf/Duck.glb");
+    std::fs::write(
+        &lens,
+        format!(
+            "[camera]\nposition = [1.2, 1.9, 3.2]\nlook_at = [0.1, 0.85, 0.0]\nfx = 300\nfy = \
+             300\ncx = 160\ncy = 120\nmodel = \"RADIAL\"\ndistortion = [-0.2, 0.05]\n\
+             resolution = [320, 240]\n\n[[object]]\nmesh = {:?}\n",
+            duck.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    fails_cleanly(
+        &trompe(&[
+            "render",
+            lens.to_str().unwrap(),
+            "--device",
+            "gpu",
+            "-o",
+            gpu.to_str().unwrap(),
+        ]),
+        "RADIAL lens distortion, which only the trace method renders",
+    );
     let pattern = dir.join("frame_%02d.png");
     let o = trompe(&[
         "render",
