@@ -478,8 +478,28 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
         return Err(invalid("exr: must name a file beside the sidecar".into()));
     }
     let exr_path = json_path.with_file_name(&sidecar.exr);
+    // That the EXR is the one this sidecar was saved with (where the sidecar says): a pair torn
+    // by a killed or raced bake is named as such, whatever else about it disagrees.
+    let same_exr = || -> Result<(), ImpostorFileError> {
+        let (Some(size), Some(sum)) = (sidecar.exr_bytes, &sidecar.exr_fnv1a) else {
+            return Ok(());
+        };
+        let (got_size, got) =
+            crate::files::checksum_file(&exr_path).map_err(|source| ImpostorFileError::Io {
+                path: exr_path.clone(),
+                source,
+            })?;
+        if got_size != size || format!("{got:016x}") != *sum {
+            return Err(invalid(format!(
+                "{} is not the EXR this sidecar was saved with ({got_size} bytes, checksum {got:016x}; the sidecar says {size} bytes, {sum}): bake again",
+                exr_path.display()
+            )));
+        }
+        Ok(())
+    };
     let ch = read_exr_channels(&exr_path)?;
     if (ch.width, ch.height) != (sidecar.width, sidecar.height) {
+        same_exr()?;
         return Err(invalid(format!(
             "{}: image is {} × {} but the sidecar says {} × {}",
             exr_path.display(),
@@ -512,6 +532,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
             .is_some_and(|l| l < 2 || l > layers)
     });
     if in_file != layers || stray.is_some() {
+        same_exr()?;
         let found = stray.map_or(String::new(), |(n, _)| format!(", and channel {n:?}"));
         return Err(invalid(format!(
             "the sidecar says {layers} layer{} but {} holds channels of {in_file}{found}",
@@ -525,19 +546,7 @@ pub fn load(json_path: &Path) -> Result<Impostor, ImpostorFileError> {
         impostor.deeper.push(layer);
     }
     // Last, once the EXR is known to be a readable impostor: that it is this sidecar's.
-    if let (Some(size), Some(sum)) = (sidecar.exr_bytes, &sidecar.exr_fnv1a) {
-        let (got_size, got) =
-            crate::files::checksum_file(&exr_path).map_err(|source| ImpostorFileError::Io {
-                path: exr_path.clone(),
-                source,
-            })?;
-        if got_size != size || format!("{got:016x}") != *sum {
-            return Err(invalid(format!(
-                "{} is not the EXR this sidecar was saved with ({got_size} bytes, checksum {got:016x}; the sidecar says {size} bytes, {sum}): bake again",
-                exr_path.display()
-            )));
-        }
-    }
+    same_exr()?;
     Ok(impostor)
 }
 
