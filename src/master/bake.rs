@@ -1,51 +1,131 @@
-//! The view-independent bake (beyond paper 5: what mvs-texturing users expect): per face, the
-//! view that sees it largest (projected area) with every texel of the face seen clearly, its texels
-//! copied from that view's master texture; a face no view sees whole takes, texel by texel, the
-//! mean of the views that see it. Built while the views stream past, so only one master
-//! texture is in memory at a time. Then **levelled**: each view's texels are scaled by one gain
-//! a channel, the ratio of the all-view mean to that view's own colours over the texels it gave
-//! the bake, so that faces from views of different exposure or white balance meet without a
-//! step at their seams (a global gain per view, not mvs-texturing's local seam levelling).
+//! The view-independent bake (beyond paper 5: what mvs-texturing and OpenMVS users expect), made
+//! seamless ([`crate::texturing::seams`]). Two passes over the views:
 //!
-//! Invariant: the result depends only on the views and their order (ties keep the earlier
-//! view); gains are clamped to `[1/2, 2]`.
+//! 1. [`Baker::add`], as each view streams past: per face, the view's projected area, whether it
+//!    sees every texel of the face clearly, and the face's mean colour in it (a look).
+//! 2. [`Baker::bake`], when all have: per view one gain a channel that brings its looks to the
+//!    faces' consensus (exposure, white balance), and per face the looks that agree
+//!    photometrically (a view where something passed in front is left out of that face). Each
+//!    face is then taken from its largest agreeing whole view, its texels scaled by the view's
+//!    gain; a face no agreeing view sees whole takes, texel by texel, the gain-corrected mean of
+//!    the agreeing views that see it. The master textures are asked for once more, one at a time.
+//!
+//! Then **levelled**: where faces from two views (or from the mean) meet, per-vertex colour
+//! offsets solved on the mesh make the two sides agree, fading away from the seam; and
+//! **filled**: a texel no view sees takes its face's corners' colours, carried across the mesh
+//! from the nearest seen faces. [`BakeReport`] says how large the step across seams was with
+//! the gains alone and after levelling.
+//!
+//! Invariants: the result depends only on the views and their order (ties keep the earlier
+//! view), on any thread count; gains are clamped to `[1/2, 2]`; only texels no view sees are
+//! filled.
 
 use super::{Atlas, MasterError};
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
 use crate::geom::Mesh;
-use glam::{DVec2, Vec4};
+use crate::texturing::seams::{self, Look, Seams};
+use glam::{DVec2, Vec3, Vec4};
 
-/// The bake being built.
-pub struct Baker {
-    /// Per face: the best whole view so far and its projected area.
-    best: Vec<Option<(usize, f64)>>,
-    /// The texels of the best views.
-    chosen: Image<Rgba>,
-    /// Per texel: the view `chosen` took it from (`u32::MAX`: none).
-    from: Vec<u32>,
-    /// Per texel: the weighted sum of every view's colour that sees it (alpha: the weights'
-    /// sum; [`EDGE_WEIGHT`] for a view that sees it only at its edge, 1 otherwise).
-    sum: Image<Rgba>,
+/// One view's look at one face, with what picks the face's view.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    /// The view and the face's mean colour in it.
+    look: Look,
+    /// The face's projected area in the view, pixels².
+    area: f32,
+    /// Whether the view sees every texel of the face clearly.
+    whole: bool,
 }
+
+/// The label of faces the bake took texel by texel from the mean ([`Seams`] between them and a
+/// view's faces are levelled like any other).
+const MEAN: u32 = u32::MAX;
 
 /// The weight of a texel a view sees only at its edge ([`super::EDGE_ALPHA`]) in the
 /// texel-by-texel mean: small enough that it counts only where no view sees the texel clearly.
 const EDGE_WEIGHT: f32 = 1e-3;
 
+/// The bake's first pass: what every view showed of every face.
+pub struct Baker {
+    /// Per face, the views that see any of it, in view order.
+    faces: Vec<Vec<Candidate>>,
+    /// Views added.
+    views: usize,
+}
+
+/// What the bake did, for the report.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BakeReport {
+    /// Faces taken whole from one view.
+    pub whole: usize,
+    /// Looks (a view at a face) left out as photometric outliers.
+    pub outliers: usize,
+    /// Mesh edges where faces from two sources meet.
+    pub seams: usize,
+    /// The mean colour step across seams with the views' gains alone, 8-bit sRGB levels
+    /// ([`Seams::step`]).
+    pub step_gains: f64,
+    /// The same after seam levelling.
+    pub step_levelled: f64,
+    /// Texels no view sees, filled from the nearest seen faces.
+    pub filled: usize,
+    /// Texels left empty (a part of the mesh no view sees any of).
+    pub empty: usize,
+}
+
+/// The bake: its atlas image, per face the view it was taken from (`None`: the texel-by-texel
+/// mean, or nothing), and what was done.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    /// The bake, in the atlas.
+    pub image: Image<Rgba>,
+    /// Per face, the view it was taken whole from.
+    pub choice: Vec<Option<usize>>,
+    /// What the bake did.
+    pub report: BakeReport,
+}
+
+impl BakeReport {
+    /// The report in words, for a mesh of `faces` faces.
+    pub fn told(&self, faces: usize) -> String {
+        let mut out = format!(
+            "{} of {faces} faces from one view whole, the rest texel by texel; {} looks left out as photometric outliers\n\
+             seams: {} edges, mean step {:.2} levels (8-bit sRGB) with the views' gains alone, {:.2} levelled",
+            self.whole, self.outliers, self.seams, self.step_gains, self.step_levelled
+        );
+        if self.filled + self.empty > 0 {
+            out += &format!(
+                "; {} texels no view sees filled from the nearest seen faces",
+                self.filled
+            );
+        }
+        if self.empty > 0 {
+            out += &format!(", {} on parts no view sees left empty", self.empty);
+        }
+        out
+    }
+}
+
 impl Baker {
-    /// An empty bake over `atlas`.
-    pub fn new(atlas: &Atlas) -> Result<Baker, MasterError> {
-        let (w, h) = atlas.size();
+    /// An empty bake over `atlas`, for at most `views` views: refused when their looks at
+    /// every face could pass the memory budget.
+    pub fn new(atlas: &Atlas, views: usize) -> Result<Baker, MasterError> {
+        let faces = atlas.layout.faces.len();
+        crate::memory::check(
+            || format!("the bake's looks of {views} views at {faces} faces"),
+            crate::memory::times(
+                (faces as u64).saturating_mul(views as u64),
+                std::mem::size_of::<Candidate>() as u64,
+            ),
+        )?;
         Ok(Baker {
-            best: vec![None; atlas.layout.faces.len()],
-            chosen: Image::new(w, h, Vec4::ZERO)?,
-            from: vec![u32::MAX; w as usize * h as usize],
-            sum: Image::new(w, h, Vec4::ZERO)?,
+            faces: vec![Vec::new(); faces],
+            views: 0,
         })
     }
 
-    /// Takes view `view` (its camera and master texture) into account.
+    /// Takes view `view` (its camera and master texture) into account: the first pass.
     pub fn add(
         &mut self,
         atlas: &Atlas,
@@ -55,175 +135,397 @@ impl Baker {
         master: &Image<Rgba>,
     ) {
         let (w, _) = atlas.size();
-        for (s, m) in self.sum.pixels_mut().iter_mut().zip(master.pixels()) {
-            // A texel seen only at the view's edge counts where no view sees it clearly.
-            let weight = if m.w >= 1.0 { 1.0 } else { EDGE_WEIGHT };
-            if m.w > 0.0 {
-                *s += (m.truncate() * weight).extend(weight);
-            }
-        }
+        self.views = self.views.max(view + 1);
         for (t, place) in atlas.layout.faces.iter().enumerate() {
             let c = mesh.corners(t).map(|p| p.as_dvec3());
             let px: Option<Vec<DVec2>> =
                 c.iter().map(|&p| camera.project(p).map(|q| q.uv)).collect();
             let Some(px) = px else { continue };
-            let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs();
-            if self.best[t].is_some_and(|(_, a)| area <= a) {
-                continue;
-            }
-            // Whole: every texel inside the triangle seen clearly.
+            let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs() as f32;
+            // The face's texels: whole when every one inside the triangle is seen clearly;
+            // its colour the mean of those seen clearly (failing them, of those seen at all).
             let [bx, by, bw, bh] = place.bbox;
-            let inside = |x: u32, y: u32| {
-                let i = (y * w + x) as usize;
-                if atlas.face[i] != t as u32 {
-                    return false;
-                }
-                let (b1, b2) = place.barycentrics(crate::frame::pixel_centre(x as f64, y as f64));
-                b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0
-            };
-            let mut whole = true;
-            'scan: for y in by..by + bh {
-                for x in bx..bx + bw {
-                    if inside(x, y) && master.pixels()[(y * w + x) as usize].w < 1.0 {
-                        whole = false;
-                        break 'scan;
-                    }
-                }
-            }
-            if !whole {
-                continue;
-            }
-            self.best[t] = Some((view, area));
+            let (mut whole, mut clear, mut any) = (true, (Vec3::ZERO, 0u32), (Vec3::ZERO, 0u32));
             for y in by..by + bh {
                 for x in bx..bx + bw {
                     let i = (y * w + x) as usize;
-                    if atlas.face[i] == t as u32 {
-                        self.chosen.pixels_mut()[i] = master.pixels()[i];
-                        self.from[i] = view as u32;
+                    if atlas.face[i] != t as u32 {
+                        continue;
+                    }
+                    let m = master.pixels()[i];
+                    if m.w >= 1.0 {
+                        clear = (clear.0 + m.truncate(), clear.1 + 1);
+                    } else if whole {
+                        let (b1, b2) = place
+                            .barycentrics(crate::frame::pixel_centre(f64::from(x), f64::from(y)));
+                        whole = !(b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0);
+                    }
+                    if m.w > 0.0 {
+                        any = (any.0 + m.truncate(), any.1 + 1);
+                    }
+                }
+            }
+            let (sum, n) = if clear.1 > 0 { clear } else { any };
+            if n == 0 {
+                continue;
+            }
+            self.faces[t].push(Candidate {
+                look: Look {
+                    view: view as u32,
+                    colour: sum / n as f32,
+                },
+                area,
+                whole,
+            });
+        }
+    }
+
+    /// The bake: gains and photometric outliers from the looks, the faces' views, then the
+    /// master textures asked of `master_of` once more, one at a time, for their texels; then
+    /// levelled and filled.
+    pub fn bake(
+        self,
+        atlas: &Atlas,
+        mesh: &Mesh,
+        master_of: &mut dyn FnMut(usize) -> Result<Image<Rgba>, MasterError>,
+    ) -> Result<Baked, MasterError> {
+        let looks: Vec<Vec<Look>> = self
+            .faces
+            .iter()
+            .map(|f| f.iter().map(|c| c.look).collect())
+            .collect();
+        let (gains, agree) = seams::gains_and_inliers(&looks, self.views);
+        let mut report = BakeReport {
+            outliers: agree.iter().flatten().filter(|a| !**a).count(),
+            ..BakeReport::default()
+        };
+        // Per face, its largest agreeing whole view (ties keep the earlier view).
+        let choice: Vec<Option<usize>> = self
+            .faces
+            .iter()
+            .zip(&agree)
+            .map(|(cands, agree)| {
+                let mut best: Option<&Candidate> = None;
+                for (c, _) in cands.iter().zip(agree).filter(|(c, a)| **a && c.whole) {
+                    if best.is_none_or(|b| c.area > b.area) {
+                        best = Some(c);
+                    }
+                }
+                best.map(|c| c.look.view as usize)
+            })
+            .collect();
+        report.whole = choice.iter().flatten().count();
+        let (w, h) = atlas.size();
+        let mut chosen = Image::new(w, h, Vec4::ZERO)?;
+        let mut sum = Image::new(w, h, Vec4::ZERO)?;
+        for (view, &gain) in gains.iter().enumerate() {
+            // Per face, whether this view's look at it agrees.
+            let mut agrees = vec![false; self.faces.len()];
+            for (f, (cands, agree)) in self.faces.iter().zip(&agree).enumerate() {
+                agrees[f] = cands
+                    .iter()
+                    .zip(agree)
+                    .any(|(c, a)| *a && c.look.view as usize == view);
+            }
+            if !agrees.iter().any(|&a| a) {
+                continue;
+            }
+            let master = master_of(view)?;
+            if master.size() != (w, h) {
+                return Err(MasterError::Size {
+                    index: view,
+                    got: master.size(),
+                    expected: (w, h),
+                });
+            }
+            for (i, m) in master.pixels().iter().enumerate() {
+                let f = atlas.face[i];
+                if f == u32::MAX || m.w == 0.0 || !agrees[f as usize] {
+                    continue;
+                }
+                let colour = m.truncate() * gain;
+                if choice[f as usize] == Some(view) {
+                    chosen.pixels_mut()[i] = colour.extend(m.w);
+                }
+                // A texel seen only at the view's edge counts where no view sees it clearly.
+                let weight = if m.w >= 1.0 { 1.0 } else { EDGE_WEIGHT };
+                sum.pixels_mut()[i] += (colour * weight).extend(weight);
+            }
+        }
+        // The chosen texels; the mean where a face has no view, or its view missed a texel.
+        let mut image = chosen;
+        let mut labels: Vec<Option<u32>> = choice.iter().map(|c| c.map(|v| v as u32)).collect();
+        for (i, texel) in image.pixels_mut().iter_mut().enumerate() {
+            let f = atlas.face[i];
+            if f == u32::MAX || (choice[f as usize].is_some() && texel.w > 0.0) {
+                continue;
+            }
+            let s = sum.pixels()[i];
+            if s.w > 0.0 {
+                *texel = (s.truncate() / s.w).extend(1.0);
+                labels[f as usize].get_or_insert(MEAN);
+            }
+        }
+        drop(sum);
+        let seams = Seams::find(mesh, &labels);
+        report.seams = seams.edges.len();
+        report.step_gains = seams.step(|f, b| texel_at(atlas, &image, f, b));
+        let offsets = seams::level(mesh, &labels, &seams, |f, b| texel_at(atlas, &image, f, b));
+        if !offsets.is_empty() {
+            for (i, texel) in image.pixels_mut().iter_mut().enumerate() {
+                let f = atlas.face[i];
+                let Some(label) = labels.get(f as usize).copied().flatten() else {
+                    continue;
+                };
+                if texel.w == 0.0 {
+                    continue;
+                }
+                let b = bary_of_texel(atlas, f as usize, i);
+                let shift = offsets.at(mesh, &seams.welded, f as usize, label, b);
+                *texel = (texel.truncate() + shift).max(Vec3::ZERO).extend(texel.w);
+            }
+        }
+        report.step_levelled = seams.step(|f, b| texel_at(atlas, &image, f, b));
+        (report.filled, report.empty) = fill(atlas, mesh, &seams.welded, &labels, &mut image);
+        Ok(Baked {
+            image,
+            choice,
+            report,
+        })
+    }
+}
+
+/// The barycentrics of face `face`'s surface point at atlas texel `i`, moved into the triangle.
+fn bary_of_texel(atlas: &Atlas, face: usize, i: usize) -> Vec3 {
+    let w = atlas.size().0 as usize;
+    let centre = crate::frame::pixel_centre((i % w) as f64, (i / w) as f64);
+    let (b1, b2) = super::clamp_to_triangle(atlas.layout.faces[face].barycentrics(centre));
+    Vec3::new((1.0 - b1 - b2) as f32, b1 as f32, b2 as f32)
+}
+
+/// The colour of `image` (an atlas image) at face `face`'s point of barycentrics `bary`: the
+/// face's texel under it, nudged a little into the triangle; `None` where that texel is empty.
+fn texel_at(atlas: &Atlas, image: &Image<Rgba>, face: usize, bary: Vec3) -> Option<Vec3> {
+    let b = bary * (1.0 - 1e-3) + Vec3::splat(1e-3 / 3.0);
+    let place = &atlas.layout.faces[face];
+    let p = place.at(f64::from(b.y), f64::from(b.z));
+    let [bx, by, bw, bh] = place.bbox;
+    let x = (p.x.floor() as i64).clamp(i64::from(bx), i64::from(bx + bw) - 1) as u32;
+    let y = (p.y.floor() as i64).clamp(i64::from(by), i64::from(by + bh) - 1) as u32;
+    let i = (y * atlas.size().0 + x) as usize;
+    let texel = image.pixels()[i];
+    (atlas.face[i] == face as u32 && texel.w > 0.0).then(|| texel.truncate())
+}
+
+/// Fills the texels of `image` no view saw (alpha 0 on a face): each takes its face's corners'
+/// colours, interpolated, where a vertex's colour is the mean its seen faces (`labels`) give
+/// it, carried ring by ring across the mesh to vertices no seen face touches. Returns the
+/// texels filled and those left empty (on parts of the mesh no seen face reaches).
+fn fill(
+    atlas: &Atlas,
+    mesh: &Mesh,
+    welded: &[u32],
+    labels: &[Option<u32>],
+    image: &mut Image<Rgba>,
+) -> (usize, usize) {
+    let holes = atlas
+        .face
+        .iter()
+        .zip(image.pixels())
+        .filter(|(f, t)| **f != u32::MAX && t.w == 0.0)
+        .count();
+    if holes == 0 {
+        return (0, 0);
+    }
+    let n = mesh.positions.len();
+    let mut colour: Vec<Option<Vec3>> = vec![None; n];
+    let mut sums = vec![(Vec3::ZERO, 0u32); n];
+    for (f, tri) in mesh.triangles.iter().enumerate() {
+        if labels[f].is_none() {
+            continue;
+        }
+        for k in 0..3 {
+            let mut b = Vec3::ZERO;
+            b[k] = 1.0;
+            if let Some(c) = texel_at(atlas, image, f, b) {
+                let s = &mut sums[welded[tri[k] as usize] as usize];
+                *s = (s.0 + c, s.1 + 1);
+            }
+        }
+    }
+    for (v, s) in sums.iter().enumerate() {
+        if s.1 > 0 {
+            colour[v] = Some(s.0 / s.1 as f32);
+        }
+    }
+    // Ring by ring: a vertex without a colour takes the mean of its coloured neighbours.
+    loop {
+        let mut next = colour.clone();
+        let mut grown = false;
+        let mut ring = vec![(Vec3::ZERO, 0u32); n];
+        for tri in &mesh.triangles {
+            let w = tri.map(|v| welded[v as usize] as usize);
+            for a in 0..3 {
+                for b in [(a + 1) % 3, (a + 2) % 3] {
+                    if let (None, Some(c)) = (colour[w[a]], colour[w[b]]) {
+                        ring[w[a]] = (ring[w[a]].0 + c, ring[w[a]].1 + 1);
                     }
                 }
             }
         }
-    }
-
-    /// Per view that gave the bake texels, its gain (RGB): the all-view mean over its own
-    /// colours on those texels, clamped to `[1/2, 2]`.
-    pub fn gains(&self) -> std::collections::BTreeMap<u32, glam::Vec3> {
-        let mut acc: std::collections::BTreeMap<u32, (glam::DVec3, glam::DVec3)> =
-            std::collections::BTreeMap::new();
-        for (i, &v) in self.from.iter().enumerate() {
-            let (c, s) = (self.chosen.pixels()[i], self.sum.pixels()[i]);
-            if v == u32::MAX || c.w == 0.0 || s.w == 0.0 {
-                continue;
-            }
-            let e = acc.entry(v).or_default();
-            e.0 += (s.truncate() / s.w).as_dvec3();
-            e.1 += c.truncate().as_dvec3();
-        }
-        acc.into_iter()
-            .map(|(v, (mean, own))| {
-                let g = (mean / own.max(glam::DVec3::splat(1e-9)))
-                    .clamp(glam::DVec3::splat(0.5), glam::DVec3::splat(2.0));
-                (v, g.as_vec3())
-            })
-            .collect()
-    }
-
-    /// The bake, levelled, and per face the view it was taken from (`None`: the
-    /// texel-by-texel mean).
-    pub fn finish(self, atlas: &Atlas) -> (Image<Rgba>, Vec<Option<usize>>) {
-        let gains = self.gains();
-        let mut out = self.chosen;
-        for (texel, v) in out.pixels_mut().iter_mut().zip(&self.from) {
-            if let Some(g) = gains.get(v) {
-                *texel = (texel.truncate() * *g).extend(texel.w);
+        for (v, r) in ring.iter().enumerate() {
+            if r.1 > 0 {
+                next[v] = Some(r.0 / r.1 as f32);
+                grown = true;
             }
         }
-        for (i, texel) in out.pixels_mut().iter_mut().enumerate() {
-            let f = atlas.face[i];
-            if f == u32::MAX {
-                continue;
-            }
-            let picked = self.best[f as usize].is_some() && texel.w > 0.0;
-            if !picked {
-                let s = self.sum.pixels()[i];
-                *texel = if s.w > 0.0 {
-                    (s.truncate() / s.w).extend(1.0)
-                } else {
-                    Vec4::ZERO
-                };
-            }
+        colour = next;
+        if !grown {
+            break;
         }
-        (out, self.best.iter().map(|b| b.map(|(v, _)| v)).collect())
     }
+    let (mut filled, mut empty) = (0, 0);
+    for (i, texel) in image.pixels_mut().iter_mut().enumerate() {
+        let f = atlas.face[i];
+        if f == u32::MAX || texel.w > 0.0 {
+            continue;
+        }
+        let b = bary_of_texel(atlas, f as usize, i);
+        let corners = mesh.triangles[f as usize].map(|v| colour[welded[v as usize] as usize]);
+        match corners {
+            [Some(c0), Some(c1), Some(c2)] => {
+                *texel = (c0 * b.x + c1 * b.y + c2 * b.z).extend(1.0);
+                filled += 1;
+            }
+            _ => empty += 1,
+        }
+    }
+    (filled, empty)
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::tests::duck_capture;
-    use super::super::{DEFAULT_SCALE, encode_views};
+    use super::super::{DEFAULT_SCALE, Encoding, encode_views};
     use super::*;
+
+    /// The Duck's capture of `count` views, each view's image changed by `change(view, pixel,
+    /// colour)`, encoded and baked.
+    fn baked(count: usize, change: impl Fn(usize, (u32, u32), Vec3) -> Vec3) -> (Encoding, Baked) {
+        let (mesh, mut set) = duck_capture(count);
+        for (v, view) in set.views.iter_mut().enumerate() {
+            if let Some(img) = &mut view.image {
+                let w = img.width();
+                for (i, p) in img.pixels_mut().iter_mut().enumerate() {
+                    let xy = ((i as u32) % w, (i as u32) / w);
+                    *p = change(v, xy, p.truncate()).extend(p.w);
+                }
+            }
+        }
+        let enc = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
+        let mut b = Baker::new(&enc.atlas, enc.masters.len()).unwrap();
+        for (v, ((_, cam), m)) in enc.cameras.iter().zip(&enc.masters).enumerate() {
+            b.add(&enc.atlas, &mesh, v, cam, m);
+        }
+        let baked = b
+            .bake(&enc.atlas, &mesh, &mut |v| Ok(enc.masters[v].clone()))
+            .unwrap();
+        (enc, baked)
+    }
+
+    /// Mean squared error of `img` against `reference` where both hold colour, after the one
+    /// global scale that fits best (levelling cannot know the true exposure, only make the
+    /// views agree).
+    fn mse_up_to_scale(img: &Image<Rgba>, reference: &Image<Rgba>) -> f64 {
+        let both = || {
+            img.pixels()
+                .iter()
+                .zip(reference.pixels())
+                .filter(|(a, b)| a.w > 0.0 && b.w > 0.0)
+        };
+        let (ab, aa) = both().fold((0.0f64, 0.0f64), |(ab, aa), (a, b)| {
+            (
+                ab + a.truncate().dot(b.truncate()) as f64,
+                aa + a.truncate().length_squared() as f64,
+            )
+        });
+        let k = (ab / aa) as f32;
+        let n = both().count() as f64;
+        both()
+            .map(|(a, b)| (a.truncate() * k - b.truncate()).length_squared() as f64)
+            .sum::<f64>()
+            / n
+    }
 
     #[test]
     fn levelling_takes_out_a_views_exposure() {
         // Every other view 40 % too bright (an exposure the photographer got wrong).
-        let (mesh, mut set) = duck_capture(8);
-        let truth = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
-        for v in set.views.iter_mut().step_by(2) {
-            if let Some(img) = &mut v.image {
-                for p in img.pixels_mut() {
-                    *p = (p.truncate() * 1.4).extend(p.w);
+        let (_, truth) = baked(8, |_, _, c| c);
+        let (enc, bright) = baked(8, |v, _, c| if v % 2 == 0 { c * 1.4 } else { c });
+        // Unlevelled: each face's texels as its view's master holds them.
+        let mut raw = bright.image.clone();
+        for (i, t) in raw.pixels_mut().iter_mut().enumerate() {
+            let f = enc.atlas.face[i];
+            if let Some(v) = bright.choice.get(f as usize).copied().flatten() {
+                let m = enc.masters[v].pixels()[i];
+                if m.w > 0.0 {
+                    *t = m;
                 }
             }
         }
-        let bright = encode_views(&mesh, &set.views, DEFAULT_SCALE, &()).unwrap();
-        let bake = |enc: &super::super::Encoding, level: bool| {
-            let mut b = Baker::new(&enc.atlas).unwrap();
-            for (v, ((_, cam), m)) in enc.cameras.iter().zip(&enc.masters).enumerate() {
-                b.add(&enc.atlas, &mesh, v, cam, m);
-            }
-            if level {
-                b.finish(&enc.atlas).0
-            } else {
-                let gains = b.gains();
-                assert!(gains.values().any(|g| g.x < 0.9), "{gains:?}");
-                // Unlevelled: the chosen texels as they are, the mean elsewhere.
-                let mut one = Baker::new(&enc.atlas).unwrap();
-                std::mem::swap(&mut one, &mut b);
-                let mut out = one.chosen.clone();
-                for (t, s) in out.pixels_mut().iter_mut().zip(one.sum.pixels()) {
-                    if t.w == 0.0 && s.w > 0.0 {
-                        *t = (s.truncate() / s.w).extend(1.0);
-                    }
-                }
-                out
-            }
-        };
-        let reference = bake(&truth, true);
-        // Levelling cannot know the true exposure, only make the views agree: compare up to
-        // the one global scale that fits best.
-        let mse = |img: &Image<Rgba>| {
-            let both = || {
-                img.pixels()
-                    .iter()
-                    .zip(reference.pixels())
-                    .filter(|(a, b)| a.w > 0.0 && b.w > 0.0)
-            };
-            let (ab, aa) = both().fold((0.0f64, 0.0f64), |(ab, aa), (a, b)| {
-                (
-                    ab + a.truncate().dot(b.truncate()) as f64,
-                    aa + a.truncate().length_squared() as f64,
-                )
-            });
-            let k = (ab / aa) as f32;
-            let n = both().count() as f64;
-            both()
-                .map(|(a, b)| (a.truncate() * k - b.truncate()).length_squared() as f64)
-                .sum::<f64>()
-                / n
-        };
-        let (raw, levelled) = (mse(&bake(&bright, false)), mse(&bake(&bright, true)));
+        let (raw, levelled) = (
+            mse_up_to_scale(&raw, &truth.image),
+            mse_up_to_scale(&bright.image, &truth.image),
+        );
         println!("unlevelled {raw:.5}, levelled {levelled:.5} (mean squared error up to scale)");
         assert!(levelled < raw * 0.5, "{levelled} vs {raw}");
+        let r = &bright.report;
+        assert!(r.step_levelled < r.step_gains, "{r:?}");
+    }
+
+    #[test]
+    fn seam_levelling_halves_the_step_that_gains_leave() {
+        // Each view's exposure falls off from its image's left to its right (a gradient no one
+        // gain a view can take out), by a different amount a view.
+        let (_, b) = baked(8, |v, (x, _), c| {
+            c * (1.3 - (0.1 + 0.08 * v as f32) * x as f32 / 160.0)
+        });
+        let r = &b.report;
+        println!("{}", r.told(b.choice.len()));
+        assert!(r.seams > 100, "{r:?}");
+        assert!(r.step_levelled < 0.5 * r.step_gains, "{r:?}");
+    }
+
+    #[test]
+    fn a_view_with_something_in_front_is_left_out_of_the_faces_it_hides() {
+        // A red square passes in front of view 3 (a person walking through the capture).
+        let red = Vec3::new(0.9, 0.02, 0.02);
+        let inside = |(x, y): (u32, u32)| (50..110).contains(&x) && (30..90).contains(&y);
+        let (enc, b) = baked(8, |v, xy, c| if v == 3 && inside(xy) { red } else { c });
+        let is_red = |t: &Vec4| t.w > 0.0 && (t.truncate() - red).length() < 0.1;
+        let in_view = enc.masters[3].pixels().iter().filter(|t| is_red(t)).count();
+        let in_bake = b.image.pixels().iter().filter(|t| is_red(t)).count();
+        println!(
+            "{} looks left out; red texels: {in_view} in view 3's master, {in_bake} in the bake",
+            b.report.outliers
+        );
+        assert!(in_view > 1000, "{in_view}");
+        assert!(b.report.outliers > 0);
+        assert!(in_bake * 50 < in_view, "{in_bake} of {in_view}");
+    }
+
+    #[test]
+    fn texels_no_view_sees_are_filled_from_the_seen_faces() {
+        // Two views see the Duck from one side only.
+        let (enc, b) = baked(2, |_, _, c| c);
+        let r = &b.report;
+        println!("{}", r.told(b.choice.len()));
+        assert!(r.filled > 1000 && r.empty == 0, "{r:?}");
+        let faces = enc.atlas.face.iter().zip(b.image.pixels());
+        assert!(
+            faces
+                .filter(|(f, _)| **f != u32::MAX)
+                .all(|(_, t)| t.w > 0.0)
+        );
     }
 }

@@ -2,6 +2,7 @@
 //! render from a folder through a new camera, propagate an edit (of one view, or seen from a new camera) to every view.
 //! Each returns a summary the command line prints.
 
+use super::bake::BakeReport;
 use super::edit::{Apply, delta, propagate};
 use super::file::{Manifest, load, load_manifest, load_master, master_name, save_manifest};
 use super::{Atlas, DEFAULT_SCALE, MasterError, encode, encode_stream};
@@ -31,8 +32,8 @@ pub struct EncodeSummary {
     pub exemplar_bytes: (u64, u64),
     /// Bytes of the master textures as 8-bit RGB, and of the one UV set (`3m` pairs).
     pub master_bytes: (u64, u64),
-    /// Faces the view-independent bake took whole from one view.
-    pub baked_whole: usize,
+    /// What the view-independent bake did.
+    pub bake: BakeReport,
     /// Files written.
     pub files: Vec<PathBuf>,
 }
@@ -56,7 +57,15 @@ impl serde::Serialize for EncodeSummary {
             "exemplar_bytes": { "images": self.exemplar_bytes.0, "uvs": self.exemplar_bytes.1 },
             "master_bytes": { "textures": self.master_bytes.0, "uvs": self.master_bytes.1 },
             "compression": self.compression(),
-            "baked_whole": self.baked_whole,
+            "bake": {
+                "whole_faces": self.bake.whole,
+                "outlier_looks": self.bake.outliers,
+                "seam_edges": self.bake.seams,
+                "seam_step_gains": self.bake.step_gains,
+                "seam_step_levelled": self.bake.step_levelled,
+                "filled_texels": self.bake.filled,
+                "empty_texels": self.bake.empty,
+            },
             "files": self.files,
         })
         .serialize(s)
@@ -84,11 +93,7 @@ impl std::fmt::Display for EncodeSummary {
             mb(self.master_bytes.1),
             self.compression()
         )?;
-        write!(
-            f,
-            "view-independent bake: {} of {} faces from one view whole, the rest texel by texel",
-            self.baked_whole, self.faces
-        )
+        write!(f, "view-independent bake: {}", self.bake.told(self.faces))
     }
 }
 
@@ -126,7 +131,7 @@ pub fn encode_folder(
         .map(|v| (v.name.clone(), v.pinhole()))
         .collect();
     let mut files = Vec::new();
-    let (atlas, baked, choice) = encode_stream(
+    let (atlas, baker) = encode_stream(
         mesh,
         &cameras,
         scale.unwrap_or(DEFAULT_SCALE),
@@ -144,7 +149,16 @@ pub fn encode_folder(
         },
         progress,
     )?;
-    files.extend(finish_folder(staging, &atlas, &cameras, mesh, &baked)?);
+    let baked = baker.bake(&atlas, mesh, &mut |v| {
+        Ok(io::read_png(&staging.join(master_name(v)))?)
+    })?;
+    files.extend(finish_folder(
+        staging,
+        &atlas,
+        &cameras,
+        mesh,
+        &baked.image,
+    )?);
     let files = published(staged, files)?;
     let (exemplar_bytes, master_bytes) = storage(&atlas, &sizes);
     Ok(EncodeSummary {
@@ -154,7 +168,7 @@ pub fn encode_folder(
         used: atlas.used(),
         exemplar_bytes,
         master_bytes,
-        baked_whole: choice.iter().filter(|c| c.is_some()).count(),
+        bake: baked.report,
         files,
     })
 }
@@ -294,7 +308,7 @@ pub fn edit_folder(
         .iter()
         .map(|v| (v.name.clone(), v.pinhole()))
         .collect();
-    let mut baker = super::bake::Baker::new(&atlas)?;
+    let mut baker = super::bake::Baker::new(&atlas, cameras.len())?;
     let staged = StagedFolder::begin(out, FolderKind::MasterEncoding)?;
     let (mut changed, mut files) = (0, Vec::new());
     for (i, (_, cam)) in cameras.iter().enumerate() {
@@ -305,13 +319,15 @@ pub fn edit_folder(
         io::write_png(&path, &m[0])?;
         files.push(path);
     }
-    let (baked, _) = baker.finish(&atlas);
+    let baked = baker.bake(&atlas, mesh, &mut |v| {
+        Ok(io::read_png(&staged.path().join(master_name(v)))?)
+    })?;
     files.extend(finish_folder(
         staged.path(),
         &atlas,
         &cameras,
         mesh,
-        &baked,
+        &baked.image,
     )?);
     let files = published(staged, files)?;
     Ok(EditSummary {

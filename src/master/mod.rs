@@ -290,15 +290,15 @@ impl Encoding {
     }
 }
 
-/// What [`encode_stream`] returns: the atlas, the view-independent bake and per face the view
-/// the bake took it from.
-pub type Streamed = (Atlas, Image<Rgba>, Vec<Option<usize>>);
+/// What [`encode_stream`] returns: the atlas and the view-independent bake's first pass, which
+/// [`bake::Baker::bake`] finishes from the master textures.
+pub type Streamed = (Atlas, bake::Baker);
 
 /// Encodes the views `cameras` (names and undistorted pinholes) of `mesh`, streaming: face
 /// sizes over all cameras (`scale` texels a pixel, [`face_sizes`]) and the layout first, then
 /// one view at a time — its image asked of `image_of`, its depth map drawn, its master texture
 /// encoded, folded into the bake and handed to `sink` — so that one image and one master
-/// texture are in memory at a time. Returns the atlas and the view-independent bake.
+/// texture are in memory at a time. Returns the atlas and the bake's first pass.
 pub fn encode_stream(
     mesh: &Mesh,
     cameras: &[(String, Pinhole)],
@@ -310,7 +310,7 @@ pub fn encode_stream(
     let pinholes: Vec<Pinhole> = cameras.iter().map(|(_, c)| c.clone()).collect();
     let sizes = face_sizes(mesh, &pinholes, scale);
     let atlas = Atlas::new(mesh, &sizes)?;
-    let mut baker = bake::Baker::new(&atlas)?;
+    let mut baker = bake::Baker::new(&atlas, cameras.len())?;
     let mut seen = false;
     for (v, cam) in pinholes.iter().enumerate() {
         let image = image_of(v)?;
@@ -325,8 +325,7 @@ pub fn encode_stream(
     if !seen {
         return Err(MasterError::NothingSeen);
     }
-    let (baked, choice) = baker.finish(&atlas);
-    Ok((atlas, baked, choice))
+    Ok((atlas, baker))
 }
 
 /// Encodes every view of `views` (images loaded) of `mesh` in memory ([`encode_stream`]).
@@ -341,7 +340,7 @@ pub fn encode_views(
         .map(|v| (v.name.clone(), v.pinhole()))
         .collect();
     let mut masters = Vec::with_capacity(views.len());
-    let (atlas, _, _) = encode_stream(
+    let (atlas, _) = encode_stream(
         mesh,
         &cameras,
         scale,

@@ -26,6 +26,7 @@
 
 pub mod faces;
 mod fill;
+pub mod seams;
 pub mod view_map;
 pub mod weights;
 

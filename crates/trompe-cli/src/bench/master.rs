@@ -75,7 +75,7 @@ pub fn master(
         let cameras = sphere_cameras(&mesh, views, size);
         let t = Instant::now();
         let mut texels = 0usize;
-        let (atlas, _, _) = encode_stream(
+        let (atlas, _) = encode_stream(
             &mesh,
             &cameras,
             1.0,
