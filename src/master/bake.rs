@@ -24,7 +24,7 @@ use super::{Atlas, MasterError};
 use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
 use crate::geom::Mesh;
-use crate::texturing::seams::{self, Look, Seams};
+use crate::texturing::seams::{self, Look, SeamReport, Seams};
 use glam::{DVec2, Vec3, Vec4};
 
 /// One view's look at one face, with what picks the face's view.
@@ -59,15 +59,8 @@ pub struct Baker {
 pub struct BakeReport {
     /// Faces taken whole from one view.
     pub whole: usize,
-    /// Looks (a view at a face) left out as photometric outliers.
-    pub outliers: usize,
-    /// Mesh edges where faces from two sources meet.
-    pub seams: usize,
-    /// The mean colour step across seams with the views' gains alone, 8-bit sRGB levels
-    /// ([`Seams::step`]).
-    pub step_gains: f64,
-    /// The same after seam levelling.
-    pub step_levelled: f64,
+    /// Outliers left out, and the step across seams before and after levelling.
+    pub seams: SeamReport,
     /// Texels no view sees, filled from the nearest seen faces.
     pub filled: usize,
     /// Texels left empty (a part of the mesh no view sees any of).
@@ -90,9 +83,8 @@ impl BakeReport {
     /// The report in words, for a mesh of `faces` faces.
     pub fn told(&self, faces: usize) -> String {
         let mut out = format!(
-            "{} of {faces} faces from one view whole, the rest texel by texel; {} looks left out as photometric outliers\n\
-             seams: {} edges, mean step {:.2} levels (8-bit sRGB) with the views' gains alone, {:.2} levelled",
-            self.whole, self.outliers, self.seams, self.step_gains, self.step_levelled
+            "{} of {faces} faces from one view whole, the rest texel by texel; {}",
+            self.whole, self.seams
         );
         if self.filled + self.empty > 0 {
             out += &format!(
@@ -195,10 +187,8 @@ impl Baker {
             .map(|f| f.iter().map(|c| c.look).collect())
             .collect();
         let (gains, agree) = seams::gains_and_inliers(&looks, self.views);
-        let mut report = BakeReport {
-            outliers: agree.iter().flatten().filter(|a| !**a).count(),
-            ..BakeReport::default()
-        };
+        let mut report = BakeReport::default();
+        report.seams.outliers = agree.iter().flatten().filter(|a| !**a).count();
         // Per face, its largest agreeing whole view (ties keep the earlier view).
         let choice: Vec<Option<usize>> = self
             .faces
@@ -268,8 +258,8 @@ impl Baker {
         }
         drop(sum);
         let seams = Seams::find(mesh, &labels);
-        report.seams = seams.edges.len();
-        report.step_gains = seams.step(|f, b| texel_at(atlas, &image, f, b));
+        report.seams.edges = seams.edges.len();
+        report.seams.step_gains = seams.step(|f, b| texel_at(atlas, &image, f, b));
         let offsets = seams::level(mesh, &labels, &seams, |f, b| texel_at(atlas, &image, f, b));
         if !offsets.is_empty() {
             for (i, texel) in image.pixels_mut().iter_mut().enumerate() {
@@ -285,7 +275,7 @@ impl Baker {
                 *texel = (texel.truncate() + shift).max(Vec3::ZERO).extend(texel.w);
             }
         }
-        report.step_levelled = seams.step(|f, b| texel_at(atlas, &image, f, b));
+        report.seams.step_levelled = seams.step(|f, b| texel_at(atlas, &image, f, b));
         (report.filled, report.empty) = fill(atlas, mesh, &seams.welded, &labels, &mut image);
         Ok(Baked {
             image,
@@ -480,7 +470,7 @@ mod tests {
         println!("unlevelled {raw:.5}, levelled {levelled:.5} (mean squared error up to scale)");
         assert!(levelled < raw * 0.5, "{levelled} vs {raw}");
         let r = &bright.report;
-        assert!(r.step_levelled < r.step_gains, "{r:?}");
+        assert!(r.seams.step_levelled < r.seams.step_gains, "{r:?}");
     }
 
     #[test]
@@ -492,8 +482,8 @@ mod tests {
         });
         let r = &b.report;
         println!("{}", r.told(b.choice.len()));
-        assert!(r.seams > 100, "{r:?}");
-        assert!(r.step_levelled < 0.5 * r.step_gains, "{r:?}");
+        assert!(r.seams.edges > 100, "{r:?}");
+        assert!(r.seams.step_levelled < 0.5 * r.seams.step_gains, "{r:?}");
     }
 
     #[test]
@@ -507,10 +497,10 @@ mod tests {
         let in_bake = b.image.pixels().iter().filter(|t| is_red(t)).count();
         println!(
             "{} looks left out; red texels: {in_view} in view 3's master, {in_bake} in the bake",
-            b.report.outliers
+            b.report.seams.outliers
         );
         assert!(in_view > 1000, "{in_view}");
-        assert!(b.report.outliers > 0);
+        assert!(b.report.seams.outliers > 0);
         assert!(in_bake * 50 < in_view, "{in_bake} of {in_view}");
     }
 

@@ -119,6 +119,9 @@ pub struct Blend {
     pub holes: usize,
     /// Of those, pixels filled from the nearest seen surface ([`Holes::Nearest`]).
     pub filled: usize,
+    /// With [`Weighting::BestFace`] and [`BlendSettings::seamless`], what making its per-face
+    /// bake seamless did.
+    pub seams: Option<seams::SeamReport>,
 }
 
 impl Blend {
@@ -140,6 +143,9 @@ impl std::fmt::Display for Blend {
         )?;
         if self.filled > 0 {
             write!(f, ", {} filled from the nearest seen surface", self.filled)?;
+        }
+        if let Some(seams) = &self.seams {
+            write!(f, "\nbest-face bake: {seams}")?;
         }
         Ok(())
     }
@@ -183,7 +189,7 @@ pub fn render_through(
             &traced
         }
     };
-    let faces = FaceWeights::build(settings.weighting, meshes, source);
+    let faces = FaceWeights::build(settings.weighting, settings.seamless, meshes, source);
     let (w, h) = camera.resolution();
     let eye = camera.position();
     let centres = source.centres();
@@ -233,9 +239,13 @@ pub fn render_through(
                             settings.weighting,
                             settings.k,
                         ),
-                        FaceWeights::BestFace(table) => table[o][t]
-                            .filter(|&i| sees(i))
-                            .map_or_else(Vec::new, |i| vec![(i, 1.0)]),
+                        FaceWeights::BestFace(best) => {
+                            let view = best.table[o][t].filter(|&i| sees(i));
+                            return view.and_then(|i| {
+                                let colour = blend(source, &at, &[(i, 1.0)])?;
+                                Some(best.level(meshes, &at, i, colour))
+                            });
+                        }
                         FaceWeights::ViewMap(maps) => {
                             let mut ws = maps[o].weights(t, (eye - at.position).normalize());
                             ws.retain(|&(i, _)| sees(i));
@@ -276,6 +286,10 @@ pub fn render_through(
         covered,
         holes,
         filled,
+        seams: match faces {
+            FaceWeights::BestFace(best) => best.report,
+            _ => None,
+        },
     })
 }
 

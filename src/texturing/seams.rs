@@ -1,7 +1,8 @@
 //! Seamless bakes: what a bake that takes each face from one view needs where two views meet
 //! (beyond the papers; what mvs-texturing and OpenMVS users expect, after Waechter, Moehrle and
-//! Goesele, "Let There Be Color! Large-Scale Texturing of 3D Reconstructions", §4 photometric
-//! consistency and §5 seam levelling — implemented here from the description).
+//! Goesele, "Let There Be Color! Large-Scale Texturing of 3D Reconstructions": the
+//! photo-consistency check of its view selection, and its seam levelling — implemented here from
+//! the description).
 //!
 //! * [`consistent`] — a face's looks (one mean colour a view that sees it) tested against
 //!   their robust centre, so that a view where something passed in front (a person walking
@@ -55,6 +56,33 @@ const SCREEN: f64 = 1e-4;
 
 /// Points sampled along each seam edge.
 pub const SEAM_SAMPLES: usize = 8;
+
+/// What making a bake seamless did, for its report.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SeamReport {
+    /// Looks (a view at a face) left out as photometric outliers.
+    pub outliers: usize,
+    /// Mesh edges where faces from two sources meet.
+    pub edges: usize,
+    /// The mean colour step across the seams with the views' gains alone, 8-bit sRGB levels
+    /// ([`Seams::step`]).
+    pub step_gains: f64,
+    /// The same after seam levelling.
+    pub step_levelled: f64,
+}
+
+/// "K looks left out as photometric outliers; seams: N edges, mean step X levels (8-bit
+/// sRGB) with the views' gains alone, Y levelled".
+impl std::fmt::Display for SeamReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} looks left out as photometric outliers; seams: {} edges, mean step {:.2} levels \
+             (8-bit sRGB) with the views' gains alone, {:.2} levelled",
+            self.outliers, self.edges, self.step_gains, self.step_levelled
+        )
+    }
+}
 
 /// One view's look at one face: the face's mean colour as that view shows it.
 #[derive(Clone, Copy, Debug, PartialEq)]

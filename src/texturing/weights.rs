@@ -80,11 +80,15 @@ pub struct BlendSettings {
     /// Whether each view's image is prefiltered to the render pixel's footprint
     /// ([`super::prefiltered`]); without it, one bilinear lookup a view.
     pub prefilter: bool,
+    /// With [`Weighting::BestFace`]: make its one-view-a-face bake seamless
+    /// ([`super::seams`]: photometric outliers left out, one gain a view, seams levelled).
+    /// Other weightings blend as they do without it.
+    pub seamless: bool,
 }
 
 impl Default for BlendSettings {
     /// ULR with β = 0.1, k = 4, 1 % depth tolerance, transparent holes, one bilinear lookup a
-    /// view.
+    /// view, best-face bakes as they are.
     fn default() -> Self {
         BlendSettings {
             weighting: Weighting::Ulr { beta: 0.1 },
@@ -92,6 +96,7 @@ impl Default for BlendSettings {
             tolerance: DEFAULT_TOLERANCE,
             holes: Holes::Transparent,
             prefilter: false,
+            seamless: false,
         }
     }
 }

@@ -442,3 +442,61 @@ fn a_rig_or_frame_that_cannot_pose_its_images_is_an_error_naming_it() {
     let err = ViewSet::load(&dir, None).unwrap_err().to_string();
     assert!(err.contains("rigs.txt") && err.contains("missing"), "{err}");
 }
+
+#[test]
+fn a_seamless_best_face_bake_levels_exposure_and_leaves_out_what_passed_in_front() {
+    // The Duck from eight views, each view's exposure falling off from its left edge to its
+    // right by a different amount (no one gain a view takes it out), and a red square in
+    // front of view 3 (a person walking through the capture).
+    let duck = common::asset("gltf/Duck.glb");
+    let settings = trompe::views::capture::CaptureSettings {
+        count: 8,
+        size: (160, 120),
+        ..Default::default()
+    };
+    let mut set = trompe::views::capture::capture(&duck, &settings, &()).unwrap();
+    let red = glam::Vec3::new(0.9, 0.02, 0.02);
+    for (v, view) in set.views.iter_mut().enumerate() {
+        let img = view.image.as_mut().expect("captured");
+        let w = img.width() as usize;
+        for (i, p) in img.pixels_mut().iter_mut().enumerate() {
+            let (x, y) = (i % w, i / w);
+            let fall = 1.3 - (0.1 + 0.08 * v as f32) * x as f32 / 160.0;
+            let c = if v == 3 && (50..110).contains(&x) && (30..90).contains(&y) {
+                red
+            } else {
+                p.truncate() * fall
+            };
+            *p = c.extend(p.w);
+        }
+    }
+    let mesh = trompe::geom::io::load(&duck).unwrap().mesh;
+    let depth = DepthMap::of_all(&set.views, &mesh).unwrap();
+    let camera = set.views[3].pinhole();
+    let render = |seamless: bool| {
+        let s = BlendSettings {
+            weighting: Weighting::BestFace,
+            seamless,
+            ..BlendSettings::default()
+        };
+        blend::render(&camera, &mesh, &set.views, &depth, &s, None).unwrap()
+    };
+    let (plain, seamless) = (render(false), render(true));
+    let reds = |b: &trompe::texturing::Blend| {
+        (b.image.pixels().iter())
+            .filter(|p| p.w > 0.0 && (p.truncate() - red).length() < 0.1)
+            .count()
+    };
+    let report = seamless.seams.expect("a seamless bake reports");
+    println!(
+        "as it is: {} red pixels; seamless: {} red pixels, {report}",
+        reds(&plain),
+        reds(&seamless)
+    );
+    assert!(plain.seams.is_none());
+    assert!(reds(&plain) > 500, "{} red pixels", reds(&plain));
+    assert!(reds(&seamless) * 20 < reds(&plain), "{}", reds(&seamless));
+    assert!(report.outliers > 0 && report.edges > 100, "{report:?}");
+    assert!(report.step_levelled < 0.5 * report.step_gains, "{report:?}");
+    assert_eq!(seamless.covered, plain.covered);
+}

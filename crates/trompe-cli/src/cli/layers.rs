@@ -197,6 +197,7 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     fn render(&self) -> Result<()> {
+        let settings = self.blend.settings()?;
         let mut scene = Scene::load(&self.scene)?;
         self.camera.apply(&mut scene)?;
         let mut plan = OutputPlan::new();
@@ -214,7 +215,6 @@ impl RenderArgs {
         }
         let camera = scene.camera.at(scene.render.time)?;
         let lens = scene.camera.lens.as_ref();
-        let settings = self.blend.settings();
         let start = std::time::Instant::now();
         let blend = match self.method {
             TextureArg::Layered => {

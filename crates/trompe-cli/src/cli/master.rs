@@ -137,6 +137,7 @@ impl MasterEncodeArgs {
 
 impl MasterRenderArgs {
     fn render(&self) -> Result<()> {
+        let settings = self.blend.settings()?;
         let mut plan = OutputPlan::new();
         let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
         plan.reads(&self.scene)
@@ -146,7 +147,6 @@ impl MasterRenderArgs {
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
         let (camera, lens) = self.camera.camera(self.scene.as_deref(), &mesh)?;
-        let settings = self.blend.settings();
         let b = trompe::master::job::render_folder(
             &self.encoding,
             &mesh,

@@ -93,12 +93,24 @@ pub struct BlendArgs {
     /// a view's texels, average lookups across it (a box filter) rather than take one.
     #[arg(long)]
     prefilter: bool,
+    /// With `--weights best-face`: make its one-view-a-face bake seamless — leave a view out
+    /// of a face where its colour disagrees with the other views' (something passed in front),
+    /// give each view one gain a channel (its exposure), and level the seams between faces from
+    /// different views.
+    #[arg(long)]
+    seamless: bool,
 }
 
 impl BlendArgs {
     /// The library's settings.
-    pub(super) fn settings(&self) -> trompe::texturing::BlendSettings {
-        trompe::texturing::BlendSettings {
+    pub(super) fn settings(&self) -> anyhow::Result<trompe::texturing::BlendSettings> {
+        if self.seamless && self.weights != WeightsArg::BestFace {
+            anyhow::bail!(
+                "--seamless makes the best-face bake seamless: it needs --weights best-face, not {}",
+                self.weights.weighting().name()
+            );
+        }
+        Ok(trompe::texturing::BlendSettings {
             weighting: self.weights.weighting(),
             k: self.k as usize,
             holes: match self.fill_holes {
@@ -106,8 +118,9 @@ impl BlendArgs {
                 false => trompe::texturing::Holes::Transparent,
             },
             prefilter: self.prefilter,
+            seamless: self.seamless,
             ..Default::default()
-        }
+        })
     }
 }
 
@@ -338,6 +351,7 @@ impl ScoreArgs {
 
 impl ViewsRenderArgs {
     pub(super) fn render(&self, verbose: bool) -> Result<()> {
+        let settings = self.blend.settings()?;
         let mut plan = OutputPlan::new();
         let mesh = load_mesh_read_by(&self.mesh, &mut plan)?;
         let mut set = load_views(&self.model, self.images.as_deref(), verbose)?;
@@ -350,7 +364,6 @@ impl ViewsRenderArgs {
         set.load_images()?;
         let (camera, lens) = self.camera.camera(self.scene.as_deref(), &mesh)?;
         let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;
-        let settings = self.blend.settings();
         let b = trompe::views::blend::render_through(
             &camera,
             lens.as_ref(),

@@ -351,3 +351,32 @@ fn a_distorted_photographs_own_camera_renders_its_distorted_frame_back() {
         );
     }
 }
+
+#[test]
+fn seamless_asks_for_the_best_face_bake() {
+    let model = common::repo("tests/fixtures/colmap/rig/binary");
+    let teapot = common::asset("meshes/teapot.obj");
+    let out = common::trompe(&[
+        "views",
+        "render",
+        model.to_str().unwrap(),
+        "--mesh",
+        teapot.to_str().unwrap(),
+        "--camera",
+        &format!("{}:1", model.to_str().unwrap()),
+        "--seamless",
+        "-o",
+        common::scratch("views-cli-seamless")
+            .join("x.png")
+            .to_str()
+            .unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let e = common::stderr(&out);
+    assert!(
+        e.contains(
+            "--seamless makes the best-face bake seamless: it needs --weights best-face, not ulr"
+        ),
+        "{e}"
+    );
+}

@@ -67,6 +67,12 @@ fn main() {
             stereo::NEEDS,
         ),
         trial(
+            "stereo::a_real_capture_with_an_exposure_change_bakes_with_its_seam_step_at_least_halved",
+            stereo::a_real_capture_with_an_exposure_change_bakes_with_its_seam_step_at_least_halved,
+            stereo::ready(),
+            stereo::NEEDS,
+        ),
+        trial(
             "web::the_threejs_runtime_draws_the_ducks_bake_as_trompe_does",
             web::the_threejs_runtime_draws_the_ducks_bake_as_trompe_does,
             web::ready(),
