@@ -31,6 +31,27 @@ fn python() -> Option<&'static str> {
     })
 }
 
+/// Writes the pair into `dir` (a working folder inside the report, which `demo` has claimed
+/// as its own, emptied first) with `make_pair.py`'s options `args`; returns `dir`.
+fn make_pair(python: &str, dir: &Path, args: &[&str]) -> Result<PathBuf, ReportError> {
+    if dir.exists() {
+        std::fs::remove_dir_all(dir).map_err(io_err(dir))?;
+    }
+    let made = std::process::Command::new(python)
+        .arg(script())
+        .arg(dir)
+        .args(args)
+        .output()
+        .map_err(io_err(dir))?;
+    if !made.status.success() {
+        return Err(ReportError::Io {
+            path: script(),
+            source: std::io::Error::other(String::from_utf8_lossy(&made.stderr).into_owned()),
+        });
+    }
+    Ok(dir.to_path_buf())
+}
+
 pub(super) fn section(out: &Path) -> Result<Section, ReportError> {
     let mut s = Section::new("photographs", "Real photographs");
     let python = python();
@@ -49,24 +70,12 @@ pub(super) fn section(out: &Path) -> Result<Section, ReportError> {
         s.paragraph(format!("Not measured here: this section needs {missing}."));
         return Ok(s);
     };
-    // The pair's models, mesh and baseline: a working folder inside the report (which
-    // `demo` has claimed as its own), removed once the figures are written.
-    let dir = out.join("photographs");
-    if dir.exists() {
-        std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
-    }
-    let made = std::process::Command::new(python)
-        .arg(script())
-        .arg(&dir)
-        .args(["--scale", "0.5", "--render-scale", "0.5"])
-        .output()
-        .map_err(io_err(&dir))?;
-    if !made.status.success() {
-        return Err(ReportError::Io {
-            path: script(),
-            source: std::io::Error::other(String::from_utf8_lossy(&made.stderr).into_owned()),
-        });
-    }
+    // The pair's models, mesh and baseline, removed once the figures are written.
+    let dir = make_pair(
+        python,
+        &out.join("photographs"),
+        &["--scale", "0.5", "--render-scale", "0.5"],
+    )?;
     let mut left = ViewSet::load(&dir.join("left"), Some(&dir.join("images")))?;
     left.load_images()?;
     let mesh_file = dir.join("mesh.obj");
@@ -154,22 +163,11 @@ pub(super) fn section(out: &Path) -> Result<Section, ReportError> {
 /// by `master encode` and by the views' seamless best-face bake: the step across seams with
 /// the views' gains alone (the global levelling) and levelled.
 fn seams(s: &mut Section, python: &str, out: &Path) -> Result<(), ReportError> {
-    let dir = out.join("photographs-seams");
-    if dir.exists() {
-        std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
-    }
-    let made = std::process::Command::new(python)
-        .arg(script())
-        .arg(&dir)
-        .args(["--scale", "0.25", "--exposure", "0.5"])
-        .output()
-        .map_err(io_err(&dir))?;
-    if !made.status.success() {
-        return Err(ReportError::Io {
-            path: script(),
-            source: std::io::Error::other(String::from_utf8_lossy(&made.stderr).into_owned()),
-        });
-    }
+    let dir = make_pair(
+        python,
+        &out.join("photographs-seams"),
+        &["--scale", "0.25", "--exposure", "0.5"],
+    )?;
     let (both, images) = (dir.join("both"), dir.join("images"));
     let mesh = trompe::geom::io::load(&dir.join("mesh.obj"))?.mesh;
     let encoded = trompe::master::job::encode_folder(

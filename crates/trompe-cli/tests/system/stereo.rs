@@ -30,6 +30,24 @@ pub fn ready() -> bool {
 pub const NEEDS: &str =
     "the Aloe pair (package opencv-doc) and python3 with OpenCV (package python3-opencv)";
 
+/// The pair written by `make_pair.py` with options `args` into the scratch folder `name`.
+fn make_pair(name: &str, args: &[&str]) -> PathBuf {
+    let dir = scratch(name);
+    let script = root().join("tests/fixtures/stereo/make_pair.py");
+    let made = std::process::Command::new(python().expect("a Python with OpenCV"))
+        .arg(&script)
+        .arg(&dir)
+        .args(args)
+        .output()
+        .expect("runs");
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    dir
+}
+
 /// PSNR, SSIM and FLIP of trompe's render and of the baseline against the right photograph,
 /// on the pixels both cover, for the pair at `scale` and the render at `render_scale` of it
 /// (`prefilter`: with `--prefilter`).
@@ -39,19 +57,7 @@ fn novel_view(
     render_scale: &str,
     prefilter: bool,
 ) -> [metrics::Scores; 2] {
-    let dir = scratch(name);
-    let script = root().join("tests/fixtures/stereo/make_pair.py");
-    let made = std::process::Command::new(python().expect("a Python with OpenCV"))
-        .arg(&script)
-        .arg(&dir)
-        .args(["--scale", scale, "--render-scale", render_scale])
-        .output()
-        .expect("runs");
-    assert!(
-        made.status.success(),
-        "{}",
-        String::from_utf8_lossy(&made.stderr)
-    );
+    let dir = make_pair(name, &["--scale", scale, "--render-scale", render_scale]);
     let at = |p: &str| dir.join(p);
     let s = |p: PathBuf| p.to_string_lossy().into_owned();
     let render = at("trompe.png");
@@ -148,19 +154,7 @@ fn number_after(text: &str, before: &str) -> f64 {
 /// global levelling) and after seam levelling. Measured: 5.60 → 2.09 levels (`master
 /// encode`), 4.64 → 0.84 levels (`views render --weights best-face --seamless`).
 pub fn a_real_capture_with_an_exposure_change_bakes_with_its_seam_step_at_least_halved() {
-    let dir = scratch("stereo-seams");
-    let script = root().join("tests/fixtures/stereo/make_pair.py");
-    let made = std::process::Command::new(python().expect("a Python with OpenCV"))
-        .arg(&script)
-        .arg(&dir)
-        .args(["--scale", "0.25", "--exposure", "0.5"])
-        .output()
-        .expect("runs");
-    assert!(
-        made.status.success(),
-        "{}",
-        String::from_utf8_lossy(&made.stderr)
-    );
+    let dir = make_pair("stereo-seams", &["--scale", "0.25", "--exposure", "0.5"]);
     let s = |p: &str| dir.join(p).to_string_lossy().into_owned();
     let (both, images, mesh) = (s("both"), s("images"), s("mesh.obj"));
     let (encoded, render) = (s("encoded"), s("best-face.png"));
