@@ -112,10 +112,13 @@ pub fn decode_linear_image(bytes: &[u8], path: &Path) -> Result<Image<Rgba>, Fra
 }
 
 fn decode_image(bytes: &[u8], path: &Path, srgb: bool) -> Result<Image<Rgba>, FrameError> {
-    let decode = |v: u8| {
+    // Every 8-bit value's decoding, once (the transfer function per pixel costs more than
+    // reading the file).
+    let table: [f32; 256] = std::array::from_fn(|v| {
         let v = v as f32 / 255.0;
         if srgb { srgb_to_linear(v) } else { v }
-    };
+    });
+    let decode = |v: u8| table[v as usize];
     let reader = || {
         image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()

@@ -163,7 +163,7 @@ pub fn render_frame(
 }
 
 /// [`render_frame`] seen through `camera` instead of the scene's, when given (an interactive
-/// viewer's).
+/// viewer's, a pinhole: the scene camera's lens is not used).
 pub fn render_frame_from(
     clouds: &HybridReflections,
     scene: &Scene,
@@ -176,7 +176,9 @@ pub fn render_frame_from(
     }
     let mut view = scene.view(t)?;
     if let Some(camera) = camera {
+        // A pinhole: the scene camera's lens goes with it.
         view.camera = camera;
+        view.lens = None;
     }
     // Deforming objects' points follow their surface this frame.
     let deformed = clouds.deformed_at(scene, t);

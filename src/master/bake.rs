@@ -25,7 +25,7 @@ use crate::camera::{Pinhole, Projection};
 use crate::frame::{Image, Rgba};
 use crate::geom::Mesh;
 use crate::texturing::seams::{self, Look, SeamReport, Seams};
-use glam::{DVec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
 /// One view's look at one face, with what picks the face's view.
 #[derive(Clone, Copy, Debug)]
@@ -34,8 +34,6 @@ struct Candidate {
     look: Look,
     /// The face's projected area in the view, pixels².
     area: f32,
-    /// Whether the view sees every texel of the face clearly.
-    whole: bool,
 }
 
 /// The label of faces the bake took texel by texel from the mean ([`Seams`] between them and a
@@ -129,10 +127,13 @@ impl Baker {
         let (w, _) = atlas.size();
         self.views = self.views.max(view + 1);
         for (t, place) in atlas.layout.faces.iter().enumerate() {
-            let c = mesh.corners(t).map(|p| p.as_dvec3());
-            let px: Option<Vec<DVec2>> =
-                c.iter().map(|&p| camera.project(p).map(|q| q.uv)).collect();
-            let Some(px) = px else { continue };
+            let px = mesh
+                .corners(t)
+                .map(|p| camera.project(p.as_dvec3()).map(|q| q.uv));
+            let [Some(a), Some(b), Some(c)] = px else {
+                continue;
+            };
+            let px = [a, b, c];
             let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs() as f32;
             // The face's texels: whole when every one inside the triangle is seen clearly;
             // its colour the mean of those seen clearly (failing them, of those seen at all).
@@ -165,9 +166,9 @@ impl Baker {
                 look: Look {
                     view: view as u32,
                     colour: sum / n as f32,
+                    whole,
                 },
                 area,
-                whole,
             });
         }
     }
@@ -196,7 +197,7 @@ impl Baker {
             .zip(&agree)
             .map(|(cands, agree)| {
                 let mut best: Option<&Candidate> = None;
-                for (c, _) in cands.iter().zip(agree).filter(|(c, a)| **a && c.whole) {
+                for (c, _) in cands.iter().zip(agree).filter(|(c, a)| **a && c.look.whole) {
                     if best.is_none_or(|b| c.area > b.area) {
                         best = Some(c);
                     }
@@ -208,17 +209,21 @@ impl Baker {
         let (w, h) = atlas.size();
         let mut chosen = Image::new(w, h, Vec4::ZERO)?;
         let mut sum = Image::new(w, h, Vec4::ZERO)?;
-        for (view, &gain) in gains.iter().enumerate() {
-            // Per face, whether this view's look at it agrees.
-            let mut agrees = vec![false; self.faces.len()];
-            for (f, (cands, agree)) in self.faces.iter().zip(&agree).enumerate() {
-                agrees[f] = cands
-                    .iter()
-                    .zip(agree)
-                    .any(|(c, a)| *a && c.look.view as usize == view);
+        // Per view, the faces where its look agrees, in face order.
+        let mut agreeing: Vec<Vec<u32>> = vec![Vec::new(); self.views];
+        for (f, (cands, agree)) in self.faces.iter().zip(&agree).enumerate() {
+            for (c, _) in cands.iter().zip(agree).filter(|(_, a)| **a) {
+                agreeing[c.look.view as usize].push(f as u32);
             }
-            if !agrees.iter().any(|&a| a) {
+        }
+        let mut agrees = vec![false; self.faces.len()];
+        for (view, &gain) in gains.iter().enumerate() {
+            if agreeing[view].is_empty() {
                 continue;
+            }
+            agrees.fill(false);
+            for &f in &agreeing[view] {
+                agrees[f as usize] = true;
             }
             let master = master_of(view)?;
             if master.size() != (w, h) {

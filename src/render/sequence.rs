@@ -148,7 +148,7 @@ impl<'a> Sequence<'a> {
     }
 
     /// [`Sequence::frame`] seen through `camera` instead of the scene's (an interactive
-    /// viewer's), when given.
+    /// viewer's, a pinhole: the scene camera's lens is not used), when given.
     pub fn frame_from(
         &mut self,
         t: f32,
@@ -162,7 +162,9 @@ impl<'a> Sequence<'a> {
         let mut timings = Timings::default();
         let mut view = timings.time("evaluate scene", || scene.view(t))?;
         if let Some(camera) = camera {
+            // A pinhole: the scene camera's lens goes with it.
             view.camera = camera;
+            view.lens = None;
         }
         super::check_memory(&view, self.options.method)?;
         super::check_finite(&view)?;

@@ -210,7 +210,8 @@ fn point(object: usize, mesh: &Mesh, triangle: usize, bary: Vec3) -> SurfacePoin
 
 /// Per triangle of object `o`, the views that see its centroid, each with the triangle's
 /// projected area in it and, with `looks`, its look: the mean colour of the view at
-/// [`LOOK_POINTS`] it sees (a view that sees none of them is left out).
+/// [`LOOK_POINTS`] it sees (whole when it sees them all; a view that sees none of them is left
+/// out).
 fn candidates(o: usize, mesh: &Mesh, source: &impl Source, looks: bool) -> Vec<Vec<(f64, Look)>> {
     (0..mesh.triangle_count())
         .into_par_iter()
@@ -229,6 +230,7 @@ fn candidates(o: usize, mesh: &Mesh, source: &impl Source, looks: bool) -> Vec<V
                     let look = Look {
                         view: i as u32,
                         colour: Vec3::ZERO,
+                        whole: true,
                     };
                     out.push((area, look));
                     continue;
@@ -250,6 +252,7 @@ fn candidates(o: usize, mesh: &Mesh, source: &impl Source, looks: bool) -> Vec<V
                         Look {
                             view: i as u32,
                             colour,
+                            whole: n == LOOK_POINTS.len(),
                         },
                     ));
                 }

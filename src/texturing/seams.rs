@@ -91,6 +91,9 @@ pub struct Look {
     pub view: u32,
     /// The face's mean colour in it (linear RGB).
     pub colour: Vec3,
+    /// Whether the view sees the whole face: only whole looks are compared, since a part of a
+    /// face has another mean colour than the whole.
+    pub whole: bool,
 }
 
 /// The median of `values` (0 when empty; the mean of the middle two for an even count).
@@ -110,28 +113,30 @@ fn centre(colours: &[Vec3]) -> Vec3 {
     Vec3::new(channel(0), channel(1), channel(2))
 }
 
-/// Per colour of one face's looks, whether it agrees with the others: within
-/// `max(OUTLIER_SPREAD × median distance, OUTLIER_FLOOR)` of the channel-wise median, in
-/// distance relative to the median's colour. Fewer than three looks cannot outvote one
-/// another: all agree.
-pub fn consistent(colours: &[Vec3]) -> Vec<bool> {
-    if colours.len() < 3 {
-        return vec![true; colours.len()];
+/// Per look at one face, whether it agrees with the others: a whole look within
+/// `max(OUTLIER_SPREAD × median distance, OUTLIER_FLOOR)` of the whole looks' channel-wise
+/// median, in distance relative to the median's colour. Fewer than three whole looks cannot
+/// outvote one another, and a partial look is not judged: they agree.
+pub fn consistent(looks: &[Look]) -> Vec<bool> {
+    let whole: Vec<Vec3> = looks.iter().filter(|l| l.whole).map(|l| l.colour).collect();
+    if whole.len() < 3 {
+        return vec![true; looks.len()];
     }
-    let mid = centre(colours);
+    let mid = centre(&whole);
     let scale = mid.length() + DARK;
-    let distance: Vec<f32> = colours
+    let distance = |c: Vec3| (c - mid).length() / scale;
+    let spread = median(whole.iter().map(|&c| distance(c)).collect());
+    let limit = (OUTLIER_SPREAD * spread).max(OUTLIER_FLOOR);
+    looks
         .iter()
-        .map(|c| (*c - mid).length() / scale)
-        .collect();
-    let limit = (OUTLIER_SPREAD * median(distance.clone())).max(OUTLIER_FLOOR);
-    distance.iter().map(|&d| d <= limit).collect()
+        .map(|l| !l.whole || distance(l.colour) <= limit)
+        .collect()
 }
 
 /// Per view (of `views`), the gain a channel that brings its looks to the faces' consensus,
 /// and per face of `looks`, which of its looks agree ([`consistent`] on the colours as the
 /// gains correct them). Gains and the test alternate for a few rounds: each view's gain is its
-/// agreeing looks' ratio of the faces' robust centres to its own colours (each sum with
+/// agreeing whole looks' ratio of the faces' robust centres to its own colours (each sum with
 /// [`GAIN_FLOOR`] a look added), clamped to
 /// `[1 / MAX_GAIN, MAX_GAIN]`.
 pub fn gains_and_inliers(looks: &[Vec<Look>], views: usize) -> (Vec<Vec3>, Vec<Vec<bool>>) {
@@ -144,19 +149,23 @@ pub fn gains_and_inliers(looks: &[Vec<Look>], views: usize) -> (Vec<Vec3>, Vec<V
         inliers = looks
             .iter()
             .map(|face| {
-                let corrected: Vec<Vec3> = face
+                let corrected: Vec<Look> = face
                     .iter()
-                    .map(|l| l.colour * gains[l.view as usize])
+                    .map(|l| Look {
+                        colour: l.colour * gains[l.view as usize],
+                        ..*l
+                    })
                     .collect();
                 let agree = consistent(&corrected);
                 let kept: Vec<Vec3> = corrected
                     .iter()
                     .zip(&agree)
-                    .filter(|(_, a)| **a)
-                    .map(|(c, _)| *c)
+                    .filter(|(l, a)| **a && l.whole)
+                    .map(|(l, _)| l.colour)
                     .collect();
                 let mid = centre(&kept).as_dvec3();
-                for (l, _) in face.iter().zip(&agree).filter(|(_, a)| **a) {
+                let counted = face.iter().zip(&agree).filter(|(l, a)| **a && l.whole);
+                for (l, _) in counted {
                     let s = &mut sums[l.view as usize];
                     s.0 += mid + GAIN_FLOOR;
                     s.1 += l.colour.as_dvec3() + GAIN_FLOOR;
@@ -505,15 +514,30 @@ mod tests {
     #[test]
     fn a_look_unlike_the_others_is_an_outlier_and_two_looks_always_agree() {
         let grey = Vec3::splat(0.4);
-        let looks = [
+        let colours = [
             grey,
             grey * 1.05,
             grey * 0.97,
             Vec3::new(0.9, 0.1, 0.1),
             grey,
         ];
+        let mut looks: Vec<Look> = (colours.iter().enumerate())
+            .map(|(v, &colour)| Look {
+                view: v as u32,
+                colour,
+                whole: true,
+            })
+            .collect();
         assert_eq!(consistent(&looks), [true, true, true, false, true]);
         assert_eq!(consistent(&looks[2..4]), [true, true]);
+        // A partial look is not judged, nor does it judge.
+        looks[3].whole = false;
+        looks[4].colour = Vec3::new(0.1, 0.1, 0.9);
+        assert_eq!(consistent(&looks), [true, true, true, true, false]);
+        // Two whole looks cannot outvote each other.
+        looks[0].whole = false;
+        looks[1].whole = false;
+        assert_eq!(consistent(&looks), [true; 5]);
     }
 
     #[test]
@@ -526,6 +550,7 @@ mod tests {
                 (0..3)
                     .map(|v| Look {
                         view: v,
+                        whole: true,
                         colour: match (v, f) {
                             (1, _) => c * 1.5,
                             (2, 4) => Vec3::new(0.9, 0.9, 0.0),

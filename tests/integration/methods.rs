@@ -183,3 +183,31 @@ fn names_parse_back_and_bad_settings_are_refused_before_any_frame() {
         .unwrap();
     assert!(e.to_string().contains("spacing"), "{e}");
 }
+
+#[test]
+fn a_camera_given_to_a_frame_replaces_the_scenes_lens_too() {
+    // The scene's camera with a real lens (barrel distortion), and the same camera without it.
+    let intrinsics = "fx = 66.0\nfy = 66.0\ncx = 32.0\ncy = 24.0";
+    let lensed = |lens: &str| {
+        let path = common::repo("scenes/intersecting.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let text = text
+            .replace("resolution = [480, 360]", "resolution = [64, 48]")
+            .replace("fov_y = 40.0", &format!("{intrinsics}{lens}"));
+        Scene::from_toml(&text, &path).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (with, without) = (
+        lensed("\nmodel = \"SIMPLE_RADIAL\"\ndistortion = [-0.2]"),
+        lensed(""),
+    );
+    let t = with.render.time;
+    assert!(with.view(t).unwrap().lens.is_some());
+    let pinhole = without.view(t).unwrap().camera;
+    let frame = |scene: &Scene, camera| {
+        let mut r = Renderer::new(scene, MethodKind::Trace, settings()).unwrap();
+        bits(&r.frame(t, camera, &()).unwrap().frame)
+    };
+    let plain = frame(&without, None);
+    assert_ne!(frame(&with, None), plain, "the lens bends the frame");
+    assert_eq!(frame(&with, Some(pinhole)), plain);
+}
