@@ -2,8 +2,8 @@
 //! every object of a render from its source's own visibility test at each triangle's centroid —
 //! so views, layers and master textures honour them alike.
 //!
-//! The best-face table is a bake, and made seamless as the master bake is
-//! ([`super::seams`]): each face's looks (its mean colour in each view that sees it) are tested
+//! The best-face table is a bake and, when asked ([`super::BlendSettings::seamless`]), made
+//! seamless as the master bake is ([`super::seams`]): each face's looks (its mean colour in each view that sees it) are tested
 //! for photometric outliers and give each view a gain; a face takes its largest agreeing view;
 //! and the seams between faces from different views are levelled by per-vertex offsets.
 //!
@@ -13,7 +13,7 @@
 use super::seams::{self, Look, Offsets, SeamReport, Seams};
 use super::view_map::ViewMap;
 use super::{Sight, Source, SurfacePoint, Weighting};
-use crate::frame::Rgba;
+use crate::frame::{FrameError, Rgba};
 use crate::geom::Mesh;
 use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
@@ -22,25 +22,26 @@ use rayon::prelude::*;
 pub(super) enum FaceWeights {
     /// [`Weighting::Ulr`] or [`Weighting::Vdtm`], weighed at each surface point.
     PerPoint,
-    /// Per object, per triangle: the view that sees its centroid largest among those whose
-    /// colour of it agrees, if any; and how its colours are levelled.
+    /// Per object, per triangle: the view that sees its centroid largest (when seamless, among
+    /// those whose colour of it agrees), if any; and how its colours are levelled.
     BestFace(BestFaces),
     /// Per object: its triangles' view maps.
     ViewMap(Vec<ViewMap>),
 }
 
 impl FaceWeights {
-    /// The tables `weighting` needs for `meshes` seen by `source`.
+    /// The tables `weighting` needs for `meshes` seen by `source` (`seamless`: the best-face
+    /// bake made seamless); refused when a seamless bake's looks could pass the memory budget.
     pub(super) fn build(
         weighting: Weighting,
         seamless: bool,
         meshes: &[&Mesh],
         source: &impl Source,
-    ) -> Self {
-        match weighting {
+    ) -> Result<Self, FrameError> {
+        Ok(match weighting {
             Weighting::Ulr { .. } | Weighting::Vdtm => FaceWeights::PerPoint,
             Weighting::BestFace => {
-                FaceWeights::BestFace(BestFaces::build(meshes, source, seamless))
+                FaceWeights::BestFace(BestFaces::build(meshes, source, seamless)?)
             }
             Weighting::ViewMap => FaceWeights::ViewMap(
                 meshes
@@ -53,7 +54,7 @@ impl FaceWeights {
                     })
                     .collect(),
             ),
-        }
+        })
     }
 }
 
@@ -94,8 +95,22 @@ const LOOK_POINTS: [[f32; 3]; 4] = [
 impl BestFaces {
     /// The best-face bake of `meshes` from `source`'s views; `seamless` or as it is (the
     /// largest view that sees a face's centroid, no gains, no offsets).
-    fn build(meshes: &[&Mesh], source: &impl Source, seamless: bool) -> BestFaces {
+    fn build(
+        meshes: &[&Mesh],
+        source: &impl Source,
+        seamless: bool,
+    ) -> Result<BestFaces, FrameError> {
         let views = source.centres().len();
+        if seamless {
+            let faces: usize = meshes.iter().map(|m| m.triangle_count()).sum();
+            crate::memory::check(
+                || format!("a seamless best-face bake's looks of {views} views at {faces} faces"),
+                crate::memory::times(
+                    (faces as u64).saturating_mul(views as u64),
+                    std::mem::size_of::<(f64, Look)>() as u64,
+                ),
+            )?;
+        }
         // Per object, per triangle: the views that see its centroid, with its projected area and
         // (when seamless) its look.
         let candidates: Vec<Vec<Vec<(f64, Look)>>> = meshes
@@ -168,12 +183,12 @@ impl BestFaces {
             report.step_gains /= report.edges as f64;
             report.step_levelled /= report.edges as f64;
         }
-        BestFaces {
+        Ok(BestFaces {
             table,
             gains,
             levelled,
             report: seamless.then_some(report),
-        }
+        })
     }
 
     /// `colour`, which `view` gave `at` (on object `at.object` of `meshes`), with the view's
@@ -211,7 +226,7 @@ fn point(object: usize, mesh: &Mesh, triangle: usize, bary: Vec3) -> SurfacePoin
 /// Per triangle of object `o`, the views that see its centroid, each with the triangle's
 /// projected area in it and, with `looks`, its look: the mean colour of the view at
 /// [`LOOK_POINTS`] it sees (whole when it sees them all; a view that sees none of them is left
-/// out).
+/// out). Without `looks`, only the largest of them (the earlier on a tie).
 fn candidates(o: usize, mesh: &Mesh, source: &impl Source, looks: bool) -> Vec<Vec<(f64, Look)>> {
     (0..mesh.triangle_count())
         .into_par_iter()
@@ -227,12 +242,14 @@ fn candidates(o: usize, mesh: &Mesh, source: &impl Source, looks: bool) -> Vec<V
                 let Some(px) = px else { continue };
                 let area = (px[1] - px[0]).perp_dot(px[2] - px[0]).abs() * 0.5;
                 if !looks {
-                    let look = Look {
-                        view: i as u32,
-                        colour: Vec3::ZERO,
-                        whole: true,
-                    };
-                    out.push((area, look));
+                    if out.first().is_none_or(|(a, _)| area > *a) {
+                        let look = Look {
+                            view: i as u32,
+                            colour: Vec3::ZERO,
+                            whole: true,
+                        };
+                        out = vec![(area, look)];
+                    }
                     continue;
                 }
                 let (mut sum, mut n) = (Vec3::ZERO, 0);

@@ -189,7 +189,7 @@ pub fn render_through(
             &traced
         }
     };
-    let faces = FaceWeights::build(settings.weighting, settings.seamless, meshes, source);
+    let faces = FaceWeights::build(settings.weighting, settings.seamless, meshes, source)?;
     let (w, h) = camera.resolution();
     let eye = camera.position();
     let centres = source.centres();
