@@ -446,7 +446,7 @@ pub fn level(
     let mut entries: Vec<(u32, u32, f64)> = Vec::new();
     let mut rhs: Vec<(u32, DVec3)> = Vec::new();
     // Smoothness within each source's faces; the keys are made in face order.
-    for (f, label) in labels.iter().enumerate() {
+    for (f, label) in labels.iter().take(mesh.triangle_count()).enumerate() {
         let Some(label) = *label else { continue };
         let k = [0, 1, 2].map(|c| key(f, c, label));
         for c in 0..3 {
@@ -467,15 +467,21 @@ pub fn level(
     let weight = 1.0 / SEAM_SAMPLES as f64;
     for s in &seams.edges {
         let [f0, f1] = s.faces.map(|f| f as usize);
-        let (Some(l0), Some(l1)) = (labels[f0], labels[f1]) else {
+        let label = |f: usize| labels.get(f).copied().flatten();
+        let (Some(l0), Some(l1)) = (label(f0), label(f1)) else {
             continue;
         };
-        let ends = |f: usize, side: usize, label: u32| {
-            s.corners[side].map(|c| {
-                offsets.index[&(welded[mesh.triangles[f][c as usize] as usize], label)] as u32
-            })
+        // The offsets at the edge's ends on each side (seams found for other labels have none).
+        let ends = |f: usize, side: usize, label: u32| -> Option<[u32; 2]> {
+            let [a, b] = s.corners[side].map(|c| {
+                let v = welded[mesh.triangles[f][c as usize] as usize];
+                offsets.index.get(&(v, label)).map(|&i| i as u32)
+            });
+            Some([a?, b?])
         };
-        let (e0, e1) = (ends(f0, 0, l0), ends(f1, 1, l1));
+        let (Some(e0), Some(e1)) = (ends(f0, 0, l0), ends(f1, 1, l1)) else {
+            continue;
+        };
         for j in 0..SEAM_SAMPLES {
             let t = (j as f32 + 0.5) / SEAM_SAMPLES as f32;
             let (Some(c0), Some(c1)) = (sample(f0, s.bary(0, t)), sample(f1, s.bary(1, t))) else {
