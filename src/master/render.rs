@@ -43,7 +43,16 @@ struct Masters<'a> {
     centres: Vec<DVec3>,
 }
 
-impl Masters<'_> {
+impl<'a> Masters<'a> {
+    fn new(layout: &'a Layout, cameras: &'a [Pinhole], masters: &'a [Image<Rgba>]) -> Self {
+        Masters {
+            layout,
+            cameras,
+            masters,
+            centres: cameras.iter().map(|c| c.position()).collect(),
+        }
+    }
+
     /// The atlas point of `at` (one texture coordinate for every view).
     fn atlas_point(&self, at: &SurfacePoint) -> DVec2 {
         self.layout.faces[at.triangle].at(at.bary.y as f64, at.bary.z as f64)
@@ -106,6 +115,39 @@ pub fn render_through(
     masters: &[Image<Rgba>],
     settings: &BlendSettings,
 ) -> Result<Blend, MasterError> {
+    check(mesh, layout, cameras, masters)?;
+    let source = Masters::new(layout, cameras, masters);
+    Ok(crate::texturing::render_through(
+        camera,
+        lens,
+        &[mesh],
+        &source,
+        settings,
+    )?)
+}
+
+/// The plain best-face table of `mesh` from `masters` (per triangle: the view whose master sees
+/// its centroid, with the largest projected area, if any), as [`render`] builds it for
+/// [`crate::texturing::Weighting::BestFace`]: for a renderer that blends elsewhere (the GPU's).
+pub fn best_faces(
+    mesh: &crate::geom::Mesh,
+    layout: &Layout,
+    cameras: &[Pinhole],
+    masters: &[Image<Rgba>],
+) -> Result<Vec<Option<usize>>, MasterError> {
+    check(mesh, layout, cameras, masters)?;
+    let source = Masters::new(layout, cameras, masters);
+    let mut tables = crate::texturing::best_face_table(&[mesh], &source)?;
+    Ok(tables.pop().unwrap_or_default())
+}
+
+/// Refuses a layout of another mesh, or cameras and masters that do not pair.
+pub fn check(
+    mesh: &crate::geom::Mesh,
+    layout: &Layout,
+    cameras: &[Pinhole],
+    masters: &[Image<Rgba>],
+) -> Result<(), MasterError> {
     if layout.faces.len() != mesh.triangle_count() {
         return Err(MasterError::Faces {
             mesh: mesh.triangle_count(),
@@ -118,19 +160,7 @@ pub fn render_through(
             masters: masters.len(),
         });
     }
-    let source = Masters {
-        layout,
-        cameras,
-        masters,
-        centres: cameras.iter().map(|c| c.position()).collect(),
-    };
-    Ok(crate::texturing::render_through(
-        camera,
-        lens,
-        &[mesh],
-        &source,
-        settings,
-    )?)
+    Ok(())
 }
 
 #[cfg(test)]

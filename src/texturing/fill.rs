@@ -12,7 +12,7 @@ use std::collections::VecDeque;
 
 /// What a render's pixel showed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Pixel {
+pub enum Pixel {
     /// No mesh.
     Background,
     /// A mesh some view sees.
@@ -23,7 +23,7 @@ pub(crate) enum Pixel {
 
 /// Fills the holes of `image` (`pixels` in row order says what each showed) from the nearest
 /// seen pixel, opaque; returns how many it filled.
-pub(crate) fn from_nearest(image: &mut Image<Rgba>, pixels: &[Pixel]) -> usize {
+pub fn from_nearest(image: &mut Image<Rgba>, pixels: &[Pixel]) -> usize {
     let (w, h) = (image.width() as usize, image.height() as usize);
     debug_assert_eq!(pixels.len(), w * h);
     let mut reached: Vec<bool> = pixels.iter().map(|&p| p != Pixel::Hole).collect();

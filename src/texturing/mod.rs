@@ -25,7 +25,7 @@
 //! one; the same inputs give the same pixels on any thread count.
 
 pub mod faces;
-mod fill;
+pub mod fill;
 pub mod seams;
 pub mod view_map;
 pub mod weights;
@@ -291,6 +291,17 @@ pub fn render_through(
             _ => None,
         },
     })
+}
+
+/// The plain best-face table of `meshes` seen by `source` (per object, per triangle: the view
+/// that sees its centroid with the largest projected area, if any), as [`render`] builds it
+/// for [`Weighting::BestFace`] without [`BlendSettings::seamless`]: for a renderer that blends
+/// elsewhere (the GPU's) from the same table.
+pub fn best_face_table(
+    meshes: &[&Mesh],
+    source: &impl Source,
+) -> Result<Vec<Vec<Option<usize>>>, FrameError> {
+    Ok(faces::BestFaces::build(meshes, source, false)?.table)
 }
 
 /// The footprint of render pixel `(x, y)` on the plane of triangle `corners` through `p`: the

@@ -14,6 +14,8 @@
 //! - [`raster`]: the visibility pass — triangles drawn by the GPU rasterizer through any
 //!   impostor camera or the eye, under a depth-peeling ceiling if asked.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
+//! - [`master`]: paper 5's rendering path — every master texture a layer of one texture
+//!   array, the mesh's one atlas point a pixel, the views blended in a compute shader.
 //! - [`octahedral`]: engines' octahedral impostors drawn by their shader, instanced, and shaded.
 //! - [`present`]: the viewer's window shown through a wgpu surface on the same device.
 //!
@@ -30,6 +32,7 @@
 pub mod build;
 pub mod bvh;
 pub mod device;
+pub mod master;
 pub mod methods;
 pub mod octahedral;
 pub mod present;

@@ -103,6 +103,9 @@ pub enum DeviceError {
     /// The scene at that time.
     #[error(transparent)]
     View(#[from] trompe::scene::ViewError),
+    /// Master textures that do not fit the mesh, or could not be read.
+    #[error(transparent)]
+    Master(#[from] trompe::master::MasterError),
 }
 
 /// A method prepared over a scene on one device.

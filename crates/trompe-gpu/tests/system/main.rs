@@ -5,6 +5,7 @@
 
 mod build;
 mod bvh;
+mod master;
 mod octahedral;
 mod trace;
 mod walk;
@@ -124,6 +125,18 @@ fn main() {
         on_gpu(
             "trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu",
             trace::every_shipped_scene_rasterizes_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
+            "master::master_textures_render_on_the_gpu_as_on_the_cpu",
+            master::master_textures_render_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
+            "master::the_same_masters_render_the_same_bits_on_repeated_runs",
+            master::the_same_masters_render_the_same_bits_on_repeated_runs,
+        ),
+        on_gpu(
+            "master::what_the_gpu_does_not_blend_is_refused_before_any_work",
+            master::what_the_gpu_does_not_blend_is_refused_before_any_work,
         ),
     ];
     let mut trials = vec![
