@@ -54,6 +54,11 @@ impl DepthMap {
         views.iter().map(|v| DepthMap::of(v, mesh)).collect()
     }
 
+    /// The pinhole the map was drawn through.
+    pub fn camera(&self) -> &crate::camera::Pinhole {
+        &self.camera
+    }
+
     /// The map's generalized depth.
     pub fn gd(&self) -> &Image<f32> {
         &self.gd

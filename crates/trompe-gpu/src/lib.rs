@@ -14,6 +14,9 @@
 //! - [`raster`]: the visibility pass — triangles drawn by the GPU rasterizer through any
 //!   impostor camera or the eye, under a depth-peeling ceiling if asked.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
+//! - [`texturing`]: projective texturing's blend — the views that see a pixel's surface
+//!   weighted and blended in a compute shader, shared by the sources below.
+//! - [`views`]: calibrated views — photographs with depth maps — blended on a new camera.
 //! - [`master`]: paper 5's rendering path — every master texture a layer of one texture
 //!   array, the mesh's one atlas point a pixel, the views blended in a compute shader.
 //! - [`octahedral`]: engines' octahedral impostors drawn by their shader, instanced, and shaded.
@@ -37,10 +40,14 @@ pub mod methods;
 pub mod octahedral;
 pub mod present;
 pub mod raster;
+pub mod texturing;
 pub mod trace;
+pub mod views;
 pub mod walk;
 
 pub use bvh::GpuBvh;
 pub use device::{AdapterReport, Backends, Gpu, GpuError, GpuRequest, adapters};
-pub use methods::{Device, DeviceError, DeviceRenderer, check_device, has_gpu_path, open_for};
+pub use methods::{
+    Device, DeviceError, DeviceRenderer, check_device, has_gpu_path, open, open_for,
+};
 pub use present::WindowSurface;

@@ -65,9 +65,17 @@ pub fn gpu_methods() -> Vec<&'static str> {
 pub fn open_for(device: Device, kind: MethodKind) -> Result<Option<Gpu>, GpuError> {
     check_device(device, kind)?;
     match device {
+        Device::Auto if !has_gpu_path(kind) => Ok(None),
+        _ => open(device),
+    }
+}
+
+/// The GPU `device` calls for, for work that has a GPU path: `None` for the CPU. `Gpu` fails
+/// when no adapter opens; `Auto` opens a hardware GPU or falls back to the CPU.
+pub fn open(device: Device) -> Result<Option<Gpu>, GpuError> {
+    match device {
         Device::Cpu => Ok(None),
         Device::Gpu => GpuRequest::new().open().map(Some),
-        Device::Auto if !has_gpu_path(kind) => Ok(None),
         Device::Auto => Ok(GpuRequest::new().software(false).open().ok()),
     }
 }

@@ -107,3 +107,80 @@ pub fn master(
     }
     Ok(out)
 }
+
+/// Paper 5 §4's rendering path on each device: the teapot's masters of `views` sphere views of
+/// 720 × 576, rendered through a new camera at 1920 × 1080 (640 × 360 when `quick`) — on the
+/// GPU from one texture array (the masters uploaded once), beside the library's CPU render of
+/// the same masters, ULR and best face.
+pub fn gpu_renders(
+    gpu: &trompe_gpu::Gpu,
+    inputs: &trompe::eval::fixtures::Shipped,
+    quick: bool,
+) -> Result<Vec<Figure>, BenchError> {
+    use trompe::texturing::{BlendSettings, Weighting};
+    let views = if quick { 36 } else { 360 };
+    let (w, h) = if quick { (640, 360) } else { (1920, 1080) };
+    let mesh = trompe::geom::io::load(&inputs.assets.join("meshes/teapot.obj"))?.mesh;
+    let cameras = sphere_cameras(&mesh, views, (720, 576));
+    let image = gradient(720, 576)?;
+    let mut masters = Vec::with_capacity(views);
+    let (atlas, _) = encode_stream(
+        &mesh,
+        &cameras,
+        1.0,
+        &mut |_| Ok::<_, MasterError>(image.clone()),
+        &mut |_, m| {
+            masters.push(m.clone());
+            Ok(())
+        },
+        &(),
+    )?;
+    let pinholes: Vec<Pinhole> = cameras.into_iter().map(|(_, c)| c).collect();
+    // Between the first two views, a little nearer.
+    let b = mesh.bounds();
+    let (p0, p1) = (pinholes[0].position(), pinholes[1].position());
+    let centre = b.center().as_dvec3();
+    let eye = centre + ((p0 + p1) * 0.5 - centre) * 0.9;
+    let camera = Pinhole::look_at(eye.as_vec3(), b.center(), glam::Vec3::Y, 40.0, w, h)?;
+    let (aw, ah) = atlas.size();
+    let mut out = Vec::new();
+    for weighting in [Weighting::Ulr { beta: 0.1 }, Weighting::BestFace] {
+        let settings = BlendSettings {
+            weighting,
+            ..BlendSettings::default()
+        };
+        let layout = &atlas.layout;
+        let t = Instant::now();
+        let cpu =
+            trompe::master::render::render(&camera, &mesh, layout, &pinholes, &masters, &settings)?;
+        let cpu_time = t.elapsed();
+        let uploaded = trompe_gpu::master::GpuMasters::new(
+            gpu,
+            &mesh,
+            (layout, &pinholes, &masters),
+            &settings,
+        )?;
+        // The first frame compiles the pipeline; then the mean of a few.
+        uploaded.render(&camera)?;
+        const FRAMES: u32 = 3;
+        let t = Instant::now();
+        for _ in 0..FRAMES {
+            std::hint::black_box(uploaded.render(&camera)?);
+        }
+        let gpu_time = t.elapsed() / FRAMES;
+        std::hint::black_box(cpu);
+        out.push(
+            Figure::millis(
+                format!(
+                    "master render, {}, teapot ({} faces), {views} masters {aw}×{ah}, {w}×{h}: \
+                     GPU frame (with read-back)",
+                    weighting.name(),
+                    mesh.triangle_count()
+                ),
+                gpu_time,
+            )
+            .versus((gpu_time, cpu_time), "CPU"),
+        );
+    }
+    Ok(out)
+}

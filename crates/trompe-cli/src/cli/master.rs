@@ -1,6 +1,7 @@
 //! `trompe master encode|render|edit`: Master Texture Space (paper 5) on the command line —
 //! parse, call one `trompe::master::job` function, print its summary.
 
+use super::render::DeviceArg;
 use super::views::{BlendArgs, CameraArg};
 use super::{bar, check_plan, load_mesh_read_by};
 use anyhow::{Context, Result, bail};
@@ -68,6 +69,12 @@ pub struct MasterRenderArgs {
     camera: CameraArg,
     #[command(flatten)]
     blend: BlendArgs,
+    /// Where the blend runs: the CPU; the GPU (every master a layer of one texture array, the
+    /// views blended in a compute shader; a hardware adapter, else a software one such as
+    /// Mesa's lavapipe); or auto (a hardware GPU where present, else the CPU). The GPU blends
+    /// ULR, VDTM and plain best face, without a lens or --prefilter.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    device: DeviceArg,
     /// Output image (.png or .exr).
     #[arg(short, long)]
     output: PathBuf,
@@ -147,7 +154,12 @@ impl MasterRenderArgs {
             .writes(&self.output, &["png", "exr"]);
         check_plan(&plan)?;
         let (camera, lens) = self.camera.camera(self.scene.as_deref(), &mesh)?;
-        let b = trompe::master::job::render_folder(
+        let gpu = trompe_gpu::open(self.device.into()).context("opening the GPU")?;
+        if let Some(gpu) = &gpu {
+            crate::output::note(format_args!("rendering on {}", gpu.name()));
+        }
+        let b = trompe_gpu::master::render_folder(
+            gpu.as_ref(),
             &self.encoding,
             &mesh,
             (&camera, lens.as_ref()),

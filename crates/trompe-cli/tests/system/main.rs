@@ -49,6 +49,12 @@ fn main() {
             ADAPTER,
         ),
         trial(
+            "gpu::master_render_on_the_gpu_is_the_cpu_frame",
+            master_render_on_the_gpu_is_the_cpu_frame,
+            adapter,
+            ADAPTER,
+        ),
+        trial(
             "gpu::the_headless_viewer_draws_trace_and_raster_on_the_gpu",
             the_headless_viewer_draws_trace_and_raster_on_the_gpu,
             adapter,
@@ -291,6 +297,75 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
     for i in 0..3 {
         assert!(dir.join(format!("frame_{i:02}.png")).is_file());
     }
+}
+
+/// `master render --device gpu` (every master a layer of one texture array, blended by a
+/// compute shader) writes the frame `--device cpu` writes; what it does not blend is refused by
+/// name, pointing at the CPU.
+pub fn master_render_on_the_gpu_is_the_cpu_frame() {
+    let dir = scratch("master-gpu");
+    let duck = common::asset("gltf/Duck.glb");
+    let duck = duck.to_str().unwrap();
+    let (cap, enc) = (dir.join("cap"), dir.join("enc"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for args in [
+        &[
+            "views",
+            "capture",
+            duck,
+            "-o",
+            &s(&cap),
+            "--count",
+            "8",
+            "--size",
+            "160x120",
+        ][..],
+        &["master", "encode", &s(&cap), "--mesh", duck, "-o", &s(&enc)],
+    ] {
+        let o = trompe(args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let render = |device: &str, weights: &str, out: &Path| {
+        trompe(&[
+            "master",
+            "render",
+            &s(&enc),
+            "--mesh",
+            duck,
+            "--scene",
+            "scenes/duck-mirror.toml",
+            "--weights",
+            weights,
+            "--device",
+            device,
+            "-o",
+            &s(out),
+        ])
+    };
+    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
+    for weights in ["ulr", "best-face"] {
+        let (cpu, gpu) = (dir.join("cpu.png"), dir.join("gpu.png"));
+        for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
+            let o = render(device, weights, out);
+            assert!(o.status.success(), "{}", stderr(&o));
+            let printed = String::from_utf8_lossy(&o.stdout);
+            assert!(printed.contains("pixels show the mesh"), "{printed}");
+        }
+        let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
+        println!(
+            "master render, {weights}: GPU against CPU FLIP {:.5}",
+            score.flip
+        );
+        assert!(
+            score.flip < 0.01,
+            "{weights}: GPU against CPU FLIP {}",
+            score.flip
+        );
+    }
+    fails_cleanly(
+        &render("gpu", "view-map", &dir.join("map.png")),
+        "the view-map weighting is not on the GPU yet (render it with --device cpu)",
+    );
 }
 
 /// `info --gpu` lists the adapters and the one it opens, with its limits.

@@ -14,7 +14,12 @@ pub fn the_shaders_parse_and_validate() {
     validate(&trompe_gpu::walk::shader_source());
     validate(&trompe_gpu::trace::impostor_shader_source());
     validate(trompe_gpu::present::SHADER);
-    validate(trompe_gpu::master::MASTER_SHADER);
+    validate(&trompe_gpu::texturing::shader_source(
+        trompe_gpu::master::MASTER_SHADER,
+    ));
+    validate(&trompe_gpu::texturing::shader_source(
+        trompe_gpu::views::VIEWS_SHADER,
+    ));
     // The tracer's stack holds one pending ray more than the recursion limit it accepts.
     let pending = format!(
         "const PENDING: u32 = {}u;",

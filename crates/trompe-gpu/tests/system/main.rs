@@ -8,6 +8,7 @@ mod bvh;
 mod master;
 mod octahedral;
 mod trace;
+mod views;
 mod walk;
 
 use libtest_mimic::{Arguments, Failed, Trial};
@@ -137,6 +138,14 @@ fn main() {
         on_gpu(
             "master::what_the_gpu_does_not_blend_is_refused_before_any_work",
             master::what_the_gpu_does_not_blend_is_refused_before_any_work,
+        ),
+        on_gpu(
+            "views::calibrated_views_render_on_the_gpu_as_on_the_cpu",
+            views::calibrated_views_render_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
+            "views::the_same_views_render_the_same_bits_on_repeated_runs",
+            views::the_same_views_render_the_same_bits_on_repeated_runs,
         ),
     ];
     let mut trials = vec![

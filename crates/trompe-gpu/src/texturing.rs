@@ -1,0 +1,283 @@
+//! Projective texturing's blend on the GPU, shared by the sources that texture a mesh from
+//! views ([`crate::views`], [`crate::master`]): the mesh drawn by the GPU rasterizer into a
+//! visibility buffer ([`crate::raster`]), then one compute invocation a pixel
+//! (`shaders/texturing.wgsl`, after the source's own WGSL) that asks every view how it sees the
+//! pixel's surface, weights those that see it and blends their colours — the library's
+//! [`trompe::texturing::render`] step by step: the same clear-then-edge passes, the same ULR and
+//! VDTM weights with ties to the lower view, the best-face table the library builds.
+//!
+//! Not on the GPU (refused before any work, with what to do instead): the view map, a seamless
+//! best-face bake, prefiltering to the pixel's footprint, more than [`MAX_K`] views a pixel.
+//! Holes filled from the nearest seen surface are filled by the library after read-back.
+//!
+//! Invariant: a frame's pixels depend only on the source, the mesh, the camera and the
+//! settings.
+
+use crate::device::{Gpu, GpuError};
+use crate::raster::{
+    GpuRasterCamera, draw_into_visibility, raster_pipeline_of, v4, visibility_texture,
+};
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3, Vec4};
+use trompe::camera::{Pinhole, Projection};
+use trompe::frame::Image;
+use trompe::texturing::fill::{Pixel, from_nearest};
+use trompe::texturing::{Blend, BlendSettings, Holes, Weighting};
+
+/// The blend's WGSL, which follows a source's.
+pub const BLEND_SHADER: &str = include_str!("../shaders/texturing.wgsl");
+
+/// The most views a pixel blends on the GPU (`shaders/texturing.wgsl`'s `K_MAX`).
+pub const MAX_K: usize = 64;
+
+/// A source's WGSL followed by the blend: the whole shader.
+pub fn shader_source(source: &str) -> String {
+    format!("{source}\n{BLEND_SHADER}")
+}
+
+/// The shader's `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuParams {
+    eye: [f32; 4],
+    size: [u32; 4],
+    mode: [u32; 4],
+    fill: [f32; 4],
+    extra: [f32; 4],
+}
+
+/// The refusal of what the GPU does not blend, pointing at the CPU.
+pub(crate) fn unsupported(what: &str) -> GpuError {
+    GpuError::Unsupported {
+        what: format!("{what} (render it with --device cpu)"),
+    }
+}
+
+/// Refuses `settings` the GPU does not blend, before any work.
+pub(crate) fn check_settings(settings: &BlendSettings) -> Result<(), GpuError> {
+    match settings.weighting {
+        Weighting::BestFace if settings.seamless => Err(unsupported(
+            "a seamless best-face bake is not on the GPU yet",
+        )),
+        Weighting::ViewMap => Err(unsupported("the view-map weighting is not on the GPU yet")),
+        _ if settings.prefilter => Err(unsupported(
+            "prefiltering to the pixel's footprint is not on the GPU yet",
+        )),
+        _ if settings.k > MAX_K => Err(unsupported(&format!(
+            "k = {} views a pixel: the GPU blends at most {MAX_K}",
+            settings.k
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// What every source's frame shares, uploaded once: the mesh's triangles, the views' centres,
+/// the best-face table, the settings and the whole shader.
+pub(crate) struct Blender {
+    raster: (wgpu::RenderPipeline, wgpu::Buffer, u32),
+    centres: wgpu::Buffer,
+    best: wgpu::Buffer,
+    views: u32,
+    settings: BlendSettings,
+    /// The module's label and the whole shader.
+    shader: (&'static str, String),
+}
+
+impl Blender {
+    /// The mesh's triangles `corners` (in the order its faces are numbered), the views'
+    /// `centres`, per face the best-face table's view (under [`Weighting::BestFace`]), and the
+    /// source's WGSL named `label`. The settings must have passed [`check_settings`].
+    pub(crate) fn new(
+        gpu: &Gpu,
+        corners: &[[Vec3; 3]],
+        centres: &[DVec3],
+        best: Option<&[Option<usize>]>,
+        settings: &BlendSettings,
+        (label, source): (&'static str, &str),
+    ) -> Result<Self, GpuError> {
+        check_settings(settings)?;
+        let raster = raster_pipeline_of(gpu, corners)?;
+        let centres: Vec<[f32; 4]> = centres.iter().map(|c| v4(c.as_vec3(), 0.0)).collect();
+        let best: Vec<u32> = match best {
+            Some(table) => table
+                .iter()
+                .map(|v| v.map_or(0, |i| i as u32 + 1))
+                .collect(),
+            None => vec![0],
+        };
+        let bytes = |v: &[u32]| v.len() as u64 * 4;
+        gpu.check_storage("the best-face table", bytes(&best))?;
+        Ok(Blender {
+            raster,
+            centres: gpu.storage_with("view centres", bytemuck::cast_slice(&centres)),
+            best: gpu.storage_with("best faces", bytemuck::cast_slice(&best)),
+            views: centres.len() as u32,
+            settings: *settings,
+            shader: (label, shader_source(source)),
+        })
+    }
+
+    /// The mesh through `camera`, blended from the source whose bindings are `entries`
+    /// (bindings 1, 3 and from 8 up; the blend holds 0, 2 and 4 to 7): the image and its pixels'
+    /// counts, as the library's render makes them.
+    pub(crate) fn render(
+        &self,
+        gpu: &Gpu,
+        camera: &Pinhole,
+        entries: &[wgpu::BindGroupEntry],
+    ) -> Result<Blend, GpuError> {
+        let (w, h) = camera.resolution();
+        gpu.check_texture("the frame", w, h)?;
+        let pixels = u64::from(w) * u64::from(h);
+        gpu.check_storage("the frame", pixels * 16)?;
+        let visibility = visibility_texture(gpu, w, h);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        draw_into_visibility(
+            gpu,
+            &mut encoder,
+            &self.raster,
+            &GpuRasterCamera::pinhole(camera),
+            &visibility,
+            (w, h),
+        );
+        let s = &self.settings;
+        let (mode, beta) = match s.weighting {
+            Weighting::Ulr { beta } => (0, beta as f32),
+            Weighting::Vdtm => (1, 0.0),
+            _ => (2, 0.0),
+        };
+        let params = GpuParams {
+            eye: v4(camera.position().as_vec3(), beta),
+            size: [w, h, self.views, s.k as u32],
+            mode: [mode, u32::from(matches!(s.holes, Holes::Fill(_))), 0, 0],
+            fill: match s.holes {
+                Holes::Fill(c) => c.to_array(),
+                _ => [0.0; 4],
+            },
+            extra: [s.tolerance as f32, 0.0, 0.0, 0.0],
+        };
+        let uniform = gpu.uniform_with("blend params", bytemuck::bytes_of(&params));
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let colour = gpu.buffer("colour", pixels * 16, storage);
+        let state = gpu.buffer("pixel state", pixels * 4, storage);
+        let pipeline = gpu.compute_pipeline(self.shader.0, &self.shader.1, "blend_views");
+        let visibility_view = visibility.create_view(&Default::default());
+        let buffers = [
+            (2, &self.centres),
+            (4, &uniform),
+            (5, &self.best),
+            (6, &colour),
+            (7, &state),
+        ];
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.shader.0),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &buffers
+                .into_iter()
+                .map(|(binding, b)| wgpu::BindGroupEntry {
+                    binding,
+                    resource: b.as_entire_binding(),
+                })
+                .chain([wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&visibility_view),
+                }])
+                .chain(entries.iter().cloned())
+                .collect::<Vec<_>>(),
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+        let read = gpu.read_back(encoder, &[colour, state], "the blended frame")?;
+        let colours: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read[0][..pixels as usize * 16]);
+        let states: Vec<u32> = bytemuck::pod_collect_to_vec(&read[1][..pixels as usize * 4]);
+        let mut image = Image::new(w, h, Vec4::ZERO)?;
+        for (out, c) in image.pixels_mut().iter_mut().zip(&colours) {
+            *out = Vec4::from_array(*c);
+        }
+        let shown: Vec<Pixel> = states
+            .iter()
+            .map(|s| match s {
+                1 => Pixel::Seen,
+                2 => Pixel::Hole,
+                _ => Pixel::Background,
+            })
+            .collect();
+        let covered = shown.iter().filter(|p| **p != Pixel::Background).count();
+        let holes = shown.iter().filter(|p| **p == Pixel::Hole).count();
+        let filled = match s.holes {
+            Holes::Nearest if holes > 0 => from_nearest(&mut image, &shown),
+            _ => 0,
+        };
+        Ok(Blend {
+            image,
+            covered,
+            holes,
+            filled,
+            seams: None,
+        })
+    }
+}
+
+/// `layers` images of `w × h`, each given by `texels(layer)` (row-major, `w × h` of them), as
+/// the layers of one texture array of `format`, `texel` bytes a texel.
+pub(crate) fn texture_array(
+    gpu: &Gpu,
+    label: &'static str,
+    (w, h, layers): (u32, u32, u32),
+    (format, texel): (wgpu::TextureFormat, u32),
+    texels: impl Fn(u32) -> Vec<u8>,
+) -> Result<wgpu::TextureView, GpuError> {
+    gpu.check_texture(label, w, h)?;
+    let limit = gpu.limits().max_texture_array_layers;
+    if layers > limit {
+        return Err(unsupported(&format!(
+            "{layers} {label}: {} holds at most {limit} in one texture array",
+            gpu.name()
+        )));
+    }
+    let bytes = u64::from(w) * u64::from(h) * u64::from(texel) * u64::from(layers.max(1));
+    trompe::memory::check(|| format!("{layers} {label} of {w} × {h}"), bytes)?;
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: layers.max(1),
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for layer in 0..layers {
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            &texels(layer),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * texel),
+                rows_per_image: Some(h),
+            },
+            crate::device::extent((w, h)),
+        );
+    }
+    Ok(texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    }))
+}

@@ -1,0 +1,242 @@
+//! View-dependent projective texturing from calibrated views on the GPU: every view's image one
+//! layer of a texture array and its depth map a layer of another (each padded to the largest
+//! view), and a frame the blend of [`crate::texturing`] over a source (`shaders/views.wgsl`)
+//! that tests each view's visibility against its depth map and looks its image up on the
+//! point's surface.
+//!
+//! The CPU twin is [`trompe::views::blend`] with [`trompe::views::visibility`]: the same
+//! seen / edge / hidden rule and the same depth-aware bilinear lookup; the best-face table is
+//! the library's own, built once on the CPU from the same views.
+//!
+//! Not on the GPU (refused before any work): a view with lens distortion (its image is looked up
+//! through the lens on the CPU), and what [`crate::texturing`] refuses.
+//!
+//! Invariant: the views are uploaded once and every frame reuses them.
+
+use crate::device::{Gpu, GpuError};
+use crate::methods::DeviceError;
+use crate::raster::v4;
+use crate::texturing::{Blender, check_settings, texture_array, unsupported};
+use bytemuck::{Pod, Zeroable};
+use trompe::camera::{Intrinsics, Pinhole, Projection};
+use trompe::geom::Mesh;
+use trompe::texturing::{Blend, BlendSettings, Weighting};
+use trompe::views::CalibratedView;
+use trompe::views::blend::ViewSource;
+use trompe::views::visibility::DepthMap;
+
+/// The calibrated views' source WGSL (the blend follows it).
+pub const VIEWS_SHADER: &str = include_str!("../shaders/views.wgsl");
+
+/// A view as the shader reads it (`shaders/views.wgsl`'s `View`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuView {
+    depth_rows: [[f32; 4]; 3],
+    depth_eye: [f32; 4],
+    rotation: [[f32; 4]; 3],
+    centre: [f32; 4],
+    intrinsics: [f32; 4],
+    size: [f32; 4],
+}
+
+/// Calibrated views and their depth maps uploaded once, rendered through any pinhole.
+pub struct GpuViews<'a> {
+    gpu: &'a Gpu,
+    blender: Blender,
+    faces: wgpu::Buffer,
+    views: wgpu::Buffer,
+    images: wgpu::TextureView,
+    depths: wgpu::TextureView,
+}
+
+impl<'a> GpuViews<'a> {
+    /// Uploads `views` (their images loaded), their depth maps `depth` (one a view,
+    /// [`DepthMap::of_all`]) and `mesh` to `gpu`, to be rendered with `settings`; `exclude`
+    /// leaves one view out (leave-one-out scoring), as [`trompe::views::blend::render`] does.
+    pub fn new(
+        gpu: &'a Gpu,
+        mesh: &Mesh,
+        (views, depth): (&[CalibratedView], &[DepthMap]),
+        settings: &BlendSettings,
+        exclude: Option<usize>,
+    ) -> Result<Self, DeviceError> {
+        check_settings(settings)?;
+        // A view takes part where it has an image, a depth map, and is not left out.
+        let takes_part =
+            |i: usize| views[i].image.is_some() && i < depth.len() && Some(i) != exclude;
+        if let Some(v) = (0..views.len())
+            .filter(|&i| takes_part(i))
+            .map(|i| &views[i])
+            .find(|v| !v.intrinsics.is_undistorted())
+        {
+            let what = format!(
+                "view {} has {} lens distortion, looked up through the lens on the CPU only",
+                v.name,
+                v.intrinsics.model().name()
+            );
+            return Err(unsupported(&what).into());
+        }
+        let best = match settings.weighting {
+            Weighting::BestFace => {
+                let source = ViewSource::new(views, depth, settings.tolerance, exclude);
+                let mut tables =
+                    trompe::texturing::best_face_table(&[mesh], &source).map_err(GpuError::from)?;
+                tables.pop()
+            }
+            _ => None,
+        };
+        let corners: Vec<[glam::Vec3; 3]> = (0..mesh.triangle_count())
+            .map(|t| mesh.corners(t))
+            .collect();
+        let centres: Vec<glam::DVec3> = views.iter().map(|v| v.pose.centre()).collect();
+        let blender = Blender::new(
+            gpu,
+            &corners,
+            &centres,
+            best.as_deref(),
+            settings,
+            ("views.wgsl", VIEWS_SHADER),
+        )?;
+        let faces: Vec<[[f32; 4]; 3]> = corners.iter().map(|c| c.map(|p| v4(p, 1.0))).collect();
+        let face_bytes: &[u8] = bytemuck::cast_slice(&faces);
+        gpu.check_storage("the mesh's faces", face_bytes.len() as u64)?;
+        let gpu_views: Vec<GpuView> = (0..views.len())
+            .map(|i| gpu_view(&views[i], depth.get(i), takes_part(i)))
+            .collect();
+        let layers = views.len() as u32;
+        let image_size = |i: usize| views[i].image.as_ref().map_or((1, 1), |m| m.size());
+        let depth_size = |i: usize| depth.get(i).map_or((1, 1), |d| d.gd().size());
+        let largest = |size: &dyn Fn(usize) -> (u32, u32)| {
+            (0..views.len()).fold((1, 1), |(w, h), i| {
+                let (a, b) = size(i);
+                (w.max(a), h.max(b))
+            })
+        };
+        let (iw, ih) = largest(&image_size);
+        let (dw, dh) = largest(&depth_size);
+        // Half floats for the photographs' 8-bit texels; depth in full.
+        let images = texture_array(
+            gpu,
+            "views' images",
+            (iw, ih, layers),
+            (wgpu::TextureFormat::Rgba16Float, 8),
+            |layer| {
+                let mut texels = vec![half::f16::ZERO; iw as usize * ih as usize * 4];
+                if let Some(img) = &views[layer as usize].image {
+                    for (y, row) in img.pixels().chunks(img.width() as usize).enumerate() {
+                        let at = y * iw as usize * 4;
+                        for (x, c) in row.iter().enumerate() {
+                            for (k, v) in c.to_array().into_iter().enumerate() {
+                                texels[at + x * 4 + k] = half::f16::from_f32(v);
+                            }
+                        }
+                    }
+                }
+                bytemuck::cast_slice(&texels).to_vec()
+            },
+        )?;
+        let depths = texture_array(
+            gpu,
+            "views' depth maps",
+            (dw, dh, layers),
+            (wgpu::TextureFormat::R32Float, 4),
+            |layer| {
+                let mut texels = vec![0.0f32; dw as usize * dh as usize];
+                if let Some(d) = depth.get(layer as usize) {
+                    let gd = d.gd();
+                    for (y, row) in gd.pixels().chunks(gd.width() as usize).enumerate() {
+                        texels[y * dw as usize..][..row.len()].copy_from_slice(row);
+                    }
+                }
+                bytemuck::cast_slice(&texels).to_vec()
+            },
+        )?;
+        Ok(GpuViews {
+            gpu,
+            blender,
+            faces: gpu.storage_with("faces", face_bytes),
+            views: gpu.storage_with("views", bytemuck::cast_slice(&gpu_views)),
+            images,
+            depths,
+        })
+    }
+
+    /// The mesh through `camera`, blended from the views: the image and its pixels' counts, as
+    /// [`trompe::views::blend::render`] makes them.
+    pub fn render(&self, camera: &Pinhole) -> Result<Blend, GpuError> {
+        let entries = [
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: self.faces.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(&self.images),
+            },
+            wgpu::BindGroupEntry {
+                binding: 8,
+                resource: self.views.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 9,
+                resource: wgpu::BindingResource::TextureView(&self.depths),
+            },
+        ];
+        self.blender.render(self.gpu, camera, &entries)
+    }
+}
+
+/// View `view` as the shader reads it: its depth map's pinhole (when it has one), its pose and
+/// intrinsics, its sizes; `takes_part` false leaves it out of every blend.
+fn gpu_view(view: &CalibratedView, depth: Option<&DepthMap>, takes_part: bool) -> GpuView {
+    let (depth_rows, depth_eye, depth_size) = match depth {
+        Some(d) => {
+            let camera = d.camera();
+            let inverse = camera.mcmillan_inverse();
+            let row = |i: usize| v4(inverse.row(i).as_vec3(), 0.0);
+            let (w, h) = camera.resolution();
+            (
+                [row(0), row(1), row(2)],
+                v4(camera.position().as_vec3(), f32::from(u8::from(takes_part))),
+                [w as f32, h as f32],
+            )
+        }
+        None => ([[0.0; 4]; 3], [0.0; 4], [0.0; 2]),
+    };
+    let rotation = glam::DMat3::from_quat(view.pose.rotation);
+    let row = |i: usize| v4(rotation.row(i).as_vec3(), 0.0);
+    let ((fx, fy), (cx, cy)) = (view.intrinsics.focal(), view.intrinsics.principal_point());
+    let (iw, ih) = view.image.as_ref().map_or((0, 0), |m| m.size());
+    GpuView {
+        depth_rows,
+        depth_eye,
+        rotation: [row(0), row(1), row(2)],
+        centre: v4(view.pose.centre().as_vec3(), 0.0),
+        intrinsics: [fx as f32, fy as f32, cx as f32, cy as f32],
+        size: [iw as f32, ih as f32, depth_size[0], depth_size[1]],
+    }
+}
+
+/// Renders `mesh` through `camera` textured from `views` (their images loaded) with their depth
+/// maps `depth`, on `gpu`, or with the library's [`trompe::views::blend::render_through`] on
+/// the CPU without one. On the GPU, a camera with a lens is refused.
+pub fn render_through(
+    gpu: Option<&Gpu>,
+    (camera, lens): (&Pinhole, Option<&Intrinsics>),
+    mesh: &Mesh,
+    (views, depth): (&[CalibratedView], &[DepthMap]),
+    settings: &BlendSettings,
+    exclude: Option<usize>,
+) -> Result<Blend, DeviceError> {
+    let Some(gpu) = gpu else {
+        let cpu = trompe::views::blend::render_through(
+            camera, lens, mesh, views, depth, settings, exclude,
+        )
+        .map_err(GpuError::from)?;
+        return Ok(cpu);
+    };
+    crate::master::refuse_lens(lens)?;
+    let uploaded = GpuViews::new(gpu, mesh, (views, depth), settings, exclude)?;
+    Ok(uploaded.render(camera)?)
+}
