@@ -1,6 +1,7 @@
 //! `trompe views capture | score | render`: calibrated views on the command line — parse, call
 //! `trompe::views`, print its report.
 
+use super::render::DeviceArg;
 use super::{bar, check_plan, load_mesh, load_mesh_read_by, parse_strength};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
@@ -164,6 +165,12 @@ pub struct ViewsRenderArgs {
     camera: CameraArg,
     #[command(flatten)]
     blend: BlendArgs,
+    /// Where the blend runs: the CPU; the GPU (the views' images and depth maps in texture
+    /// arrays, blended in a compute shader; a hardware adapter, else a software one such as
+    /// Mesa's lavapipe); or auto (a hardware GPU where present, else the CPU). The GPU blends
+    /// ULR, VDTM and plain best face from views without lens distortion, without --prefilter.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    device: DeviceArg,
     /// Output image (.png or .exr); pixels no view sees are transparent.
     #[arg(short, long)]
     output: PathBuf,
@@ -363,13 +370,16 @@ impl ViewsRenderArgs {
         check_plan(&plan)?;
         set.load_images()?;
         let (camera, lens) = self.camera.camera(self.scene.as_deref(), &mesh)?;
+        let gpu = trompe_gpu::open(self.device.into()).context("opening the GPU")?;
+        if let Some(gpu) = &gpu {
+            crate::output::note(format_args!("rendering on {}", gpu.name()));
+        }
         let depth = trompe::views::visibility::DepthMap::of_all(&set.views, &mesh)?;
-        let b = trompe::views::blend::render_through(
-            &camera,
-            lens.as_ref(),
+        let b = trompe_gpu::views::render_through(
+            gpu.as_ref(),
+            (&camera, lens.as_ref()),
             &mesh,
-            &set.views,
-            &depth,
+            (&set.views, &depth),
             &settings,
             None,
         )?;

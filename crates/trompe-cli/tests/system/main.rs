@@ -49,8 +49,8 @@ fn main() {
             ADAPTER,
         ),
         trial(
-            "gpu::master_render_on_the_gpu_is_the_cpu_frame",
-            master_render_on_the_gpu_is_the_cpu_frame,
+            "gpu::projective_renders_on_the_gpu_are_the_cpu_frames",
+            projective_renders_on_the_gpu_are_the_cpu_frames,
             adapter,
             ADAPTER,
         ),
@@ -300,9 +300,10 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
 }
 
 /// `master render --device gpu` (every master a layer of one texture array, blended by a
-/// compute shader) writes the frame `--device cpu` writes; what it does not blend is refused by
-/// name, pointing at the CPU.
-pub fn master_render_on_the_gpu_is_the_cpu_frame() {
+/// compute shader) and `views render --device gpu` (the views' images and depth maps in texture
+/// arrays) write the frames `--device cpu` writes; what they do not blend is refused by name,
+/// pointing at the CPU.
+pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
     let dir = scratch("master-gpu");
     let duck = common::asset("gltf/Duck.glb");
     let duck = duck.to_str().unwrap();
@@ -325,11 +326,11 @@ pub fn master_render_on_the_gpu_is_the_cpu_frame() {
         let o = trompe(args);
         assert!(o.status.success(), "{}", stderr(&o));
     }
-    let render = |device: &str, weights: &str, out: &Path| {
+    let render = |(command, input): (&str, &Path), device: &str, weights: &str, out: &Path| {
         trompe(&[
-            "master",
+            command,
             "render",
-            &s(&enc),
+            &s(input),
             "--mesh",
             duck,
             "--scene",
@@ -343,29 +344,28 @@ pub fn master_render_on_the_gpu_is_the_cpu_frame() {
         ])
     };
     let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
-    for weights in ["ulr", "best-face"] {
-        let (cpu, gpu) = (dir.join("cpu.png"), dir.join("gpu.png"));
-        for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
-            let o = render(device, weights, out);
-            assert!(o.status.success(), "{}", stderr(&o));
-            let printed = String::from_utf8_lossy(&o.stdout);
-            assert!(printed.contains("pixels show the mesh"), "{printed}");
+    for source in [("master", enc.as_path()), ("views", cap.as_path())] {
+        for weights in ["ulr", "best-face"] {
+            let (cpu, gpu) = (dir.join("cpu.png"), dir.join("gpu.png"));
+            for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
+                let o = render(source, device, weights, out);
+                assert!(o.status.success(), "{}", stderr(&o));
+                let printed = String::from_utf8_lossy(&o.stdout);
+                assert!(printed.contains("pixels show the mesh"), "{printed}");
+            }
+            let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
+            let name = source.0;
+            println!(
+                "{name} render, {weights}: GPU against CPU FLIP {:.5}",
+                score.flip
+            );
+            assert!(score.flip < 0.01, "{name}, {weights}: FLIP {}", score.flip);
         }
-        let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
-        println!(
-            "master render, {weights}: GPU against CPU FLIP {:.5}",
-            score.flip
-        );
-        assert!(
-            score.flip < 0.01,
-            "{weights}: GPU against CPU FLIP {}",
-            score.flip
+        fails_cleanly(
+            &render(source, "gpu", "view-map", &dir.join("map.png")),
+            "the view-map weighting is not on the GPU yet (render it with --device cpu)",
         );
     }
-    fails_cleanly(
-        &render("gpu", "view-map", &dir.join("map.png")),
-        "the view-map weighting is not on the GPU yet (render it with --device cpu)",
-    );
 }
 
 /// `info --gpu` lists the adapters and the one it opens, with its limits.
