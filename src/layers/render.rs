@@ -142,6 +142,19 @@ pub fn render_through(
     crate::texturing::render_through(camera, lens, &set.mesh_refs(), &source, settings)
 }
 
+/// The plain best-face table of the layer set's meshes (per object, per triangle: the view whose
+/// layer sees its centroid, with the largest projected area, if any), as [`render`] builds it
+/// for [`crate::texturing::Weighting::BestFace`]: for a renderer that blends elsewhere (the
+/// GPU's).
+pub fn best_faces(set: &LayerSet, tolerance: f64) -> Result<Vec<Vec<Option<usize>>>, FrameError> {
+    let source = Layered {
+        set,
+        centres: set.views.iter().map(|v| v.pose.centre()).collect(),
+        tolerance,
+    };
+    crate::texturing::best_face_table(&set.mesh_refs(), &source)
+}
+
 /// Plain projective texturing: each view's whole photograph projected onto everything in its
 /// frustum, hidden or not (`views` with their images loaded, undistorted pinholes).
 pub fn render_projective(

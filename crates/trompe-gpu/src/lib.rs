@@ -17,6 +17,7 @@
 //! - [`texturing`]: projective texturing's blend — the views that see a pixel's surface
 //!   weighted and blended in a compute shader, shared by the sources below.
 //! - [`views`]: calibrated views — photographs with depth maps — blended on a new camera.
+//! - [`layers`]: image layers, each object through its layer's sub-frustum (paper 4 §5).
 //! - [`master`]: paper 5's rendering path — every master texture a layer of one texture
 //!   array, the mesh's one atlas point a pixel, the views blended in a compute shader.
 //! - [`octahedral`]: engines' octahedral impostors drawn by their shader, instanced, and shaded.
@@ -35,6 +36,7 @@
 pub mod build;
 pub mod bvh;
 pub mod device;
+pub mod layers;
 pub mod master;
 pub mod methods;
 pub mod octahedral;

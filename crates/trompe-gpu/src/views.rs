@@ -28,6 +28,14 @@ use trompe::views::visibility::DepthMap;
 /// The calibrated views' source WGSL (the blend follows it).
 pub const VIEWS_SHADER: &str = include_str!("../shaders/views.wgsl");
 
+/// The views' whole source: the rules of images with depth, then the views'.
+pub fn views_source() -> String {
+    format!("{DEPTH_IMAGES_SHADER}\n{VIEWS_SHADER}")
+}
+
+/// The rules of images with depth (`shaders/depth_images.wgsl`), shared with the layers.
+pub const DEPTH_IMAGES_SHADER: &str = include_str!("../shaders/depth_images.wgsl");
+
 /// A view as the shader reads it (`shaders/views.wgsl`'s `View`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -77,6 +85,16 @@ impl<'a> GpuViews<'a> {
             );
             return Err(unsupported(&what).into());
         }
+        if let Some(i) = (0..views.len())
+            .filter(|&i| takes_part(i))
+            .find(|&i| views[i].image.as_ref().map(|m| m.size()) != Some(depth[i].gd().size()))
+        {
+            let what = format!(
+                "view {}'s depth map is not the size of its image",
+                views[i].name
+            );
+            return Err(GpuError::Unsupported { what }.into());
+        }
         let best = match settings.weighting {
             Weighting::BestFace => {
                 let source = ViewSource::new(views, depth, settings.tolerance, exclude);
@@ -96,7 +114,7 @@ impl<'a> GpuViews<'a> {
             &centres,
             best.as_deref(),
             settings,
-            ("views.wgsl", VIEWS_SHADER),
+            ("views.wgsl", &views_source()),
         )?;
         let faces: Vec<[[f32; 4]; 3]> = corners.iter().map(|c| c.map(|p| v4(p, 1.0))).collect();
         let face_bytes: &[u8] = bytemuck::cast_slice(&faces);

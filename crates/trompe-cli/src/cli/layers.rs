@@ -1,9 +1,10 @@
 //! `trompe layers build | render`: layered view-dependent projective textures (paper 4) on the
 //! command line — parse, call `trompe::layers`, print its report.
 
+use super::render::DeviceArg;
 use super::views::{BlendArgs, CameraArg, RigArg, parse_size};
 use super::{bar, check_plan};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::{Subcommand, ValueEnum};
 use std::path::PathBuf;
 use trompe::files::{FolderKind, OutputPlan};
@@ -190,6 +191,13 @@ pub struct RenderArgs {
     camera: CameraArg,
     #[command(flatten)]
     blend: BlendArgs,
+    /// Where the layered blend runs: the CPU; the GPU (every image layer and its depth in
+    /// texture arrays, each object through its layer's sub-frustum, blended in a compute
+    /// shader; a hardware adapter, else a software one such as Mesa's lavapipe); or auto (a
+    /// hardware GPU where present, else the CPU). The GPU blends ULR, VDTM and plain best face,
+    /// without a lens or --prefilter; `--method projective` runs on the CPU.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
+    device: DeviceArg,
     /// Output image (.png or .exr); pixels nothing textures are transparent.
     #[arg(short, long)]
     output: PathBuf,
@@ -215,10 +223,22 @@ impl RenderArgs {
         }
         let camera = scene.camera.at(scene.render.time)?;
         let lens = scene.camera.lens.as_ref();
+        let gpu = match (self.method, self.device) {
+            (TextureArg::Layered, device) => {
+                trompe_gpu::open(device.into()).context("opening the GPU")?
+            }
+            (TextureArg::Projective, DeviceArg::Gpu) => {
+                bail!("--method projective has no GPU path yet: run it with --device cpu")
+            }
+            (TextureArg::Projective, _) => None,
+        };
+        if let Some(gpu) = &gpu {
+            crate::output::note(format_args!("rendering on {}", gpu.name()));
+        }
         let start = std::time::Instant::now();
         let blend = match self.method {
             TextureArg::Layered => {
-                layers::render::render_through((&camera, lens), &set, &settings)?
+                trompe_gpu::layers::render_through(gpu.as_ref(), (&camera, lens), &set, &settings)?
             }
             TextureArg::Projective => {
                 let views = layers::file::photographs(&self.layers, &set)?;

@@ -301,8 +301,9 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
 
 /// `master render --device gpu` (every master a layer of one texture array, blended by a
 /// compute shader) and `views render --device gpu` (the views' images and depth maps in texture
-/// arrays) write the frames `--device cpu` writes; what they do not blend is refused by name,
-/// pointing at the CPU.
+/// arrays) and `layers render --device gpu` (every image layer in texture arrays) write the
+/// frames `--device cpu` writes; what they do not blend is refused by name, pointing at the
+/// CPU.
 pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
     let dir = scratch("master-gpu");
     let duck = common::asset("gltf/Duck.glb");
@@ -366,6 +367,47 @@ pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
             "the view-map weighting is not on the GPU yet (render it with --device cpu)",
         );
     }
+    // Image layers of a street of objects that hide each other, from its own camera.
+    let layers = dir.join("layers");
+    let built = trompe(&[
+        "layers",
+        "build",
+        "scenes/street.toml",
+        "--views",
+        "3",
+        "--size",
+        "160x120",
+        "-o",
+        &s(&layers),
+    ]);
+    assert!(built.status.success(), "{}", stderr(&built));
+    let layered = |device: &str, method: &str, out: &Path| {
+        trompe(&[
+            "layers",
+            "render",
+            "scenes/street.toml",
+            "--layers",
+            &s(&layers),
+            "--method",
+            method,
+            "--device",
+            device,
+            "-o",
+            &s(out),
+        ])
+    };
+    let (cpu, gpu) = (dir.join("layers-cpu.png"), dir.join("layers-gpu.png"));
+    for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
+        let o = layered(device, "layered", out);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
+    println!("layers render: GPU against CPU FLIP {:.5}", score.flip);
+    assert!(score.flip < 0.01, "layers: FLIP {}", score.flip);
+    fails_cleanly(
+        &layered("gpu", "projective", &gpu),
+        "--method projective has no GPU path yet: run it with --device cpu",
+    );
 }
 
 /// `info --gpu` lists the adapters and the one it opens, with its limits.

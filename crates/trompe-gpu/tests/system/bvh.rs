@@ -18,7 +18,10 @@ pub fn the_shaders_parse_and_validate() {
         trompe_gpu::master::MASTER_SHADER,
     ));
     validate(&trompe_gpu::texturing::shader_source(
-        trompe_gpu::views::VIEWS_SHADER,
+        &trompe_gpu::views::views_source(),
+    ));
+    validate(&trompe_gpu::texturing::shader_source(
+        &trompe_gpu::layers::layers_source(),
     ));
     // The tracer's stack holds one pending ray more than the recursion limit it accepts.
     let pending = format!(

@@ -5,6 +5,7 @@
 
 mod build;
 mod bvh;
+mod layers;
 mod master;
 mod octahedral;
 mod trace;
@@ -146,6 +147,10 @@ fn main() {
         on_gpu(
             "views::the_same_views_render_the_same_bits_on_repeated_runs",
             views::the_same_views_render_the_same_bits_on_repeated_runs,
+        ),
+        on_gpu(
+            "layers::image_layers_render_on_the_gpu_as_on_the_cpu",
+            layers::image_layers_render_on_the_gpu_as_on_the_cpu,
         ),
     ];
     let mut trials = vec![
