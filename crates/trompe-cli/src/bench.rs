@@ -26,6 +26,7 @@ pub mod methods;
 pub mod octahedral;
 pub mod reflect;
 pub mod relief;
+pub mod texturing;
 pub mod walks;
 
 use glam::Vec3;

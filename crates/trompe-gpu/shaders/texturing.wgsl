@@ -39,8 +39,9 @@ struct Params {
 @group(0) @binding(6) var<storage, read_write> colour_out: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> state_out: array<u32>;
 
-// The most views a pixel blends, and one more for ULR's threshold.
-const K_MAX: u32 = 64u;
+// The most views a pixel blends (`K_MAX`, the render's k, at most 64) is set before this file
+// (crates/trompe-gpu/src/texturing.rs `shader_source`), so a pixel's arrays are no longer than
+// the blend needs.
 // A penalty this small is a view looking along the eye's ray exactly.
 const EXACT: f32 = 1e-9;
 
@@ -64,8 +65,8 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
     let ulr = params.mode.x == 0u;
     // The k + 1 smallest penalties, sorted, ties to the lower index (a later view enters only
     // before a strictly larger penalty).
-    var pen: array<f32, 65>;
-    var idx: array<u32, 65>;
+    var pen: array<f32, K_MAX + 1u>;
+    var idx: array<u32, K_MAX + 1u>;
     var n = 0u;
     var worst = 0.0;
     for (var i = 0u; i < params.size.z; i++) {
@@ -104,7 +105,7 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
     if (n > k) {
         threshold = pen[k];
     }
-    var raw: array<f32, 64>;
+    var raw: array<f32, K_MAX>;
     var total = 0.0;
     for (var j = 0u; j < taken; j++) {
         var w = 1.0 / pen[j];

@@ -30,9 +30,11 @@ pub const BLEND_SHADER: &str = include_str!("../shaders/texturing.wgsl");
 /// The most views a pixel blends on the GPU (`shaders/texturing.wgsl`'s `K_MAX`).
 pub const MAX_K: usize = 64;
 
-/// A source's WGSL followed by the blend: the whole shader.
-pub fn shader_source(source: &str) -> String {
-    format!("{source}\n{BLEND_SHADER}")
+/// A source's WGSL followed by the blend of at most `k` views a pixel (1 to [`MAX_K`]): the
+/// whole shader.
+pub fn shader_source(source: &str, k: usize) -> String {
+    let k = k.clamp(1, MAX_K);
+    format!("const K_MAX: u32 = {k}u;\n{source}\n{BLEND_SHADER}")
 }
 
 /// The shader's `Params`.
@@ -79,8 +81,8 @@ pub(crate) struct Blender {
     best: wgpu::Buffer,
     views: u32,
     settings: BlendSettings,
-    /// The module's label and the whole shader.
-    shader: (&'static str, String),
+    /// The module's label (with its k) and the whole shader.
+    shader: (String, String),
 }
 
 impl Blender {
@@ -113,7 +115,10 @@ impl Blender {
             best: gpu.storage_with("best faces", bytemuck::cast_slice(&best)),
             views: centres.len() as u32,
             settings: *settings,
-            shader: (label, shader_source(source)),
+            shader: (
+                format!("{label}, k = {}", settings.k),
+                shader_source(source, settings.k),
+            ),
         })
     }
 
@@ -160,7 +165,7 @@ impl Blender {
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let colour = gpu.buffer("colour", pixels * 16, storage);
         let state = gpu.buffer("pixel state", pixels * 4, storage);
-        let pipeline = gpu.compute_pipeline(self.shader.0, &self.shader.1, "blend_views");
+        let pipeline = gpu.compute_pipeline(&self.shader.0, &self.shader.1, "blend_views");
         let visibility_view = visibility.create_view(&Default::default());
         let buffers = [
             (2, &self.centres),
@@ -170,7 +175,7 @@ impl Blender {
             (7, &state),
         ];
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.shader.0),
+            label: Some(&self.shader.0),
             layout: &pipeline.get_bind_group_layout(0),
             entries: &buffers
                 .into_iter()

@@ -4,9 +4,9 @@
 //! against output resolution (paper 1's Table 1 axis) and the impostor frame against impostor
 //! resolution (Table 2's); the impostor secondary pass — paper 1's walk of reflected rays —
 //! beside the exact BVH pass on the same rays, on each device, as the reflected mesh grows 16×
-//! to over a million triangles; paper 5's master textures rendered from one texture array
-//! beside the CPU's render of the same masters; and the exact ray query alone on incoherent
-//! rays.
+//! to over a million triangles; the projective-texturing methods (calibrated views, image
+//! layers, master textures) blended by the GPU beside the CPU's render of the same frame; and
+//! the exact ray query alone on incoherent rays.
 //!
 //! Without a hardware GPU the adapter is Mesa's lavapipe, which runs the shaders on the CPU's
 //! cores: its figures say what the shaders cost there, not what a GPU does.
@@ -168,6 +168,7 @@ pub fn gpu(
 
     out.extend(secondary_pass(&gpu, inputs, quick)?);
     out.extend(impostor_builds(&gpu, inputs, quick)?);
+    out.extend(super::texturing::gpu_renders(&gpu, inputs, quick)?);
     out.extend(super::master::gpu_renders(&gpu, inputs, quick)?);
 
     // The exact ray query alone: the same rays through the CPU BVH and its GPU walk, the bunny

@@ -14,15 +14,12 @@ pub fn the_shaders_parse_and_validate() {
     validate(&trompe_gpu::walk::shader_source());
     validate(&trompe_gpu::trace::impostor_shader_source());
     validate(trompe_gpu::present::SHADER);
-    validate(&trompe_gpu::texturing::shader_source(
-        trompe_gpu::master::MASTER_SHADER,
-    ));
-    validate(&trompe_gpu::texturing::shader_source(
-        &trompe_gpu::views::views_source(),
-    ));
-    validate(&trompe_gpu::texturing::shader_source(
-        &trompe_gpu::layers::layers_source(),
-    ));
+    for k in [1, 4, trompe_gpu::texturing::MAX_K] {
+        use trompe_gpu::texturing::shader_source;
+        validate(&shader_source(trompe_gpu::master::MASTER_SHADER, k));
+        validate(&shader_source(&trompe_gpu::views::views_source(), k));
+        validate(&shader_source(&trompe_gpu::layers::layers_source(), k));
+    }
     // The tracer's stack holds one pending ray more than the recursion limit it accepts.
     let pending = format!(
         "const PENDING: u32 = {}u;",
