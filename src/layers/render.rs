@@ -142,17 +142,19 @@ pub fn render_through(
     crate::texturing::render_through(camera, lens, &set.mesh_refs(), &source, settings)
 }
 
-/// The plain best-face table of the layer set's meshes (per object, per triangle: the view whose
-/// layer sees its centroid, with the largest projected area, if any), as [`render`] builds it
-/// for [`crate::texturing::Weighting::BestFace`]: for a renderer that blends elsewhere (the
-/// GPU's).
-pub fn best_faces(set: &LayerSet, tolerance: f64) -> Result<Vec<Vec<Option<usize>>>, FrameError> {
+/// The table `settings.weighting` weighs the layer set's meshes by (per object, per face: the
+/// best face's view, or the view maps; none for the per-point weightings), as [`render`] builds
+/// it: for a renderer that blends elsewhere (the GPU's).
+pub fn face_table(
+    set: &LayerSet,
+    settings: &BlendSettings,
+) -> Result<crate::texturing::FaceTable, FrameError> {
     let source = Layered {
         set,
         centres: set.views.iter().map(|v| v.pose.centre()).collect(),
-        tolerance,
+        tolerance: settings.tolerance,
     };
-    crate::texturing::best_face_table(&set.mesh_refs(), &source)
+    crate::texturing::face_table(settings.weighting, &set.mesh_refs(), &source)
 }
 
 /// Plain projective texturing: each view's whole photograph projected onto everything in its

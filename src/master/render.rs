@@ -126,19 +126,17 @@ pub fn render_through(
     )?)
 }
 
-/// The plain best-face table of `mesh` from `masters` (per triangle: the view whose master sees
-/// its centroid, with the largest projected area, if any), as [`render`] builds it for
-/// [`crate::texturing::Weighting::BestFace`]: for a renderer that blends elsewhere (the GPU's).
-pub fn best_faces(
+/// The table `weighting` weighs `mesh` by from `masters` (per face: the best face's view, or the
+/// view maps; none for the per-point weightings), as [`render`] builds it: for a renderer that
+/// blends elsewhere (the GPU's).
+pub fn face_table(
     mesh: &crate::geom::Mesh,
-    layout: &Layout,
-    cameras: &[Pinhole],
-    masters: &[Image<Rgba>],
-) -> Result<Vec<Option<usize>>, MasterError> {
+    (layout, cameras, masters): (&Layout, &[Pinhole], &[Image<Rgba>]),
+    weighting: crate::texturing::Weighting,
+) -> Result<crate::texturing::FaceTable, MasterError> {
     check(mesh, layout, cameras, masters)?;
     let source = Masters::new(layout, cameras, masters);
-    let mut tables = crate::texturing::best_face_table(&[mesh], &source)?;
-    Ok(tables.pop().unwrap_or_default())
+    Ok(crate::texturing::face_table(weighting, &[mesh], &source)?)
 }
 
 /// Refuses a layout of another mesh, or cameras and masters that do not pair.

@@ -95,7 +95,7 @@ const LOOK_POINTS: [[f32; 3]; 4] = [
 impl BestFaces {
     /// The best-face bake of `meshes` from `source`'s views; `seamless` or as it is (the
     /// largest view that sees a face's centroid, no gains, no offsets).
-    pub(super) fn build(
+    fn build(
         meshes: &[&Mesh],
         source: &impl Source,
         seamless: bool,

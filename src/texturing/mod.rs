@@ -293,15 +293,33 @@ pub fn render_through(
     })
 }
 
-/// The plain best-face table of `meshes` seen by `source` (per object, per triangle: the view
-/// that sees its centroid with the largest projected area, if any), as [`render`] builds it
-/// for [`Weighting::BestFace`] without [`BlendSettings::seamless`]: for a renderer that blends
-/// elsewhere (the GPU's) from the same table.
-pub fn best_face_table(
+/// A weighting's per-face table, for a renderer that blends elsewhere (the GPU's) from the
+/// same tables as [`render`] builds.
+#[derive(Clone, Debug)]
+pub enum FaceTable {
+    /// [`Weighting::Ulr`] and [`Weighting::Vdtm`] weigh each point: no table.
+    PerPoint,
+    /// Per object, per triangle: the view that sees its centroid with the largest projected
+    /// area, if any (the plain bake, not [`BlendSettings::seamless`]).
+    BestFace(Vec<Vec<Option<usize>>>),
+    /// Per object: its triangles' view maps.
+    ViewMap(Vec<view_map::ViewMap>),
+}
+
+/// The table `weighting` weighs `meshes` seen by `source` by, as [`render`] builds it (a
+/// best-face table without [`BlendSettings::seamless`]).
+pub fn face_table(
+    weighting: Weighting,
     meshes: &[&Mesh],
     source: &impl Source,
-) -> Result<Vec<Vec<Option<usize>>>, FrameError> {
-    Ok(faces::BestFaces::build(meshes, source, false)?.table)
+) -> Result<FaceTable, FrameError> {
+    Ok(
+        match FaceWeights::build(weighting, false, meshes, source)? {
+            FaceWeights::PerPoint => FaceTable::PerPoint,
+            FaceWeights::BestFace(best) => FaceTable::BestFace(best.table),
+            FaceWeights::ViewMap(maps) => FaceTable::ViewMap(maps),
+        },
+    )
 }
 
 /// The footprint of render pixel `(x, y)` on the plane of triangle `corners` through `p`: the

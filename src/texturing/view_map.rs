@@ -84,6 +84,22 @@ impl ViewMap {
         }
     }
 
+    /// The unit sample directions (the same for every mesh: a twice-subdivided icosahedron).
+    pub fn directions(&self) -> &[DVec3] {
+        &self.directions
+    }
+
+    /// The spherical triangles of the samples, as indices into [`ViewMap::directions`].
+    pub fn sphere_faces(&self) -> &[[u32; 3]] {
+        &self.faces
+    }
+
+    /// Per triangle of the mesh, per sample direction: the view the sample holds, or
+    /// `u16::MAX` where no view sees the triangle (row-major, [`ViewMap::directions`] a row).
+    pub fn table(&self) -> &[u16] {
+        &self.table
+    }
+
     /// The views and weights triangle `t` takes seen along unit direction `omega` (from the
     /// surface toward the eye): at most three, weights summing to one; empty when no view sees
     /// the triangle.

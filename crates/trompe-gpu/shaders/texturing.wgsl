@@ -23,7 +23,8 @@ struct Params {
     eye: vec4<f32>,
     // Width, height, views, k.
     size: vec4<u32>,
-    // x: the weighting (0 ULR, 1 VDTM, 2 best face); y: 1 where holes take `fill`.
+    // x: the weighting (0 ULR, 1 VDTM, 2 best face, 3 view map); y: 1 where holes take `fill`;
+    // z: the view map's sample directions a face.
     mode: vec4<u32>,
     // The colour of a hole under a fill policy.
     fill: vec4<f32>,
@@ -38,6 +39,12 @@ struct Params {
 @group(0) @binding(5) var<storage, read> best: array<u32>;
 @group(0) @binding(6) var<storage, read_write> colour_out: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> state_out: array<u32>;
+// The view map (src/texturing/view_map.rs): its unit sample directions, its spherical
+// triangles (xyz: three directions), and per face and direction the view the sample holds, two
+// 16-bit entries a word (0xffff: none). One entry each when the weighting is another.
+@group(0) @binding(11) var<storage, read> map_directions: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read> map_triangles: array<vec4<u32>>;
+@group(0) @binding(13) var<storage, read> map_views: array<u32>;
 
 // The most views a pixel blends (`K_MAX`, the render's k, at most 64) is set before this file
 // (crates/trompe-gpu/src/texturing.rs `shader_source`), so a pixel's arrays are no longer than
@@ -144,6 +151,89 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
     return vec4<f32>(sum, 1.0);
 }
 
+// The view sample `sample` of face `face`'s view map holds (0xffff: none).
+fn map_view(face: u32, sample: u32) -> u32 {
+    let i = face * params.mode.z + sample;
+    return (map_views[i / 2u] >> (16u * (i % 2u))) & 0xffffu;
+}
+
+// The view-map blend of the views that take part in one pass: the (at most three) views of
+// the spherical triangle the direction to the eye falls in, by its barycentric coordinates,
+// those that take part renormalized; w = 0 when none gives a colour.
+fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
+    let omega = normalize(params.eye.xyz - position(at));
+    var views: array<u32, 3>;
+    var weights: array<f32, 3>;
+    var n = 0u;
+    for (var f = 0u; f < arrayLength(&map_triangles); f++) {
+        let tri = map_triangles[f];
+        let a = map_directions[tri.x].xyz;
+        let b = map_directions[tri.y].xyz;
+        let c = map_directions[tri.z].xyz;
+        let w = vec3<f32>(dot(omega, cross(b, c)), dot(omega, cross(c, a)), dot(omega, cross(a, b)));
+        let total = w.x + w.y + w.z;
+        let inside = all(w >= vec3<f32>(0.0)) || all(w <= vec3<f32>(0.0));
+        if (!inside || total == 0.0 || dot(omega, a + b + c) <= 0.0) {
+            continue;
+        }
+        let corners = vec3<u32>(tri.x, tri.y, tri.z);
+        for (var k = 0u; k < 3u; k++) {
+            let v = map_view(face, corners[k]);
+            let weight = w[k] / total;
+            if (v == 0xffffu || weight <= 0.0) {
+                continue;
+            }
+            var merged = false;
+            for (var e = 0u; e < n; e++) {
+                if (views[e] == v) {
+                    weights[e] += weight;
+                    merged = true;
+                }
+            }
+            if (!merged) {
+                views[n] = v;
+                weights[n] = weight;
+                n += 1u;
+            }
+        }
+        break;
+    }
+    // The views that take part, renormalized; a view with no colour dropped as in the blend.
+    var kept_weight = 0.0;
+    for (var e = 0u; e < n; e++) {
+        if (!takes_part(views[e], at, clearly)) {
+            weights[e] = 0.0;
+        }
+        kept_weight += weights[e];
+    }
+    if (kept_weight <= 0.0) {
+        return vec4<f32>(0.0);
+    }
+    var sum = vec3<f32>(0.0);
+    var kept = 0.0;
+    var dropped = false;
+    for (var e = 0u; e < n; e++) {
+        if (weights[e] <= 0.0) {
+            continue;
+        }
+        let w = weights[e] / kept_weight;
+        let c = lookup(views[e], at);
+        if (c.w > 0.0) {
+            sum += c.xyz * w;
+            kept += w;
+        } else {
+            dropped = true;
+        }
+    }
+    if (kept <= 0.0) {
+        return vec4<f32>(0.0);
+    }
+    if (dropped) {
+        return vec4<f32>(sum / kept, 1.0);
+    }
+    return vec4<f32>(sum, 1.0);
+}
+
 @compute @workgroup_size(8, 8)
 fn blend_views(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = params.size.x;
@@ -167,6 +257,8 @@ fn blend_views(@builtin(global_invocation_id) id: vec3<u32>) {
             if (entry > 0u && takes_part(entry - 1u, at, clearly)) {
                 c = lookup(entry - 1u, at);
             }
+        } else if (params.mode.x == 3u) {
+            c = blend_view_map(at, v.x - 1u, clearly);
         } else {
             c = blend_per_point(at, clearly);
         }

@@ -18,7 +18,7 @@ use crate::texturing::{Blender, check_settings, texture_array, unsupported};
 use bytemuck::{Pod, Zeroable};
 use trompe::camera::{Intrinsics, Pinhole};
 use trompe::layers::LayerSet;
-use trompe::texturing::{Blend, BlendSettings, Weighting};
+use trompe::texturing::{Blend, BlendSettings};
 
 /// The layers' source WGSL (the rules of images with depth go before it, the blend after).
 pub const LAYERS_SHADER: &str = include_str!("../shaders/layers.wgsl");
@@ -62,20 +62,13 @@ impl<'a> GpuLayers<'a> {
             .iter()
             .flat_map(|m| (0..m.triangle_count()).map(|t| m.corners(t)))
             .collect();
-        let best = match settings.weighting {
-            Weighting::BestFace => Some(
-                trompe::layers::render::best_faces(set, settings.tolerance)
-                    .map_err(GpuError::from)?
-                    .concat(),
-            ),
-            _ => None,
-        };
+        let table = trompe::layers::render::face_table(set, settings).map_err(GpuError::from)?;
         let centres: Vec<glam::DVec3> = set.views.iter().map(|v| v.pose.centre()).collect();
         let blender = Blender::new(
             gpu,
             &corners,
             &centres,
-            best.as_deref(),
+            &table,
             settings,
             ("layers.wgsl", &layers_source()),
         )?;

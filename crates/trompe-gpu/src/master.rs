@@ -4,8 +4,8 @@
 //! (`shaders/master.wgsl`) that asks every view at the pixel's one texture coordinate.
 //!
 //! The CPU twin is [`trompe::master::render`]: the same sight by the master's alpha and the
-//! same bilinear lookup over texels with a colour; the best-face table is the library's own
-//! ([`trompe::master::render::best_faces`]), built once on the CPU.
+//! same bilinear lookup over texels with a colour; the best-face table and the view maps are the
+//! library's own ([`trompe::master::render::face_table`]), built once on the CPU.
 //!
 //! Invariant: the masters are uploaded once and every frame reuses them; a frame's pixels
 //! depend only on the masters, the mesh, the camera and the settings.
@@ -20,7 +20,7 @@ use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba};
 use trompe::geom::Mesh;
 use trompe::master::layout::Layout;
-use trompe::texturing::{Blend, BlendSettings, Weighting};
+use trompe::texturing::{Blend, BlendSettings};
 
 /// The master-texture source's WGSL (the blend follows it).
 pub const MASTER_SHADER: &str = include_str!("../shaders/master.wgsl");
@@ -64,12 +64,11 @@ impl<'a> GpuMasters<'a> {
             );
             return Err(GpuError::Unsupported { what }.into());
         }
-        let best = match settings.weighting {
-            Weighting::BestFace => Some(trompe::master::render::best_faces(
-                mesh, layout, cameras, masters,
-            )?),
-            _ => None,
-        };
+        let table = trompe::master::render::face_table(
+            mesh,
+            (layout, cameras, masters),
+            settings.weighting,
+        )?;
         let corners: Vec<[glam::Vec3; 3]> = (0..mesh.triangle_count())
             .map(|t| mesh.corners(t))
             .collect();
@@ -78,7 +77,7 @@ impl<'a> GpuMasters<'a> {
             gpu,
             &corners,
             &centres,
-            best.as_deref(),
+            &table,
             settings,
             ("master.wgsl", MASTER_SHADER),
         )?;

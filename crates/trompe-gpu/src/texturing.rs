@@ -6,8 +6,7 @@
 //! [`trompe::texturing::render`] step by step: the same clear-then-edge passes, the same ULR and
 //! VDTM weights with ties to the lower view, the best-face table the library builds.
 //!
-//! Not on the GPU (refused before any work, with what to do instead): the view map, a seamless
-//! best-face bake, prefiltering to the pixel's footprint, more than [`MAX_K`] views a pixel.
+//! Not on the GPU (refused before any work, with what to do instead): a seamless best-face bake, prefiltering to the pixel's footprint, more than [`MAX_K`] views a pixel.
 //! Holes filled from the nearest seen surface are filled by the library after read-back.
 //!
 //! Invariant: a frame's pixels depend only on the source, the mesh, the camera and the
@@ -22,7 +21,7 @@ use glam::{DVec3, Vec3, Vec4};
 use trompe::camera::{Pinhole, Projection};
 use trompe::frame::Image;
 use trompe::texturing::fill::{Pixel, from_nearest};
-use trompe::texturing::{Blend, BlendSettings, Holes, Weighting};
+use trompe::texturing::{Blend, BlendSettings, FaceTable, Holes, Weighting};
 
 /// The blend's WGSL, which follows a source's.
 pub const BLEND_SHADER: &str = include_str!("../shaders/texturing.wgsl");
@@ -61,7 +60,6 @@ pub(crate) fn check_settings(settings: &BlendSettings) -> Result<(), GpuError> {
         Weighting::BestFace if settings.seamless => Err(unsupported(
             "a seamless best-face bake is not on the GPU yet",
         )),
-        Weighting::ViewMap => Err(unsupported("the view-map weighting is not on the GPU yet")),
         _ if settings.prefilter => Err(unsupported(
             "prefiltering to the pixel's footprint is not on the GPU yet",
         )),
@@ -74,11 +72,14 @@ pub(crate) fn check_settings(settings: &BlendSettings) -> Result<(), GpuError> {
 }
 
 /// What every source's frame shares, uploaded once: the mesh's triangles, the views' centres,
-/// the best-face table, the settings and the whole shader.
+/// the weighting's per-face table, the settings and the whole shader.
 pub(crate) struct Blender {
     raster: (wgpu::RenderPipeline, wgpu::Buffer, u32),
     centres: wgpu::Buffer,
     best: wgpu::Buffer,
+    /// The view map: its directions, its spherical triangles, its views; and its directions a
+    /// face.
+    view_map: ([wgpu::Buffer; 3], u32),
     views: u32,
     settings: BlendSettings,
     /// The module's label (with its k) and the whole shader.
@@ -86,33 +87,35 @@ pub(crate) struct Blender {
 }
 
 impl Blender {
-    /// The mesh's triangles `corners` (in the order its faces are numbered), the views'
-    /// `centres`, per face the best-face table's view (under [`Weighting::BestFace`]), and the
-    /// source's WGSL named `label`. The settings must have passed [`check_settings`].
+    /// The mesh's triangles `corners` (its objects' one after another, as its faces are
+    /// numbered), the views' `centres`, the weighting's per-face `table` (the library's, over
+    /// the same objects), and the source's WGSL named `label`. The settings must have passed
+    /// [`check_settings`].
     pub(crate) fn new(
         gpu: &Gpu,
         corners: &[[Vec3; 3]],
         centres: &[DVec3],
-        best: Option<&[Option<usize>]>,
+        table: &FaceTable,
         settings: &BlendSettings,
         (label, source): (&'static str, &str),
     ) -> Result<Self, GpuError> {
         check_settings(settings)?;
         let raster = raster_pipeline_of(gpu, corners)?;
         let centres: Vec<[f32; 4]> = centres.iter().map(|c| v4(c.as_vec3(), 0.0)).collect();
-        let best: Vec<u32> = match best {
-            Some(table) => table
+        let best: Vec<u32> = match table {
+            FaceTable::BestFace(tables) => tables
                 .iter()
+                .flatten()
                 .map(|v| v.map_or(0, |i| i as u32 + 1))
                 .collect(),
-            None => vec![0],
+            _ => vec![0],
         };
-        let bytes = |v: &[u32]| v.len() as u64 * 4;
-        gpu.check_storage("the best-face table", bytes(&best))?;
+        gpu.check_storage("the best-face table", best.len() as u64 * 4)?;
         Ok(Blender {
             raster,
             centres: gpu.storage_with("view centres", bytemuck::cast_slice(&centres)),
             best: gpu.storage_with("best faces", bytemuck::cast_slice(&best)),
+            view_map: upload_view_maps(gpu, table)?,
             views: centres.len() as u32,
             settings: *settings,
             shader: (
@@ -149,12 +152,18 @@ impl Blender {
         let (mode, beta) = match s.weighting {
             Weighting::Ulr { beta } => (0, beta as f32),
             Weighting::Vdtm => (1, 0.0),
-            _ => (2, 0.0),
+            Weighting::BestFace => (2, 0.0),
+            Weighting::ViewMap => (3, 0.0),
         };
         let params = GpuParams {
             eye: v4(camera.position().as_vec3(), beta),
             size: [w, h, self.views, s.k as u32],
-            mode: [mode, u32::from(matches!(s.holes, Holes::Fill(_))), 0, 0],
+            mode: [
+                mode,
+                u32::from(matches!(s.holes, Holes::Fill(_))),
+                self.view_map.1,
+                0,
+            ],
             fill: match s.holes {
                 Holes::Fill(c) => c.to_array(),
                 _ => [0.0; 4],
@@ -167,12 +176,16 @@ impl Blender {
         let state = gpu.buffer("pixel state", pixels * 4, storage);
         let pipeline = gpu.compute_pipeline(&self.shader.0, &self.shader.1, "blend_views");
         let visibility_view = visibility.create_view(&Default::default());
+        let [directions, triangles, views] = &self.view_map.0;
         let buffers = [
             (2, &self.centres),
             (4, &uniform),
             (5, &self.best),
             (6, &colour),
             (7, &state),
+            (11, directions),
+            (12, triangles),
+            (13, views),
         ];
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.shader.0),
@@ -225,6 +238,51 @@ impl Blender {
             seams: None,
         })
     }
+}
+
+/// The view maps of `table` (one an object, their faces one after another) as the shader reads
+/// them: the sample directions, the spherical triangles, the views two to a word; and the
+/// directions a face. One entry each when the table is not a view map.
+fn upload_view_maps(gpu: &Gpu, table: &FaceTable) -> Result<([wgpu::Buffer; 3], u32), GpuError> {
+    let (directions, triangles, views, per_face) = match table {
+        FaceTable::ViewMap(maps) if !maps.is_empty() => {
+            let first = &maps[0];
+            let directions: Vec<[f32; 4]> = first
+                .directions()
+                .iter()
+                .map(|d| v4(d.as_vec3(), 0.0))
+                .collect();
+            let triangles: Vec<[u32; 4]> = first
+                .sphere_faces()
+                .iter()
+                .map(|t| [t[0], t[1], t[2], 0])
+                .collect();
+            let entries: Vec<u16> = maps
+                .iter()
+                .flat_map(|m| m.table().iter().copied())
+                .collect();
+            let views: Vec<u32> = entries
+                .chunks(2)
+                .map(|pair| u32::from(pair[0]) | (u32::from(*pair.get(1).unwrap_or(&0)) << 16))
+                .collect();
+            (
+                directions,
+                triangles,
+                views,
+                first.directions().len() as u32,
+            )
+        }
+        _ => (vec![[0.0; 4]], vec![[0; 4]], vec![0], 0),
+    };
+    gpu.check_storage("the view maps", views.len() as u64 * 4)?;
+    Ok((
+        [
+            gpu.storage_with("view-map directions", bytemuck::cast_slice(&directions)),
+            gpu.storage_with("view-map triangles", bytemuck::cast_slice(&triangles)),
+            gpu.storage_with("view-map views", bytemuck::cast_slice(&views)),
+        ],
+        per_face,
+    ))
 }
 
 /// `layers` images of `w × h`, each given by `texels(layer)` (row-major, `w × h` of them), as

@@ -5,8 +5,8 @@
 //! point's surface.
 //!
 //! The CPU twin is [`trompe::views::blend`] with [`trompe::views::visibility`]: the same
-//! seen / edge / hidden rule and the same depth-aware bilinear lookup; the best-face table is
-//! the library's own, built once on the CPU from the same views.
+//! seen / edge / hidden rule and the same depth-aware bilinear lookup; the best-face table and
+//! the view maps are the library's own, built once on the CPU from the same views.
 //!
 //! Not on the GPU (refused before any work): a view with lens distortion (its image is looked up
 //! through the lens on the CPU), and what [`crate::texturing`] refuses.
@@ -20,7 +20,7 @@ use crate::texturing::{Blender, check_settings, texture_array, unsupported};
 use bytemuck::{Pod, Zeroable};
 use trompe::camera::{Intrinsics, Pinhole, Projection};
 use trompe::geom::Mesh;
-use trompe::texturing::{Blend, BlendSettings, Weighting};
+use trompe::texturing::{Blend, BlendSettings};
 use trompe::views::CalibratedView;
 use trompe::views::blend::ViewSource;
 use trompe::views::visibility::DepthMap;
@@ -95,15 +95,9 @@ impl<'a> GpuViews<'a> {
             );
             return Err(GpuError::Unsupported { what }.into());
         }
-        let best = match settings.weighting {
-            Weighting::BestFace => {
-                let source = ViewSource::new(views, depth, settings.tolerance, exclude);
-                let mut tables =
-                    trompe::texturing::best_face_table(&[mesh], &source).map_err(GpuError::from)?;
-                tables.pop()
-            }
-            _ => None,
-        };
+        let source = ViewSource::new(views, depth, settings.tolerance, exclude);
+        let table = trompe::texturing::face_table(settings.weighting, &[mesh], &source)
+            .map_err(GpuError::from)?;
         let corners: Vec<[glam::Vec3; 3]> = (0..mesh.triangle_count())
             .map(|t| mesh.corners(t))
             .collect();
@@ -112,7 +106,7 @@ impl<'a> GpuViews<'a> {
             gpu,
             &corners,
             &centres,
-            best.as_deref(),
+            &table,
             settings,
             ("views.wgsl", &views_source()),
         )?;

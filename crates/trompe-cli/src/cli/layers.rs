@@ -194,8 +194,9 @@ pub struct RenderArgs {
     /// Where the layered blend runs: the CPU; the GPU (every image layer and its depth in
     /// texture arrays, each object through its layer's sub-frustum, blended in a compute
     /// shader; a hardware adapter, else a software one such as Mesa's lavapipe); or auto (a
-    /// hardware GPU where present, else the CPU). The GPU blends ULR, VDTM and plain best face,
-    /// without a lens or --prefilter; `--method projective` runs on the CPU.
+    /// hardware GPU where present, else the CPU). The GPU blends every weighting but a
+    /// seamless best face, without a lens or --prefilter; `--method projective` runs on the
+    /// CPU.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Output image (.png or .exr); pixels nothing textures are transparent.

@@ -51,6 +51,7 @@ pub fn master_textures_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
     for weighting in [
         Weighting::Ulr { beta: 0.1 },
         Weighting::Vdtm,
+        Weighting::ViewMap,
         Weighting::BestFace,
     ] {
         let settings = BlendSettings {
@@ -135,13 +136,6 @@ pub fn what_the_gpu_does_not_blend_is_refused_before_any_work(gpu: &Gpu) {
         );
     };
     let base = BlendSettings::default();
-    refused(
-        BlendSettings {
-            weighting: Weighting::ViewMap,
-            ..base
-        },
-        "view-map",
-    );
     refused(
         BlendSettings {
             weighting: Weighting::BestFace,

@@ -40,6 +40,7 @@ pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
     for weighting in [
         Weighting::Ulr { beta: 0.1 },
         Weighting::Vdtm,
+        Weighting::ViewMap,
         Weighting::BestFace,
     ] {
         let settings = BlendSettings {
