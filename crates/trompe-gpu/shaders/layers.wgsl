@@ -36,18 +36,9 @@ struct Layer {
 // src/views/blend.rs's SAME_SURFACE.
 const SAME_SURFACE: f32 = 0.05;
 
-struct At {
-    x: vec3<f32>,
-    face: u32,
-}
-
-fn surface_at(face: u32, b1: f32, b2: f32) -> At {
+fn corners(face: u32) -> array<vec3<f32>, 3> {
     let f = faces[face];
-    return At(f.c0.xyz * (1.0 - b1 - b2) + f.c1.xyz * b1 + f.c2.xyz * b2, face);
-}
-
-fn position(at: At) -> vec3<f32> {
-    return at.x;
+    return array<vec3<f32>, 3>(f.c0.xyz, f.c1.xyz, f.c2.xyz);
 }
 
 // Where `at` lands in the layer of `view` that holds it: xy the texel point, z the eye depth,
@@ -100,6 +91,11 @@ fn sight(view: u32, at: At) -> u32 {
         return 1u;
     }
     return 0u;
+}
+
+fn texel(view: u32, at: At) -> vec3<f32> {
+    let t = layer_texel(view, at);
+    return vec3<f32>(t.xy, select(0.0, 1.0, t.w > 0.0));
 }
 
 fn lookup(view: u32, at: At) -> vec4<f32> {

@@ -22,27 +22,24 @@ struct Face {
 @group(0) @binding(1) var<storage, read> faces: array<Face>;
 @group(0) @binding(3) var masters: texture_2d_array<f32>;
 
-struct At {
-    // The world point.
-    x: vec3<f32>,
-    // Its atlas point.
-    p: vec2<f32>,
-}
-
-fn surface_at(face: u32, b1: f32, b2: f32) -> At {
+fn corners(face: u32) -> array<vec3<f32>, 3> {
     let f = faces[face];
-    let b0 = 1.0 - b1 - b2;
-    let x = f.c0.xyz * b0 + f.c1.xyz * b1 + f.c2.xyz * b2;
-    return At(x, f.atlas0.xy + f.atlas0.zw * b1 + f.atlas1.xy * b2);
+    return array<vec3<f32>, 3>(f.c0.xyz, f.c1.xyz, f.c2.xyz);
 }
 
-fn position(at: At) -> vec3<f32> {
-    return at.x;
+// The atlas point of barycentrics `b` on face `face` (one texture coordinate for every view).
+fn atlas_point(face: u32, b: vec3<f32>) -> vec2<f32> {
+    let f = faces[face];
+    return f.atlas0.xy + f.atlas0.zw * b.y + f.atlas1.xy * b.z;
+}
+
+fn texel(view: u32, at: At) -> vec3<f32> {
+    return vec3<f32>(atlas_point(at.face, at.bary), 1.0);
 }
 
 fn sight(view: u32, at: At) -> u32 {
     let dims = vec2<f32>(textureDimensions(masters));
-    let t = floor(at.p);
+    let t = floor(atlas_point(at.face, at.bary));
     if (!(t.x >= 0.0 && t.y >= 0.0 && t.x < dims.x && t.y < dims.y)) {
         return 0u;
     }
@@ -56,9 +53,12 @@ fn sight(view: u32, at: At) -> u32 {
     return 0u;
 }
 
+// A point across the footprint may leave the triangle, and its texel the face's part of the
+// atlas: it is looked up at the nearest point of the triangle (its barycentrics clamped).
 fn lookup(view: u32, at: At) -> vec4<f32> {
     let dims = vec2<i32>(textureDimensions(masters));
-    let f = at.p - vec2<f32>(0.5);
+    let b = max(at.bary, vec3<f32>(0.0));
+    let f = atlas_point(at.face, b / (b.x + b.y + b.z)) - vec2<f32>(0.5);
     let base = floor(f);
     let t = f - base;
     let origin = vec2<i32>(base);

@@ -2,11 +2,13 @@
 // master textures): the mesh's visibility buffer (raster.wgsl, triangles in mesh order) read one
 // invocation a pixel; the views that see the pixel's surface weighted and their colours blended.
 //
-// A source's file goes before this one and gives what the blend asks of it:
-// - `struct At`: a surface point as the source answers it;
-// - `fn surface_at(face: u32, b1: f32, b2: f32) -> At` and `fn position(at: At) -> vec3<f32>`;
+// A source's file goes before this one and gives what the blend asks of it, of a surface point
+// `At` (below):
+// - `fn corners(face: u32) -> array<vec3<f32>, 3>`: the face's triangle;
 // - `fn sight(view: u32, at: At) -> u32`: 2 seen clearly, 1 at an edge, 0 not at all;
-// - `fn lookup(view: u32, at: At) -> vec4<f32>`: the view's colour (w = 1), or w = 0 for none.
+// - `fn lookup(view: u32, at: At) -> vec4<f32>`: the view's colour (w = 1), or w = 0 for none;
+// - `fn texel(view: u32, at: At) -> vec3<f32>`: where the point lands in the image the view
+//   samples (xy; z = 0 where it lands nowhere), for the prefilter.
 //
 // The blend follows the CPU step by step:
 // - the views that see the point clearly are weighted (ULR, VDTM, or the best-face table); only
@@ -21,10 +23,15 @@
 struct Params {
     // xyz: the eye; w: ULR's β.
     eye: vec4<f32>,
+    // The camera's McMillan vectors: pixel (u, v) looks along a·u + b·v + c.
+    cam_a: vec4<f32>,
+    cam_b: vec4<f32>,
+    cam_c: vec4<f32>,
     // Width, height, views, k.
     size: vec4<u32>,
     // x: the weighting (0 ULR, 1 VDTM, 2 best face, 3 view map); y: 1 where holes take `fill`;
-    // z: the view map's sample directions a face.
+    // z: the view map's sample directions a face; w: 1 where each view's image is prefiltered
+    // to the pixel's footprint.
     mode: vec4<u32>,
     // The colour of a hole under a fill policy.
     fill: vec4<f32>,
@@ -51,6 +58,127 @@ struct Params {
 // the blend needs.
 // A penalty this small is a view looking along the eye's ray exactly.
 const EXACT: f32 = 1e-9;
+
+// A point of a rendered surface (src/texturing/mod.rs `SurfacePoint`): its face, barycentrics
+// and world position, and the pixel's footprint on the face's plane — the world and barycentric
+// steps to the next pixel right and down (zero where not prefiltered, or seen edge-on).
+struct At {
+    face: u32,
+    bary: vec3<f32>,
+    x: vec3<f32>,
+    dx: vec3<f32>,
+    dy: vec3<f32>,
+    dbx: vec3<f32>,
+    dby: vec3<f32>,
+}
+
+fn position(at: At) -> vec3<f32> {
+    return at.x;
+}
+
+// The point `(s, t)` pixel steps from `at` along its footprint (it may leave the triangle).
+fn offset(at: At, s: f32, t: f32) -> At {
+    let zero = vec3<f32>(0.0);
+    let bary = at.bary + at.dbx * s + at.dby * t;
+    return At(at.face, bary, at.x + at.dx * s + at.dy * t, zero, zero, zero, zero);
+}
+
+// The change of barycentric coordinates on triangle `c` along the in-plane step `d`.
+fn bary_step(c: array<vec3<f32>, 3>, d: vec3<f32>) -> vec3<f32> {
+    let e1 = c[1] - c[0];
+    let e2 = c[2] - c[0];
+    let d00 = dot(e1, e1);
+    let d01 = dot(e1, e2);
+    let d11 = dot(e2, e2);
+    let d20 = dot(d, e1);
+    let d21 = dot(d, e2);
+    let det = d00 * d11 - d01 * d01;
+    if (det == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let b = (d11 * d20 - d01 * d21) / det;
+    let g = (d00 * d21 - d01 * d20) / det;
+    return vec3<f32>(-(b + g), b, g);
+}
+
+// The surface point of pixel `pixel` on face `face` at barycentrics (1 − b1 − b2, b1, b2), with
+// the pixel's footprint when prefiltering: the steps to where the rays of the next pixel's
+// centre right and down meet the face's plane (zero where the plane is seen edge-on).
+fn surface_at(pixel: vec2<u32>, face: u32, b1: f32, b2: f32) -> At {
+    let c = corners(face);
+    let bary = vec3<f32>(1.0 - b1 - b2, b1, b2);
+    let x = c[0] * bary.x + c[1] * bary.y + c[2] * bary.z;
+    var at = At(face, bary, x, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    if (params.mode.w == 0u) {
+        return at;
+    }
+    let eye = params.eye.xyz;
+    let n = cross(c[1] - c[0], c[2] - c[0]);
+    let along = dot(n, x - eye);
+    let centre = vec2<f32>(pixel) + vec2<f32>(0.5);
+    var steps: array<vec3<f32>, 2>;
+    for (var k = 0u; k < 2u; k++) {
+        let uv = centre + select(vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), k == 0u);
+        let ray = params.cam_a.xyz * uv.x + params.cam_b.xyz * uv.y + params.cam_c.xyz;
+        let t = along / dot(n, ray);
+        let q = eye + ray * t;
+        // Finite and in front: `t == t` and `abs(t) < 3e38` refuse NaN and infinity.
+        if (!(t > 0.0 && abs(t) < 3e38 && all(abs(q) < vec3<f32>(3e38)))) {
+            return at;
+        }
+        steps[k] = q - x;
+    }
+    at.dx = steps[0];
+    at.dy = steps[1];
+    at.dbx = bary_step(c, steps[0]);
+    at.dby = bary_step(c, steps[1]);
+    return at;
+}
+
+// Most lookups along each side of a pixel's footprint (src/texturing/mod.rs MAX_FOOTPRINT_TAPS).
+const MAX_FOOTPRINT_TAPS: u32 = 8u;
+
+// View `view`'s colour at `at`: prefiltered to the pixel's footprint where it spans two or more
+// of the image's texels (the mean of n × n lookups across it, n the footprint's longer side in
+// texels, at most MAX_FOOTPRINT_TAPS; `at`'s own lookup where none gives a colour), one lookup
+// otherwise (src/texturing/mod.rs `prefiltered`).
+fn colour(view: u32, at: At) -> vec4<f32> {
+    if (params.mode.w == 0u) {
+        return lookup(view, at);
+    }
+    let p = texel(view, at);
+    if (p.z == 0.0) {
+        return lookup(view, at);
+    }
+    var texels = 0.0;
+    for (var k = 0u; k < 2u; k++) {
+        let q = texel(view, offset(at, select(0.0, 1.0, k == 0u), select(1.0, 0.0, k == 0u)));
+        if (q.z != 0.0) {
+            texels = max(texels, length(q.xy - p.xy));
+        }
+    }
+    if (!(texels >= 2.0 && texels < 3e38)) {
+        return lookup(view, at);
+    }
+    let n = min(u32(floor(texels)), MAX_FOOTPRINT_TAPS);
+    var sum = vec4<f32>(0.0);
+    var count = 0u;
+    for (var j = 0u; j < n; j++) {
+        for (var i = 0u; i < n; i++) {
+            let s = (f32(i) + 0.5) / f32(n) - 0.5;
+            let t = (f32(j) + 0.5) / f32(n) - 0.5;
+            let c = lookup(view, offset(at, s, t));
+            if (c.w > 0.0) {
+                sum += c;
+                count += 1u;
+            }
+        }
+    }
+    if (count == 0u) {
+        return lookup(view, at);
+    }
+    return vec4<f32>((sum / f32(count)).xyz, 1.0);
+}
 
 // Whether view `view` takes part in the pass that blends clear views (`clearly`) or edge views.
 fn takes_part(view: u32, at: At, clearly: bool) -> bool {
@@ -105,7 +233,7 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     if (pen[0] <= EXACT) {
-        return lookup(idx[0], at);
+        return colour(idx[0], at);
     }
     let taken = min(n, k);
     var threshold = worst * (1.0 + 1e-3);
@@ -123,7 +251,7 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
         total += w;
     }
     if (!(total > 0.0)) {
-        return lookup(idx[0], at);
+        return colour(idx[0], at);
     }
     // The weighted colours; a view with none is dropped and the others renormalized.
     var sum = vec3<f32>(0.0);
@@ -134,7 +262,7 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
         if (w <= 0.0) {
             continue;
         }
-        let c = lookup(idx[j], at);
+        let c = colour(idx[j], at);
         if (c.w > 0.0) {
             sum += c.xyz * w;
             kept += w;
@@ -217,7 +345,7 @@ fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
             continue;
         }
         let w = weights[e] / kept_weight;
-        let c = lookup(views[e], at);
+        let c = colour(views[e], at);
         if (c.w > 0.0) {
             sum += c.xyz * w;
             kept += w;
@@ -247,7 +375,7 @@ fn blend_views(@builtin(global_invocation_id) id: vec3<u32>) {
         state_out[i] = 0u;
         return;
     }
-    let at = surface_at(v.x - 1u, bitcast<f32>(v.y), bitcast<f32>(v.z));
+    let at = surface_at(id.xy, v.x - 1u, bitcast<f32>(v.y), bitcast<f32>(v.z));
     var c = vec4<f32>(0.0);
     for (var round = 0u; round < 2u; round++) {
         let clearly = round == 0u;
@@ -255,7 +383,7 @@ fn blend_views(@builtin(global_invocation_id) id: vec3<u32>) {
             // The table's view alone, where it takes part in this pass.
             let entry = best[v.x - 1u];
             if (entry > 0u && takes_part(entry - 1u, at, clearly)) {
-                c = lookup(entry - 1u, at);
+                c = colour(entry - 1u, at);
             }
         } else if (params.mode.x == 3u) {
             c = blend_view_map(at, v.x - 1u, clearly);

@@ -40,17 +40,26 @@ struct View {
 // same surface (src/views/blend.rs's SAME_SURFACE).
 const SAME_SURFACE: f32 = 0.05;
 
-struct At {
-    x: vec3<f32>,
-}
-
-fn surface_at(face: u32, b1: f32, b2: f32) -> At {
+fn corners(face: u32) -> array<vec3<f32>, 3> {
     let f = faces[face];
-    return At(f.c0.xyz * (1.0 - b1 - b2) + f.c1.xyz * b1 + f.c2.xyz * b2);
+    return array<vec3<f32>, 3>(f.c0.xyz, f.c1.xyz, f.c2.xyz);
 }
 
-fn position(at: At) -> vec3<f32> {
-    return at.x;
+// Where `at` lands in view `view`'s image (through its intrinsics, no lens): xy the pixel, z its
+// depth along the camera's z (0: behind it).
+fn project(view: u32, at: At) -> vec3<f32> {
+    let v = views[view];
+    let r = at.x - v.centre.xyz;
+    let p = vec3<f32>(dot(v.rot0.xyz, r), dot(v.rot1.xyz, r), dot(v.rot2.xyz, r));
+    if (p.z <= 1e-9) {
+        return vec3<f32>(0.0);
+    }
+    return vec3<f32>(v.intrinsics.xy * (p.xy / p.z) + v.intrinsics.zw, p.z);
+}
+
+fn texel(view: u32, at: At) -> vec3<f32> {
+    let p = project(view, at);
+    return vec3<f32>(p.xy, select(0.0, 1.0, p.z > 0.0));
 }
 
 fn depth_image(view: u32) -> DepthImage {
@@ -71,13 +80,11 @@ fn sight(view: u32, at: At) -> u32 {
 }
 
 fn lookup(view: u32, at: At) -> vec4<f32> {
-    let v = views[view];
-    let r = at.x - v.centre.xyz;
-    let p = vec3<f32>(dot(v.rot0.xyz, r), dot(v.rot1.xyz, r), dot(v.rot2.xyz, r));
-    if (p.z <= 1e-9) {
+    let p = project(view, at);
+    if (p.z <= 0.0) {
         return vec4<f32>(0.0);
     }
-    let px = v.intrinsics.xy * (p.xy / p.z) + v.intrinsics.zw;
+    let px = p.xy;
     let d = depth_image(view);
     let on = bilinear_on_surface(d, px, p.z, SAME_SURFACE);
     if (on.w > 0.0) {

@@ -1,13 +1,16 @@
 //! Projective texturing's blend on the GPU, shared by the sources that texture a mesh from
-//! views ([`crate::views`], [`crate::master`]): the mesh drawn by the GPU rasterizer into a
-//! visibility buffer ([`crate::raster`]), then one compute invocation a pixel
+//! views ([`crate::views`], [`crate::layers`], [`crate::master`]): the mesh drawn by the GPU
+//! rasterizer into a visibility buffer ([`crate::raster`]), then one compute invocation a pixel
 //! (`shaders/texturing.wgsl`, after the source's own WGSL) that asks every view how it sees the
 //! pixel's surface, weights those that see it and blends their colours — the library's
 //! [`trompe::texturing::render`] step by step: the same clear-then-edge passes, the same ULR and
-//! VDTM weights with ties to the lower view, the best-face table the library builds.
+//! VDTM weights with ties to the lower view, the view maps and best-face table the library
+//! builds, the same prefilter to the pixel's footprint (found on the face's plane, n × n
+//! lookups across it).
 //!
-//! Not on the GPU (refused before any work, with what to do instead): a seamless best-face bake, prefiltering to the pixel's footprint, more than [`MAX_K`] views a pixel.
-//! Holes filled from the nearest seen surface are filled by the library after read-back.
+//! Not on the GPU (refused before any work, with what to do instead): a seamless best-face bake
+//! and more than [`MAX_K`] views a pixel. Holes filled from the nearest seen surface are filled
+//! by the library after read-back.
 //!
 //! Invariant: a frame's pixels depend only on the source, the mesh, the camera and the
 //! settings.
@@ -41,6 +44,7 @@ pub fn shader_source(source: &str, k: usize) -> String {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct GpuParams {
     eye: [f32; 4],
+    camera: [[f32; 4]; 3],
     size: [u32; 4],
     mode: [u32; 4],
     fill: [f32; 4],
@@ -59,9 +63,6 @@ pub(crate) fn check_settings(settings: &BlendSettings) -> Result<(), GpuError> {
     match settings.weighting {
         Weighting::BestFace if settings.seamless => Err(unsupported(
             "a seamless best-face bake is not on the GPU yet",
-        )),
-        _ if settings.prefilter => Err(unsupported(
-            "prefiltering to the pixel's footprint is not on the GPU yet",
         )),
         _ if settings.k > MAX_K => Err(unsupported(&format!(
             "k = {} views a pixel: the GPU blends at most {MAX_K}",
@@ -157,12 +158,16 @@ impl Blender {
         };
         let params = GpuParams {
             eye: v4(camera.position().as_vec3(), beta),
+            camera: {
+                let (a, b, c) = camera.mcmillan();
+                [a, b, c].map(|v| v4(v.as_vec3(), 0.0))
+            },
             size: [w, h, self.views, s.k as u32],
             mode: [
                 mode,
                 u32::from(matches!(s.holes, Holes::Fill(_))),
                 self.view_map.1,
-                0,
+                u32::from(s.prefilter),
             ],
             fill: match s.holes {
                 Holes::Fill(c) => c.to_array(),

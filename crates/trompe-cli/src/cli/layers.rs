@@ -195,8 +195,7 @@ pub struct RenderArgs {
     /// texture arrays, each object through its layer's sub-frustum, blended in a compute
     /// shader; a hardware adapter, else a software one such as Mesa's lavapipe); or auto (a
     /// hardware GPU where present, else the CPU). The GPU blends every weighting but a
-    /// seamless best face, without a lens or --prefilter; `--method projective` runs on the
-    /// CPU.
+    /// seamless best face, without a lens; `--method projective` runs on the CPU.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Output image (.png or .exr); pixels nothing textures are transparent.

@@ -72,7 +72,7 @@ pub struct MasterRenderArgs {
     /// Where the blend runs: the CPU; the GPU (every master a layer of one texture array, the
     /// views blended in a compute shader; a hardware adapter, else a software one such as
     /// Mesa's lavapipe); or auto (a hardware GPU where present, else the CPU). The GPU blends
-    /// every weighting but a seamless best face, without a lens or --prefilter.
+    /// every weighting but a seamless best face, without a lens.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Output image (.png or .exr).

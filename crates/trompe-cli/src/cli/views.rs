@@ -168,8 +168,7 @@ pub struct ViewsRenderArgs {
     /// Where the blend runs: the CPU; the GPU (the views' images and depth maps in texture
     /// arrays, blended in a compute shader; a hardware adapter, else a software one such as
     /// Mesa's lavapipe); or auto (a hardware GPU where present, else the CPU). The GPU blends
-    /// every weighting but a seamless best face, from views without lens distortion, without
-    /// --prefilter.
+    /// every weighting but a seamless best face, from views without lens distortion.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Output image (.png or .exr); pixels no view sees are transparent.

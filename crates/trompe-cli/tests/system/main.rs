@@ -331,7 +331,7 @@ pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
         let (input, out) = (s(input), s(out));
         let mut args = vec![command, "render", &input, "--mesh", duck];
         args.extend(["--scene", "scenes/duck-mirror.toml", "--device", device]);
-        // "--weights W", or "--weights W --prefilter".
+        // "--weights W", or "--weights W --seamless".
         args.push("--weights");
         args.extend(weights.split(' '));
         args.extend(["-o", &out]);
@@ -339,7 +339,7 @@ pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
     };
     let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
     for source in [("master", enc.as_path()), ("views", cap.as_path())] {
-        for weights in ["ulr", "view-map", "best-face"] {
+        for weights in ["ulr", "ulr --prefilter", "view-map", "best-face"] {
             let (cpu, gpu) = (dir.join("cpu.png"), dir.join("gpu.png"));
             for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
                 let o = render(source, device, weights, out);
@@ -356,8 +356,8 @@ pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
             assert!(score.flip < 0.01, "{name}, {weights}: FLIP {}", score.flip);
         }
         fails_cleanly(
-            &render(source, "gpu", "ulr --prefilter", &dir.join("map.png")),
-            "prefiltering to the pixel's footprint is not on the GPU yet (render it with --device cpu)",
+            &render(source, "gpu", "best-face --seamless", &dir.join("map.png")),
+            "a seamless best-face bake is not on the GPU yet (render it with --device cpu)",
         );
     }
     // Image layers of a street of objects that hide each other, from its own camera.

@@ -14,6 +14,16 @@ use trompe::views::capture::{CaptureSettings, capture_of};
 use trompe_gpu::Gpu;
 use trompe_gpu::layers::GpuLayers;
 
+/// Every weighting the GPU blends, and the per-point ones again prefiltered to the pixel.
+const WEIGHTINGS: [(Weighting, bool); 6] = [
+    (Weighting::Ulr { beta: 0.1 }, false),
+    (Weighting::Vdtm, false),
+    (Weighting::ViewMap, false),
+    (Weighting::BestFace, false),
+    (Weighting::Ulr { beta: 0.1 }, true),
+    (Weighting::ViewMap, true),
+];
+
 /// A box behind the Duck beside a ball on a ground plane: objects that hide each other, so a
 /// view has several visibility layers.
 const SCENE: &str = r#"
@@ -71,21 +81,25 @@ pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
     let eye = (a + b) * 0.5 + DVec3::Y * 0.1;
     let target = Vec3::new(0.0, 0.15, 0.0);
     let between = Pinhole::look_at(eye.as_vec3(), target, Vec3::Y, 45.0, 320, 240).unwrap();
-    for weighting in [
-        Weighting::Ulr { beta: 0.1 },
-        Weighting::Vdtm,
-        Weighting::ViewMap,
-        Weighting::BestFace,
-    ] {
+    // The same, far smaller: a pixel spans several texels of the layers.
+    let small = Pinhole::look_at(eye.as_vec3(), target, Vec3::Y, 45.0, 48, 36).unwrap();
+    for (weighting, prefilter) in WEIGHTINGS {
         let settings = BlendSettings {
             weighting,
+            prefilter,
             holes: Holes::Fill(glam::Vec4::new(1.0, 0.0, 1.0, 1.0)),
             ..BlendSettings::default()
         };
+        let weighting = format!(
+            "{}{}",
+            weighting.name(),
+            if prefilter { ", prefiltered" } else { "" }
+        );
         let uploaded = GpuLayers::new(gpu, &set, &settings).unwrap();
         for (name, camera) in [
             ("view 2", views[2].pinhole()),
             ("between views 0 and 1", between.clone()),
+            ("between, 48 × 36", small.clone()),
         ] {
             let cpu = layers::render::render(&camera, &set, &settings).unwrap();
             let on_gpu = uploaded.render(&camera).unwrap();
@@ -101,14 +115,10 @@ pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
             println!(
                 "{} at {name}: mean FLIP {f:.5}, largest channel difference {worst:.5}; \
                  covered {} / {}, holes {} / {}",
-                weighting.name(),
-                on_gpu.covered,
-                cpu.covered,
-                on_gpu.holes,
-                cpu.holes
+                weighting, on_gpu.covered, cpu.covered, on_gpu.holes, cpu.holes
             );
             // The goal: mean FLIP ≤ 0.01 against the CPU twin.
-            assert!(f <= 0.01, "{} at {name}: FLIP {f}", weighting.name());
+            assert!(f <= 0.01, "{weighting} at {name}: FLIP {f}");
             let covered_gap = on_gpu.covered.abs_diff(cpu.covered);
             assert!(
                 covered_gap * 200 <= cpu.covered,

@@ -145,6 +145,10 @@ fn main() {
             views::calibrated_views_render_on_the_gpu_as_on_the_cpu,
         ),
         on_gpu(
+            "views::the_gpu_prefilters_as_the_cpu_where_a_pixel_spans_texels",
+            views::the_gpu_prefilters_as_the_cpu_where_a_pixel_spans_texels,
+        ),
+        on_gpu(
             "views::the_same_views_render_the_same_bits_on_repeated_runs",
             views::the_same_views_render_the_same_bits_on_repeated_runs,
         ),

@@ -15,6 +15,16 @@ use trompe::views::visibility::DepthMap;
 use trompe_gpu::Gpu;
 use trompe_gpu::views::GpuViews;
 
+/// Every weighting the GPU blends, and the per-point ones again prefiltered to the pixel.
+const WEIGHTINGS: [(Weighting, bool); 6] = [
+    (Weighting::Ulr { beta: 0.1 }, false),
+    (Weighting::Vdtm, false),
+    (Weighting::ViewMap, false),
+    (Weighting::BestFace, false),
+    (Weighting::Ulr { beta: 0.1 }, true),
+    (Weighting::ViewMap, true),
+];
+
 /// The Duck captured from a ring of 12 views at 160 × 120, with its depth maps, and a camera
 /// between views 0 and 1, a little higher, at 320 × 240.
 fn duck_views() -> (Mesh, ViewSet, Vec<DepthMap>, Pinhole) {
@@ -37,21 +47,33 @@ fn duck_views() -> (Mesh, ViewSet, Vec<DepthMap>, Pinhole) {
 pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
     let (mesh, set, depth, between) = duck_views();
     let views = set.views.as_slice();
-    for weighting in [
-        Weighting::Ulr { beta: 0.1 },
-        Weighting::Vdtm,
-        Weighting::ViewMap,
-        Weighting::BestFace,
-    ] {
+    // The camera between, far smaller: a pixel spans several texels of the views.
+    let small = Pinhole::look_at(
+        between.position().as_vec3(),
+        mesh.bounds().center(),
+        Vec3::Y,
+        40.0,
+        48,
+        36,
+    )
+    .unwrap();
+    for (weighting, prefilter) in WEIGHTINGS {
         let settings = BlendSettings {
             weighting,
+            prefilter,
             holes: Holes::Fill(glam::Vec4::new(1.0, 0.0, 1.0, 1.0)),
             ..BlendSettings::default()
         };
+        let weighting = format!(
+            "{}{}",
+            weighting.name(),
+            if prefilter { ", prefiltered" } else { "" }
+        );
         // View 3 left out and seen from its own camera (leave-one-out), then the new camera.
         for (name, camera, exclude) in [
             ("view 3 left out", views[3].pinhole(), Some(3)),
             ("between views 0 and 1", between.clone(), None),
+            ("between, 48 × 36", small.clone(), None),
         ] {
             let cpu =
                 trompe::views::blend::render(&camera, &mesh, views, &depth, &settings, exclude)
@@ -63,14 +85,10 @@ pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
             let f = flip(&cpu.image, &on_gpu.image, None).unwrap();
             println!(
                 "{} at {name}: mean FLIP {f:.5}; covered {} / {}, holes {} / {}",
-                weighting.name(),
-                on_gpu.covered,
-                cpu.covered,
-                on_gpu.holes,
-                cpu.holes
+                weighting, on_gpu.covered, cpu.covered, on_gpu.holes, cpu.holes
             );
             // The goal: mean FLIP ≤ 0.01 against the CPU twin.
-            assert!(f <= 0.01, "{} at {name}: FLIP {f}", weighting.name());
+            assert!(f <= 0.01, "{weighting} at {name}: FLIP {f}");
             let covered_gap = on_gpu.covered.abs_diff(cpu.covered);
             assert!(
                 covered_gap * 200 <= cpu.covered,
@@ -80,6 +98,53 @@ pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
             assert!(holes_gap * 200 <= cpu.covered, "holes {holes_gap} apart");
         }
     }
+}
+
+/// The prefilter is at work where a pixel spans several texels: the far smaller camera's
+/// prefiltered frame is not the plain one, and the GPU's is the CPU's prefiltered frame.
+pub fn the_gpu_prefilters_as_the_cpu_where_a_pixel_spans_texels(gpu: &Gpu) {
+    let (mesh, set, depth, between) = duck_views();
+    let small = Pinhole::look_at(
+        between.position().as_vec3(),
+        mesh.bounds().center(),
+        Vec3::Y,
+        40.0,
+        48,
+        36,
+    )
+    .unwrap();
+    let render = |prefilter: bool| {
+        let settings = BlendSettings {
+            prefilter,
+            ..BlendSettings::default()
+        };
+        let cpu = trompe::views::blend::render(&small, &mesh, &set.views, &depth, &settings, None)
+            .unwrap();
+        let on_gpu = GpuViews::new(gpu, &mesh, (&set.views, &depth), &settings, None)
+            .unwrap()
+            .render(&small)
+            .unwrap();
+        (cpu.image, on_gpu.image)
+    };
+    let ((plain_cpu, plain_gpu), (filtered_cpu, filtered_gpu)) = (render(false), render(true));
+    let mean_difference = |a: &trompe::frame::Image<glam::Vec4>,
+                           b: &trompe::frame::Image<glam::Vec4>| {
+        let sum: f32 = a
+            .pixels()
+            .iter()
+            .zip(b.pixels())
+            .map(|(p, q)| (*p - *q).abs().truncate().element_sum())
+            .sum();
+        sum / (3 * a.pixels().len()) as f32
+    };
+    let filtering = mean_difference(&plain_cpu, &filtered_cpu);
+    let devices = mean_difference(&filtered_cpu, &filtered_gpu);
+    println!(
+        "48 × 36: the prefilter moves the CPU frame by {filtering:.5} a channel; the devices' \
+         prefiltered frames differ by {devices:.6} (plain: {:.6})",
+        mean_difference(&plain_cpu, &plain_gpu)
+    );
+    assert!(filtering > 20.0 * devices, "{filtering} against {devices}");
 }
 
 pub fn the_same_views_render_the_same_bits_on_repeated_runs(gpu: &Gpu) {
