@@ -524,21 +524,7 @@ impl<'a> Renderer<'a> {
             State::Layered(kept) => {
                 let set = match kept.take() {
                     Some(set) => set,
-                    None => {
-                        let views = photograph(scene, &self.settings.capture, &mut timings)?;
-                        let (meshes, names) = crate::layers::scene_objects(scene)?;
-                        timings
-                            .time("build layers", || {
-                                crate::layers::build(
-                                    meshes,
-                                    names,
-                                    &views,
-                                    &Default::default(),
-                                    &(),
-                                )
-                            })
-                            .map_err(Box::new)?
-                    }
+                    None => scene_layers(scene, &self.settings, &mut timings)?,
                 };
                 let camera = match camera {
                     Some(c) => c,
@@ -650,9 +636,27 @@ fn photograph(
     Ok(set.views)
 }
 
+/// The `layered` method's layers of `scene` (paper 4): the scene photographed from the views
+/// `settings.capture` places, sorted into visibility layers and cut into image layers — what
+/// the method textures every frame by, on either device.
+pub fn scene_layers(
+    scene: &Scene,
+    settings: &MethodSettings,
+    timings: &mut Timings,
+) -> Result<crate::layers::LayerSet, MethodError> {
+    let views = photograph(scene, &settings.capture, timings)?;
+    let (meshes, names) = crate::layers::scene_objects(scene)?;
+    Ok(timings
+        .time("build layers", || {
+            crate::layers::build(meshes, names, &views, &Default::default(), &())
+        })
+        .map_err(Box::new)?)
+}
+
 /// A blended image over the scene's environment: where the blend is transparent (no object,
-/// or a hole no photograph fills), the panorama seen along the pixel's ray.
-fn over_environment(
+/// or a hole no photograph fills), the panorama seen along the pixel's ray — the frame of the
+/// texturing methods, on either device.
+pub fn over_environment(
     scene: &Scene,
     camera: &Pinhole,
     image: &crate::frame::Image<crate::frame::Rgba>,

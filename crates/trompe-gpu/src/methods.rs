@@ -9,6 +9,7 @@
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
 //! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), graph cameras' frustum by frustum; all kept across frames, placed and lit by the library's [`Sequence`] |
 //! | `octahedral` | the atlases the library bakes drawn by the engines' shader (`shaders/octahedral_impostor.wgsl`), one instanced draw an atlas, then shaded ([`crate::octahedral`]); kept while nothing moves |
+//! | `layered` | the layers the library photographs and builds (paper 4), uploaded once and blended by the GPU's texturing shader, each object through its layer's sub-frustum ([`crate::layers`]), over the panorama |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -48,6 +49,7 @@ pub fn has_gpu_path(kind: MethodKind) -> bool {
             | MethodKind::Impostor
             | MethodKind::PinholeImpostor
             | MethodKind::Octahedral
+            | MethodKind::Layered
     )
 }
 
@@ -124,6 +126,17 @@ pub enum DeviceRenderer<'a> {
     Gpu(Box<GpuMethod<'a>>),
     /// The octahedral method on the GPU.
     Octahedral(Box<GpuOctahedral<'a>>),
+    /// The layered method on the GPU.
+    Layered(Box<GpuLayered<'a>>),
+}
+
+/// The layered method on the GPU, over one scene: the library's layers, uploaded on the first
+/// frame and kept, as the CPU keeps its layers.
+pub struct GpuLayered<'a> {
+    gpu: &'a Gpu,
+    scene: &'a Scene,
+    settings: MethodSettings,
+    kept: Option<crate::layers::GpuLayers<'a>>,
 }
 
 /// The octahedral method on the GPU, over one scene.
@@ -168,6 +181,17 @@ impl<'a> DeviceRenderer<'a> {
                 scene, kind, settings,
             )?))),
             Some(_) if !has_gpu_path(kind) => Err(no_gpu_path(kind).into()),
+            Some(gpu) if kind == MethodKind::Layered => {
+                // The CPU renderer's checks, and the GPU blend's, before any work.
+                Renderer::new(scene, kind, settings.clone())?;
+                crate::texturing::check_settings(&settings.layers)?;
+                Ok(DeviceRenderer::Layered(Box::new(GpuLayered {
+                    gpu,
+                    scene,
+                    settings,
+                    kept: None,
+                })))
+            }
             Some(gpu) if kind == MethodKind::Octahedral => {
                 // The CPU renderer's checks of the settings, before any work.
                 Renderer::new(scene, kind, settings.clone())?;
@@ -234,6 +258,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Cpu(r) => r.kind(),
             DeviceRenderer::Gpu(m) => m.kind,
             DeviceRenderer::Octahedral(_) => MethodKind::Octahedral,
+            DeviceRenderer::Layered(_) => MethodKind::Layered,
         }
     }
 
@@ -243,6 +268,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Cpu(_) => "CPU",
             DeviceRenderer::Gpu(m) => m.gpu.name(),
             DeviceRenderer::Octahedral(m) => m.gpu.name(),
+            DeviceRenderer::Layered(m) => m.gpu.name(),
         }
     }
 
@@ -256,6 +282,7 @@ impl<'a> DeviceRenderer<'a> {
         match self {
             DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
             DeviceRenderer::Octahedral(m) => m.frame(t, camera, progress),
+            DeviceRenderer::Layered(m) => m.frame(t, camera, progress),
             DeviceRenderer::Gpu(m) => {
                 let GpuMethod {
                     gpu,
@@ -408,6 +435,51 @@ impl GpuOctahedral<'_> {
             frame,
             timings,
             report: format!("on {}: {report}", self.gpu.name()),
+            state: Vec::new(),
+        })
+    }
+}
+
+impl GpuLayered<'_> {
+    /// The frame at time `t` through `camera`, or the scene's camera at `t`: the library's layers
+    /// (photographed and built on the first frame, then kept) blended on the GPU, over the
+    /// panorama.
+    fn frame(
+        &mut self,
+        t: f32,
+        camera: Option<Pinhole>,
+        progress: &dyn Progress,
+    ) -> Result<MethodFrame, DeviceError> {
+        if !t.is_finite() {
+            return Err(MethodError::from(trompe::render::RenderError::Time(t)).into());
+        }
+        let mut timings = Timings::default();
+        let uploaded = match self.kept.take() {
+            Some(kept) => kept,
+            None => {
+                let set = trompe::methods::scene_layers(self.scene, &self.settings, &mut timings)?;
+                timings.time("upload layers", || {
+                    crate::layers::GpuLayers::new(self.gpu, &set, &self.settings.layers)
+                })?
+            }
+        };
+        let uploaded = self.kept.insert(uploaded);
+        let camera = match camera {
+            Some(c) => c,
+            None => self.scene.camera.at(t).map_err(MethodError::from)?,
+        };
+        let blend = timings.time("GPU frame", || uploaded.render(&camera))?;
+        let frame = trompe::methods::over_environment(self.scene, &camera, &blend.image)?;
+        progress.advance(u64::from(frame.color.height()));
+        Ok(MethodFrame {
+            frame,
+            timings,
+            report: format!(
+                "on {}: {} holes of {} pixels",
+                self.gpu.name(),
+                blend.holes,
+                blend.covered
+            ),
             state: Vec::new(),
         })
     }

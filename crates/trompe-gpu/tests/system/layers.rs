@@ -129,3 +129,43 @@ pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
         }
     }
 }
+
+/// The `layered` method on the GPU (the library's layers of the scene photographed, blended on
+/// the GPU, over the panorama) against the CPU's, on the shipped street (a truck, a bunny and a
+/// duck that hide each other); its layers kept across frames.
+pub fn the_layered_method_runs_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
+    use trompe::methods::{MethodKind, MethodSettings};
+    let street = |scene: &Scene| scene.objects.len() == 4 && scene.objects[1].name == "truck";
+    let compared = crate::trace::agrees_on_scenes(
+        gpu,
+        (MethodKind::Layered, &MethodSettings::default()),
+        0.999,
+        &street,
+    );
+    assert_eq!(compared, 1, "the street alone");
+    let scene = crate::trace::shipped_scenes()
+        .into_iter()
+        .map(|(_, s)| s)
+        .find(|s| street(s))
+        .expect("scenes/street.toml");
+    let mut renderer = trompe_gpu::DeviceRenderer::new(
+        &scene,
+        MethodKind::Layered,
+        MethodSettings::default(),
+        Some(gpu),
+    )
+    .unwrap();
+    let t = scene.render.time;
+    let first = renderer.frame(t, None, &()).unwrap();
+    let again = renderer.frame(t, None, &()).unwrap();
+    let built =
+        |f: &trompe::methods::MethodFrame| f.timings.0.iter().any(|(s, _)| *s == "build layers");
+    assert!(
+        built(&first) && !built(&again),
+        "the layers are built once, then kept"
+    );
+    assert!(
+        again.frame.color == first.frame.color,
+        "a kept frame changed"
+    );
+}

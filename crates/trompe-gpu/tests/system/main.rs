@@ -153,6 +153,10 @@ fn main() {
             views::the_same_views_render_the_same_bits_on_repeated_runs,
         ),
         on_gpu(
+            "layers::the_layered_method_runs_on_the_gpu_as_on_the_cpu",
+            layers::the_layered_method_runs_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
             "layers::image_layers_render_on_the_gpu_as_on_the_cpu",
             layers::image_layers_render_on_the_gpu_as_on_the_cpu,
         ),
