@@ -541,11 +541,7 @@ impl<'a> Renderer<'a> {
             State::Projective(kept) => {
                 let (views, meshes) = match kept.take() {
                     Some(taken) => taken,
-                    None => {
-                        let views = photograph(scene, &self.settings.capture, &mut timings)?;
-                        let (meshes, _) = crate::layers::scene_objects(scene)?;
-                        (views, meshes)
-                    }
+                    None => scene_photographs(scene, &self.settings, &mut timings)?,
                 };
                 let camera = match camera {
                     Some(c) => c,
@@ -651,6 +647,18 @@ pub fn scene_layers(
             crate::layers::build(meshes, names, &views, &Default::default(), &())
         })
         .map_err(Box::new)?)
+}
+
+/// The `projective` method's photographs of `scene` (paper 4's baseline), from the views
+/// `settings.capture` places, and the scene's meshes they are projected onto.
+pub fn scene_photographs(
+    scene: &Scene,
+    settings: &MethodSettings,
+    timings: &mut Timings,
+) -> Result<(Vec<CalibratedView>, Vec<crate::geom::Mesh>), MethodError> {
+    let views = photograph(scene, &settings.capture, timings)?;
+    let (meshes, _) = crate::layers::scene_objects(scene)?;
+    Ok((views, meshes))
 }
 
 /// A blended image over the scene's environment: where the blend is transparent (no object,

@@ -157,6 +157,21 @@ pub fn face_table(
     crate::texturing::face_table(settings.weighting, &set.mesh_refs(), &source)
 }
 
+/// The table `weighting` weighs `meshes` by under plain projective texturing (whole
+/// photographs), as [`render_projective`] builds it: for a renderer that blends elsewhere (the
+/// GPU's).
+pub fn projective_face_table(
+    meshes: &[&Mesh],
+    views: &[CalibratedView],
+    weighting: crate::texturing::Weighting,
+) -> Result<crate::texturing::FaceTable, FrameError> {
+    let source = Photographs {
+        views,
+        centres: views.iter().map(|v| v.pose.centre()).collect(),
+    };
+    crate::texturing::face_table(weighting, meshes, &source)
+}
+
 /// Plain projective texturing: each view's whole photograph projected onto everything in its
 /// frustum, hidden or not (`views` with their images loaded, undistorted pinholes).
 pub fn render_projective(

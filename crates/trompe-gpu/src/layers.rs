@@ -209,3 +209,29 @@ pub fn render_through(
     let uploaded = GpuLayers::new(gpu, set, settings)?;
     Ok(uploaded.render(camera)?)
 }
+
+/// Plain projective texturing of `meshes` from `views`' whole photographs through `camera` on
+/// `gpu` ([`crate::views::GpuViews::photographs`]), or with the library's
+/// [`trompe::layers::render::render_projective_through`] on the CPU without one. On the GPU, a
+/// camera with a lens is refused.
+pub fn render_projective_through(
+    gpu: Option<&Gpu>,
+    (camera, lens): (&Pinhole, Option<&Intrinsics>),
+    meshes: &[&trompe::geom::Mesh],
+    views: &[trompe::views::CalibratedView],
+    settings: &BlendSettings,
+) -> Result<Blend, DeviceError> {
+    let Some(gpu) = gpu else {
+        let cpu = trompe::layers::render::render_projective_through(
+            (camera, lens),
+            meshes,
+            views,
+            settings,
+        )
+        .map_err(GpuError::from)?;
+        return Ok(cpu);
+    };
+    crate::master::refuse_lens(lens)?;
+    let uploaded = crate::views::GpuViews::photographs(gpu, meshes, views, settings)?;
+    Ok(uploaded.render(camera)?)
+}

@@ -9,7 +9,7 @@
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
 //! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), graph cameras' frustum by frustum; all kept across frames, placed and lit by the library's [`Sequence`] |
 //! | `octahedral` | the atlases the library bakes drawn by the engines' shader (`shaders/octahedral_impostor.wgsl`), one instanced draw an atlas, then shaded ([`crate::octahedral`]); kept while nothing moves |
-//! | `layered` | the layers the library photographs and builds (paper 4), uploaded once and blended by the GPU's texturing shader, each object through its layer's sub-frustum ([`crate::layers`]), over the panorama |
+//! | `layered`, `projective` | the layers the library photographs and builds (paper 4), or its photographs whole (the paper's baseline), uploaded once and blended by the GPU's texturing shader ([`crate::layers`], [`crate::views`]), over the panorama |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
@@ -50,6 +50,7 @@ pub fn has_gpu_path(kind: MethodKind) -> bool {
             | MethodKind::PinholeImpostor
             | MethodKind::Octahedral
             | MethodKind::Layered
+            | MethodKind::Projective
     )
 }
 
@@ -126,17 +127,26 @@ pub enum DeviceRenderer<'a> {
     Gpu(Box<GpuMethod<'a>>),
     /// The octahedral method on the GPU.
     Octahedral(Box<GpuOctahedral<'a>>),
-    /// The layered method on the GPU.
-    Layered(Box<GpuLayered<'a>>),
+    /// The layered and projective methods on the GPU.
+    Photographed(Box<GpuPhotographed<'a>>),
 }
 
-/// The layered method on the GPU, over one scene: the library's layers, uploaded on the first
-/// frame and kept, as the CPU keeps its layers.
-pub struct GpuLayered<'a> {
+/// The layered or projective method on the GPU, over one scene: the library's photographs of it
+/// (cut into layers, or whole), uploaded on the first frame and kept, as the CPU keeps them.
+pub struct GpuPhotographed<'a> {
     gpu: &'a Gpu,
     scene: &'a Scene,
+    kind: MethodKind,
     settings: MethodSettings,
-    kept: Option<crate::layers::GpuLayers<'a>>,
+    kept: Option<Photographs<'a>>,
+}
+
+/// What a photographed method keeps on the device.
+enum Photographs<'a> {
+    /// The layers (`layered`).
+    Layers(crate::layers::GpuLayers<'a>),
+    /// The whole photographs (`projective`).
+    Whole(crate::views::GpuViews<'a>),
 }
 
 /// The octahedral method on the GPU, over one scene.
@@ -181,13 +191,14 @@ impl<'a> DeviceRenderer<'a> {
                 scene, kind, settings,
             )?))),
             Some(_) if !has_gpu_path(kind) => Err(no_gpu_path(kind).into()),
-            Some(gpu) if kind == MethodKind::Layered => {
+            Some(gpu) if matches!(kind, MethodKind::Layered | MethodKind::Projective) => {
                 // The CPU renderer's checks, and the GPU blend's, before any work.
                 Renderer::new(scene, kind, settings.clone())?;
                 crate::texturing::check_settings(&settings.layers)?;
-                Ok(DeviceRenderer::Layered(Box::new(GpuLayered {
+                Ok(DeviceRenderer::Photographed(Box::new(GpuPhotographed {
                     gpu,
                     scene,
+                    kind,
                     settings,
                     kept: None,
                 })))
@@ -258,7 +269,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Cpu(r) => r.kind(),
             DeviceRenderer::Gpu(m) => m.kind,
             DeviceRenderer::Octahedral(_) => MethodKind::Octahedral,
-            DeviceRenderer::Layered(_) => MethodKind::Layered,
+            DeviceRenderer::Photographed(m) => m.kind,
         }
     }
 
@@ -268,7 +279,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Cpu(_) => "CPU",
             DeviceRenderer::Gpu(m) => m.gpu.name(),
             DeviceRenderer::Octahedral(m) => m.gpu.name(),
-            DeviceRenderer::Layered(m) => m.gpu.name(),
+            DeviceRenderer::Photographed(m) => m.gpu.name(),
         }
     }
 
@@ -282,7 +293,7 @@ impl<'a> DeviceRenderer<'a> {
         match self {
             DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
             DeviceRenderer::Octahedral(m) => m.frame(t, camera, progress),
-            DeviceRenderer::Layered(m) => m.frame(t, camera, progress),
+            DeviceRenderer::Photographed(m) => m.frame(t, camera, progress),
             DeviceRenderer::Gpu(m) => {
                 let GpuMethod {
                     gpu,
@@ -440,10 +451,10 @@ impl GpuOctahedral<'_> {
     }
 }
 
-impl GpuLayered<'_> {
-    /// The frame at time `t` through `camera`, or the scene's camera at `t`: the library's layers
-    /// (photographed and built on the first frame, then kept) blended on the GPU, over the
-    /// panorama.
+impl GpuPhotographed<'_> {
+    /// The frame at time `t` through `camera`, or the scene's camera at `t`: the library's
+    /// photographs of the scene (taken, and cut into layers, on the first frame, then kept)
+    /// blended on the GPU, over the panorama.
     fn frame(
         &mut self,
         t: f32,
@@ -454,29 +465,41 @@ impl GpuLayered<'_> {
             return Err(MethodError::from(trompe::render::RenderError::Time(t)).into());
         }
         let mut timings = Timings::default();
+        let (gpu, scene, settings) = (self.gpu, self.scene, &self.settings);
         let uploaded = match self.kept.take() {
             Some(kept) => kept,
+            None if self.kind == MethodKind::Layered => {
+                let set = trompe::methods::scene_layers(scene, settings, &mut timings)?;
+                Photographs::Layers(timings.time("upload layers", || {
+                    crate::layers::GpuLayers::new(gpu, &set, &settings.layers)
+                })?)
+            }
             None => {
-                let set = trompe::methods::scene_layers(self.scene, &self.settings, &mut timings)?;
-                timings.time("upload layers", || {
-                    crate::layers::GpuLayers::new(self.gpu, &set, &self.settings.layers)
-                })?
+                let (views, meshes) =
+                    trompe::methods::scene_photographs(scene, settings, &mut timings)?;
+                let meshes: Vec<&trompe::geom::Mesh> = meshes.iter().collect();
+                Photographs::Whole(timings.time("upload photographs", || {
+                    crate::views::GpuViews::photographs(gpu, &meshes, &views, &settings.layers)
+                })?)
             }
         };
         let uploaded = self.kept.insert(uploaded);
         let camera = match camera {
             Some(c) => c,
-            None => self.scene.camera.at(t).map_err(MethodError::from)?,
+            None => scene.camera.at(t).map_err(MethodError::from)?,
         };
-        let blend = timings.time("GPU frame", || uploaded.render(&camera))?;
-        let frame = trompe::methods::over_environment(self.scene, &camera, &blend.image)?;
+        let blend = timings.time("GPU frame", || match uploaded {
+            Photographs::Layers(layers) => layers.render(&camera),
+            Photographs::Whole(views) => views.render(&camera),
+        })?;
+        let frame = trompe::methods::over_environment(scene, &camera, &blend.image)?;
         progress.advance(u64::from(frame.color.height()));
         Ok(MethodFrame {
             frame,
             timings,
             report: format!(
                 "on {}: {} holes of {} pixels",
-                self.gpu.name(),
+                gpu.name(),
                 blend.holes,
                 blend.covered
             ),

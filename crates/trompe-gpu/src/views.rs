@@ -8,6 +8,9 @@
 //! seen / edge / hidden rule and the same depth-aware bilinear lookup; the best-face table and
 //! the view maps are the library's own, built once on the CPU from the same views.
 //!
+//! The same source projects whole photographs, without depth maps ([`GpuViews::photographs`]):
+//! paper 4's baseline, [`trompe::layers::render::render_projective`] on the GPU.
+//!
 //! Not on the GPU (refused before any work): a view with lens distortion (its image is looked up
 //! through the lens on the CPU), and what [`crate::texturing`] refuses.
 //!
@@ -18,7 +21,7 @@ use crate::methods::DeviceError;
 use crate::raster::v4;
 use crate::texturing::{Blender, check_settings, texture_array, unsupported};
 use bytemuck::{Pod, Zeroable};
-use trompe::camera::{Intrinsics, Pinhole, Projection};
+use trompe::camera::{Intrinsics, Pinhole};
 use trompe::geom::Mesh;
 use trompe::texturing::{Blend, BlendSettings};
 use trompe::views::CalibratedView;
@@ -69,10 +72,35 @@ impl<'a> GpuViews<'a> {
         settings: &BlendSettings,
         exclude: Option<usize>,
     ) -> Result<Self, DeviceError> {
+        Self::upload(gpu, &[mesh], (views, Some(depth)), settings, exclude)
+    }
+
+    /// Uploads `views`' whole photographs (their images loaded) and `meshes` to `gpu`: plain
+    /// projective texturing, each photograph projected onto everything in its frame, hidden or
+    /// not, as [`trompe::layers::render::render_projective`] does (paper 4's baseline).
+    pub fn photographs(
+        gpu: &'a Gpu,
+        meshes: &[&Mesh],
+        views: &[CalibratedView],
+        settings: &BlendSettings,
+    ) -> Result<Self, DeviceError> {
+        Self::upload(gpu, meshes, (views, None), settings, None)
+    }
+
+    /// Uploads `views` and `meshes` (their faces one after another), each view seen through its
+    /// depth map or, without depth maps, projected whole.
+    fn upload(
+        gpu: &'a Gpu,
+        meshes: &[&Mesh],
+        (views, depth): (&[CalibratedView], Option<&[DepthMap]>),
+        settings: &BlendSettings,
+        exclude: Option<usize>,
+    ) -> Result<Self, DeviceError> {
         check_settings(settings)?;
-        // A view takes part where it has an image, a depth map, and is not left out.
-        let takes_part =
-            |i: usize| views[i].image.is_some() && i < depth.len() && Some(i) != exclude;
+        // A view takes part where it has an image, a depth map (when seen through them), and
+        // is not left out.
+        let has_depth = |i: usize| depth.is_none_or(|d| i < d.len());
+        let takes_part = |i: usize| views[i].image.is_some() && has_depth(i) && Some(i) != exclude;
         if let Some(v) = (0..views.len())
             .filter(|&i| takes_part(i))
             .map(|i| &views[i])
@@ -85,21 +113,30 @@ impl<'a> GpuViews<'a> {
             );
             return Err(unsupported(&what).into());
         }
-        if let Some(i) = (0..views.len())
-            .filter(|&i| takes_part(i))
-            .find(|&i| views[i].image.as_ref().map(|m| m.size()) != Some(depth[i].gd().size()))
-        {
+        let depth_of = |i: usize| depth.and_then(|d| d.get(i));
+        if let Some(i) = (0..views.len()).filter(|&i| takes_part(i)).find(|&i| {
+            let image = views[i].image.as_ref().map(|m| m.size());
+            depth_of(i).is_some_and(|d| Some(d.gd().size()) != image)
+        }) {
             let what = format!(
                 "view {}'s depth map is not the size of its image",
                 views[i].name
             );
             return Err(GpuError::Unsupported { what }.into());
         }
-        let source = ViewSource::new(views, depth, settings.tolerance, exclude);
-        let table = trompe::texturing::face_table(settings.weighting, &[mesh], &source)
-            .map_err(GpuError::from)?;
-        let corners: Vec<[glam::Vec3; 3]> = (0..mesh.triangle_count())
-            .map(|t| mesh.corners(t))
+        let table = match depth {
+            Some(depth) => {
+                let source = ViewSource::new(views, depth, settings.tolerance, exclude);
+                trompe::texturing::face_table(settings.weighting, meshes, &source)
+            }
+            None => {
+                trompe::layers::render::projective_face_table(meshes, views, settings.weighting)
+            }
+        }
+        .map_err(GpuError::from)?;
+        let corners: Vec<[glam::Vec3; 3]> = meshes
+            .iter()
+            .flat_map(|m| (0..m.triangle_count()).map(|t| m.corners(t)))
             .collect();
         let centres: Vec<glam::DVec3> = views.iter().map(|v| v.pose.centre()).collect();
         let blender = Blender::new(
@@ -114,11 +151,11 @@ impl<'a> GpuViews<'a> {
         let face_bytes: &[u8] = bytemuck::cast_slice(&faces);
         gpu.check_storage("the mesh's faces", face_bytes.len() as u64)?;
         let gpu_views: Vec<GpuView> = (0..views.len())
-            .map(|i| gpu_view(&views[i], depth.get(i), takes_part(i)))
+            .map(|i| gpu_view(&views[i], depth_of(i), takes_part(i)))
             .collect();
         let layers = views.len() as u32;
         let image_size = |i: usize| views[i].image.as_ref().map_or((1, 1), |m| m.size());
-        let depth_size = |i: usize| depth.get(i).map_or((1, 1), |d| d.gd().size());
+        let depth_size = |i: usize| depth_of(i).map_or((1, 1), |d| d.gd().size());
         let largest = |size: &dyn Fn(usize) -> (u32, u32)| {
             (0..views.len()).fold((1, 1), |(w, h), i| {
                 let (a, b) = size(i);
@@ -155,7 +192,7 @@ impl<'a> GpuViews<'a> {
             (wgpu::TextureFormat::R32Float, 4),
             |layer| {
                 let mut texels = vec![0.0f32; dw as usize * dh as usize];
-                if let Some(d) = depth.get(layer as usize) {
+                if let Some(d) = depth_of(layer as usize) {
                     let gd = d.gd();
                     for (y, row) in gd.pixels().chunks(gd.width() as usize).enumerate() {
                         texels[y * dw as usize..][..row.len()].copy_from_slice(row);
@@ -199,23 +236,23 @@ impl<'a> GpuViews<'a> {
     }
 }
 
-/// View `view` as the shader reads it: its depth map's pinhole (when it has one), its pose and
-/// intrinsics, its sizes; `takes_part` false leaves it out of every blend.
+/// View `view` as the shader reads it: its depth map's pinhole (without one, its whole
+/// photograph is projected), its pose and intrinsics, its size; `takes_part` false leaves it
+/// out of every blend.
 fn gpu_view(view: &CalibratedView, depth: Option<&DepthMap>, takes_part: bool) -> GpuView {
-    let (depth_rows, depth_eye, depth_size) = match depth {
+    let (depth_rows, depth_eye) = match depth {
         Some(d) => {
             let camera = d.camera();
             let inverse = camera.mcmillan_inverse();
             let row = |i: usize| v4(inverse.row(i).as_vec3(), 0.0);
-            let (w, h) = camera.resolution();
             (
                 [row(0), row(1), row(2)],
-                v4(camera.position().as_vec3(), f32::from(u8::from(takes_part))),
-                [w as f32, h as f32],
+                v4(camera.position().as_vec3(), 0.0),
             )
         }
-        None => ([[0.0; 4]; 3], [0.0; 4], [0.0; 2]),
+        None => ([[0.0; 4]; 3], [0.0; 4]),
     };
+    let whole = f32::from(u8::from(depth.is_none()));
     let rotation = glam::DMat3::from_quat(view.pose.rotation);
     let row = |i: usize| v4(rotation.row(i).as_vec3(), 0.0);
     let ((fx, fy), (cx, cy)) = (view.intrinsics.focal(), view.intrinsics.principal_point());
@@ -224,9 +261,12 @@ fn gpu_view(view: &CalibratedView, depth: Option<&DepthMap>, takes_part: bool) -
         depth_rows,
         depth_eye,
         rotation: [row(0), row(1), row(2)],
-        centre: v4(view.pose.centre().as_vec3(), 0.0),
+        centre: v4(
+            view.pose.centre().as_vec3(),
+            f32::from(u8::from(takes_part)),
+        ),
         intrinsics: [fx as f32, fy as f32, cx as f32, cy as f32],
-        size: [iw as f32, ih as f32, depth_size[0], depth_size[1]],
+        size: [iw as f32, ih as f32, whole, 0.0],
     }
 }
 

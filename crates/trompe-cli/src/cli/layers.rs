@@ -4,7 +4,7 @@
 use super::render::DeviceArg;
 use super::views::{BlendArgs, CameraArg, RigArg, parse_size};
 use super::{bar, check_plan};
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Subcommand, ValueEnum};
 use std::path::PathBuf;
 use trompe::files::{FolderKind, OutputPlan};
@@ -191,11 +191,12 @@ pub struct RenderArgs {
     camera: CameraArg,
     #[command(flatten)]
     blend: BlendArgs,
-    /// Where the layered blend runs: the CPU; the GPU (every image layer and its depth in
+    /// Where the blend runs: the CPU; the GPU (every image layer and its depth in
     /// texture arrays, each object through its layer's sub-frustum, blended in a compute
     /// shader; a hardware adapter, else a software one such as Mesa's lavapipe); or auto (a
     /// hardware GPU where present, else the CPU). The GPU blends every weighting but a
-    /// seamless best face, without a lens; `--method projective` runs on the CPU.
+    /// seamless best face, without a lens; `--method projective` projects the photographs
+    /// whole from a texture array.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
     /// Output image (.png or .exr); pixels nothing textures are transparent.
@@ -223,15 +224,7 @@ impl RenderArgs {
         }
         let camera = scene.camera.at(scene.render.time)?;
         let lens = scene.camera.lens.as_ref();
-        let gpu = match (self.method, self.device) {
-            (TextureArg::Layered, device) => {
-                trompe_gpu::open(device.into()).context("opening the GPU")?
-            }
-            (TextureArg::Projective, DeviceArg::Gpu) => {
-                bail!("--method projective has no GPU path yet: run it with --device cpu")
-            }
-            (TextureArg::Projective, _) => None,
-        };
+        let gpu = trompe_gpu::open(self.device.into()).context("opening the GPU")?;
         if let Some(gpu) = &gpu {
             crate::output::note(format_args!("rendering on {}", gpu.name()));
         }
@@ -243,7 +236,8 @@ impl RenderArgs {
             TextureArg::Projective => {
                 let views = layers::file::photographs(&self.layers, &set)?;
                 let meshes = set.mesh_refs();
-                layers::render::render_projective_through(
+                trompe_gpu::layers::render_projective_through(
+                    gpu.as_ref(),
                     (&camera, lens),
                     &meshes,
                     &views,

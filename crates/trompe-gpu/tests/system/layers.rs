@@ -169,3 +169,17 @@ pub fn the_layered_method_runs_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
         "a kept frame changed"
     );
 }
+
+/// The `projective` method on the GPU (the library's photographs of the scene projected whole,
+/// hidden or not, paper 4's baseline) against the CPU's, on the shipped street.
+pub fn the_projective_method_runs_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
+    use trompe::methods::{MethodKind, MethodSettings};
+    let street = |scene: &Scene| scene.objects.len() == 4 && scene.objects[1].name == "truck";
+    let compared = crate::trace::agrees_on_scenes(
+        gpu,
+        (MethodKind::Projective, &MethodSettings::default()),
+        0.999,
+        &street,
+    );
+    assert_eq!(compared, 1, "the street alone");
+}

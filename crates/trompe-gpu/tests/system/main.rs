@@ -157,6 +157,10 @@ fn main() {
             layers::the_layered_method_runs_on_the_gpu_as_on_the_cpu,
         ),
         on_gpu(
+            "layers::the_projective_method_runs_on_the_gpu_as_on_the_cpu",
+            layers::the_projective_method_runs_on_the_gpu_as_on_the_cpu,
+        ),
+        on_gpu(
             "layers::image_layers_render_on_the_gpu_as_on_the_cpu",
             layers::image_layers_render_on_the_gpu_as_on_the_cpu,
         ),
