@@ -1,6 +1,7 @@
 // Images with depth, as the sources that keep to a surface read them (views.wgsl, layers.wgsl;
 // this file goes before the source's own): colour images in one texture array, their
-// generalized depth (1/z, 0 where nothing was seen) in another, layer for layer.
+// generalized depth (1/z, 0 where nothing was seen) in another, layer for layer; and the
+// mesh's triangles those sources share.
 //
 // The CPU's rules, in f32: src/views/visibility.rs (`sight_in`: seen, at an edge, hidden) and
 // the lookups that keep to a surface (src/views/blend.rs `sample_on_surface` and
@@ -8,6 +9,20 @@
 
 @group(0) @binding(3) var images: texture_2d_array<f32>;
 @group(0) @binding(9) var depths: texture_2d_array<f32>;
+
+// The mesh's triangles, as the sources that read images with depth keep them.
+struct Face {
+    c0: vec4<f32>,
+    c1: vec4<f32>,
+    c2: vec4<f32>,
+}
+
+@group(0) @binding(1) var<storage, read> faces: array<Face>;
+
+fn corners(face: u32) -> array<vec3<f32>, 3> {
+    let f = faces[face];
+    return array<vec3<f32>, 3>(f.c0.xyz, f.c1.xyz, f.c2.xyz);
+}
 
 // One image with depth: its layer, its size in texels, and whether a texel counts only where
 // the image holds it (alpha ≥ ½: an image layer's texels).

@@ -10,13 +10,6 @@
 // (texels it holds on the point's surface, within SAME_SURFACE, bilinear, else the nearest of
 // the 3 × 3) finds one; its colour is the first lookup, else the edge lookup.
 
-struct Face {
-    // The triangle's corners (xyz).
-    c0: vec4<f32>,
-    c1: vec4<f32>,
-    c2: vec4<f32>,
-}
-
 struct Layer {
     // The rows of its texture matrix (Bias · Frustum(layer window) · View).
     m0: vec4<f32>,
@@ -27,7 +20,6 @@ struct Layer {
     size: vec4<f32>,
 }
 
-@group(0) @binding(1) var<storage, read> faces: array<Face>;
 @group(0) @binding(8) var<storage, read> layers: array<Layer>;
 // Per view and face (view × faces + face): the layer (index into `layers`) + 1 that holds the
 // face in that view, 0 where none does.
@@ -35,11 +27,6 @@ struct Layer {
 
 // src/views/blend.rs's SAME_SURFACE.
 const SAME_SURFACE: f32 = 0.05;
-
-fn corners(face: u32) -> array<vec3<f32>, 3> {
-    let f = faces[face];
-    return array<vec3<f32>, 3>(f.c0.xyz, f.c1.xyz, f.c2.xyz);
-}
 
 // Where `at` lands in the layer of `view` that holds it: xy the texel point, z the eye depth,
 // w the layer + 1 (0: no layer holds it, or it is behind the view).

@@ -240,29 +240,48 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
     if (n > k) {
         threshold = pen[k];
     }
-    var raw: array<f32, K_MAX>;
+    var views: array<u32, BLEND_MAX>;
+    var weights: array<f32, BLEND_MAX>;
     var total = 0.0;
     for (var j = 0u; j < taken; j++) {
         var w = 1.0 / pen[j];
         if (ulr) {
             w = max(1.0 - pen[j] / threshold, 0.0);
         }
-        raw[j] = w;
+        views[j] = idx[j];
+        weights[j] = w;
         total += w;
     }
     if (!(total > 0.0)) {
         return colour(idx[0], at);
     }
-    // The weighted colours; a view with none is dropped and the others renormalized.
+    for (var j = 0u; j < taken; j++) {
+        weights[j] /= total;
+    }
+    return blend_colours(&views, &weights, taken, at);
+}
+
+// The most views one blend weighs: the per-point weightings' k, or the view map's three.
+const BLEND_MAX: u32 = max(K_MAX, 3u);
+
+// The colours the views `views[0..n]` give `at`, weighted by `weights` (a view of weight 0
+// left out): a view that gives none is dropped and the others renormalized (src/texturing/
+// mod.rs `blend`); w = 0 when none gives a colour.
+fn blend_colours(
+    views: ptr<function, array<u32, BLEND_MAX>>,
+    weights: ptr<function, array<f32, BLEND_MAX>>,
+    n: u32,
+    at: At,
+) -> vec4<f32> {
     var sum = vec3<f32>(0.0);
     var kept = 0.0;
     var dropped = false;
-    for (var j = 0u; j < taken; j++) {
-        let w = raw[j] / total;
+    for (var j = 0u; j < n; j++) {
+        let w = (*weights)[j];
         if (w <= 0.0) {
             continue;
         }
-        let c = colour(idx[j], at);
+        let c = colour((*views)[j], at);
         if (c.w > 0.0) {
             sum += c.xyz * w;
             kept += w;
@@ -290,8 +309,8 @@ fn map_view(face: u32, sample: u32) -> u32 {
 // those that take part renormalized; w = 0 when none gives a colour.
 fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
     let omega = normalize(params.eye.xyz - position(at));
-    var views: array<u32, 3>;
-    var weights: array<f32, 3>;
+    var views: array<u32, BLEND_MAX>;
+    var weights: array<f32, BLEND_MAX>;
     var n = 0u;
     for (var f = 0u; f < arrayLength(&map_triangles); f++) {
         let tri = map_triangles[f];
@@ -326,7 +345,7 @@ fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
         }
         break;
     }
-    // The views that take part, renormalized; a view with no colour dropped as in the blend.
+    // The views that take part, renormalized.
     var kept_weight = 0.0;
     for (var e = 0u; e < n; e++) {
         if (!takes_part(views[e], at, clearly)) {
@@ -337,29 +356,10 @@ fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
     if (kept_weight <= 0.0) {
         return vec4<f32>(0.0);
     }
-    var sum = vec3<f32>(0.0);
-    var kept = 0.0;
-    var dropped = false;
     for (var e = 0u; e < n; e++) {
-        if (weights[e] <= 0.0) {
-            continue;
-        }
-        let w = weights[e] / kept_weight;
-        let c = colour(views[e], at);
-        if (c.w > 0.0) {
-            sum += c.xyz * w;
-            kept += w;
-        } else {
-            dropped = true;
-        }
+        weights[e] /= kept_weight;
     }
-    if (kept <= 0.0) {
-        return vec4<f32>(0.0);
-    }
-    if (dropped) {
-        return vec4<f32>(sum / kept, 1.0);
-    }
-    return vec4<f32>(sum, 1.0);
+    return blend_colours(&views, &weights, n, at);
 }
 
 @compute @workgroup_size(8, 8)

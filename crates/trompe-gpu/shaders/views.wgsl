@@ -12,13 +12,6 @@
 // map: it sees every point in front of it that lands in its frame, and colours it by a plain
 // bilinear lookup, clamped at the edges.
 
-struct Face {
-    // The triangle's corners (xyz).
-    c0: vec4<f32>,
-    c1: vec4<f32>,
-    c2: vec4<f32>,
-}
-
 struct View {
     // The depth map's pinhole: the rows of M⁻¹ (applied to a point less `depth_eye`).
     depth_u: vec4<f32>,
@@ -39,17 +32,11 @@ struct View {
     size: vec4<f32>,
 }
 
-@group(0) @binding(1) var<storage, read> faces: array<Face>;
 @group(0) @binding(8) var<storage, read> views: array<View>;
 
 // How far (relative depth) a texel's surface may be from the sampled point and still be the
 // same surface (src/views/blend.rs's SAME_SURFACE).
 const SAME_SURFACE: f32 = 0.05;
-
-fn corners(face: u32) -> array<vec3<f32>, 3> {
-    let f = faces[face];
-    return array<vec3<f32>, 3>(f.c0.xyz, f.c1.xyz, f.c2.xyz);
-}
 
 // Where `at` lands in view `view`'s image (through its intrinsics, no lens): xy the pixel, z its
 // depth along the camera's z (0: behind it).

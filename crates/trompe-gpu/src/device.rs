@@ -66,6 +66,18 @@ pub enum GpuError {
         /// The adapter's name.
         adapter: String,
     },
+    /// The device could not hold what the work needs.
+    #[error("{adapter} could not hold {what}, {bytes} bytes: {reason}")]
+    OutOfMemory {
+        /// What it holds.
+        what: String,
+        /// Its size.
+        bytes: u64,
+        /// The adapter's name.
+        adapter: String,
+        /// The driver's answer.
+        reason: String,
+    },
     /// A window's surface could not be made or shown on the adapter.
     #[error("showing a window on {adapter}: {reason}")]
     Surface {
@@ -538,6 +550,26 @@ impl Gpu {
             });
         }
         Ok(())
+    }
+
+    /// `make`'s work (the creation of a resource of `bytes` for `what`), refused with
+    /// [`GpuError::OutOfMemory`] where the device cannot hold it (instead of wgpu's panic).
+    pub(crate) fn allocating<T>(
+        &self,
+        (what, bytes): (&str, u64),
+        make: impl FnOnce() -> T,
+    ) -> Result<T, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let made = make();
+        match pollster::block_on(scope.pop()) {
+            None => Ok(made),
+            Some(e) => Err(GpuError::OutOfMemory {
+                what: what.to_string(),
+                bytes,
+                adapter: self.info.name.clone(),
+                reason: e.to_string(),
+            }),
+        }
     }
 
     /// The largest number of workgroups one dispatch may have along x.

@@ -14,7 +14,9 @@
 use crate::device::{Gpu, GpuError};
 use crate::methods::DeviceError;
 use crate::raster::v4;
-use crate::texturing::{Blender, check_settings, texture_array, unsupported};
+use crate::texturing::{
+    Blender, check_settings, entries, halves, padded_layer, texture_array, unsupported,
+};
 use bytemuck::{Pod, Zeroable};
 use trompe::camera::{Intrinsics, Pinhole};
 use trompe::layers::LayerSet;
@@ -119,33 +121,14 @@ impl<'a> GpuLayers<'a> {
             "image layers",
             (lw, lh, layer_count),
             (wgpu::TextureFormat::Rgba16Float, 8),
-            |layer| {
-                let mut texels = vec![half::f16::ZERO; lw as usize * lh as usize * 4];
-                let img = images[layer as usize].0;
-                for (y, row) in img.pixels().chunks(img.width() as usize).enumerate() {
-                    let at = y * lw as usize * 4;
-                    for (x, c) in row.iter().enumerate() {
-                        for (k, v) in c.to_array().into_iter().enumerate() {
-                            texels[at + x * 4 + k] = half::f16::from_f32(v);
-                        }
-                    }
-                }
-                bytemuck::cast_slice(&texels).to_vec()
-            },
+            |layer| padded_layer(Some(images[layer as usize].0), (lw, lh), halves),
         )?;
         let depth_array = texture_array(
             gpu,
             "image layers' depth",
             (lw, lh, layer_count),
             (wgpu::TextureFormat::R32Float, 4),
-            |layer| {
-                let mut texels = vec![0.0f32; lw as usize * lh as usize];
-                let gd = images[layer as usize].1;
-                for (y, row) in gd.pixels().chunks(gd.width() as usize).enumerate() {
-                    texels[y * lw as usize..][..row.len()].copy_from_slice(row);
-                }
-                bytemuck::cast_slice(&texels).to_vec()
-            },
+            |layer| padded_layer(Some(images[layer as usize].1), (lw, lh), |g| [g]),
         )?;
         let faces: Vec<[[f32; 4]; 3]> = corners.iter().map(|c| c.map(|p| v4(p, 1.0))).collect();
         let face_bytes: &[u8] = bytemuck::cast_slice(&faces);
@@ -165,29 +148,11 @@ impl<'a> GpuLayers<'a> {
     /// The layer set's meshes through `camera`: the image and its pixels' counts, as
     /// [`trompe::layers::render::render`] makes them.
     pub fn render(&self, camera: &Pinhole) -> Result<Blend, GpuError> {
-        let entries = [
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: self.faces.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(&self.images),
-            },
-            wgpu::BindGroupEntry {
-                binding: 8,
-                resource: self.layers.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 9,
-                resource: wgpu::BindingResource::TextureView(&self.depths),
-            },
-            wgpu::BindGroupEntry {
-                binding: 10,
-                resource: self.holders.as_entire_binding(),
-            },
-        ];
-        self.blender.render(self.gpu, camera, &entries)
+        let source = entries(
+            &[(1, &self.faces), (8, &self.layers), (10, &self.holders)],
+            &[(3, &self.images), (9, &self.depths)],
+        );
+        self.blender.render(self.gpu, camera, &source)
     }
 }
 

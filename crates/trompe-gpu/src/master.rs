@@ -1,7 +1,8 @@
 //! Rendering from master textures on the GPU ("Master Texture" §4, the paper's rendering path):
-//! every view's master texture is one layer of a texture array, the mesh carries one atlas
-//! point a corner, and a frame is the blend of [`crate::texturing`] over a source
-//! (`shaders/master.wgsl`) that asks every view at the pixel's one texture coordinate.
+//! every view's master texture is one layer of a texture array (8-bit sRGB, as an encoding's
+//! files hold them, or half floats for brighter ones), the mesh carries one atlas point a
+//! corner, and a frame is the blend of [`crate::texturing`] over a source (`shaders/master.wgsl`)
+//! that asks every view at the pixel's one texture coordinate.
 //!
 //! The CPU twin is [`trompe::master::render`]: the same sight by the master's alpha and the
 //! same bilinear lookup over texels with a colour; the best-face table and the view maps are the
@@ -13,7 +14,7 @@
 use crate::device::{Gpu, GpuError};
 use crate::methods::DeviceError;
 use crate::raster::v4;
-use crate::texturing::{Blender, check_settings, texture_array};
+use crate::texturing::{Blender, check_settings, entries, halves, padded_layer, texture_array};
 use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
 use trompe::camera::Pinhole;
@@ -97,21 +98,31 @@ impl<'a> GpuMasters<'a> {
             .collect();
         let face_bytes: &[u8] = bytemuck::cast_slice(&faces);
         gpu.check_storage("the mesh's faces", face_bytes.len() as u64)?;
-        // Half floats: a master's 8-bit texels and its edge alpha ½ exactly.
-        let masters = texture_array(
-            gpu,
-            "master textures",
-            (w, h, masters.len() as u32),
-            (wgpu::TextureFormat::Rgba16Float, 8),
-            |layer| {
-                let halves: Vec<half::f16> = masters[layer as usize]
-                    .pixels()
-                    .iter()
-                    .flat_map(|c| c.to_array().map(half::f16::from_f32))
-                    .collect();
-                bytemuck::cast_slice(&halves).to_vec()
-            },
-        )?;
+        // Masters within [0, 1] (those read from an encoding's PNGs) as 8-bit sRGB, as they are
+        // written and as a renderer holds hundreds of them: the device decodes each texel to
+        // linear light, alpha linear (an edge's ½ is 128/255). Brighter ones (in memory, of
+        // rendered views) as half floats.
+        let layers = (w, h, masters.len() as u32);
+        let in_unit = |c: &trompe::frame::Rgba| {
+            c.cmpge(glam::Vec4::ZERO).all() && c.cmple(glam::Vec4::ONE).all()
+        };
+        let masters = if masters.iter().all(|m| m.pixels().iter().all(in_unit)) {
+            texture_array(
+                gpu,
+                "master textures",
+                layers,
+                (wgpu::TextureFormat::Rgba8UnormSrgb, 4),
+                |layer| trompe::frame::io::to_srgb8(&masters[layer as usize]),
+            )?
+        } else {
+            texture_array(
+                gpu,
+                "master textures",
+                layers,
+                (wgpu::TextureFormat::Rgba16Float, 8),
+                |layer| padded_layer(Some(&masters[layer as usize]), (w, h), halves),
+            )?
+        };
         Ok(GpuMasters {
             gpu,
             blender,
@@ -123,17 +134,8 @@ impl<'a> GpuMasters<'a> {
     /// The mesh through `camera`, blended from the masters: the image and its pixels' counts,
     /// as [`trompe::master::render::render`] makes them.
     pub fn render(&self, camera: &Pinhole) -> Result<Blend, GpuError> {
-        let entries = [
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: self.faces.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(&self.masters),
-            },
-        ];
-        self.blender.render(self.gpu, camera, &entries)
+        let source = entries(&[(1, &self.faces)], &[(3, &self.masters)]);
+        self.blender.render(self.gpu, camera, &source)
     }
 }
 

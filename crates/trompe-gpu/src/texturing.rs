@@ -126,14 +126,14 @@ impl Blender {
         })
     }
 
-    /// The mesh through `camera`, blended from the source whose bindings are `entries`
+    /// The mesh through `camera`, blended from the source whose bindings are `source`
     /// (bindings 1, 3 and from 8 up; the blend holds 0, 2 and 4 to 7): the image and its pixels'
     /// counts, as the library's render makes them.
     pub(crate) fn render(
         &self,
         gpu: &Gpu,
         camera: &Pinhole,
-        entries: &[wgpu::BindGroupEntry],
+        source: &[wgpu::BindGroupEntry],
     ) -> Result<Blend, GpuError> {
         let (w, h) = camera.resolution();
         gpu.check_texture("the frame", w, h)?;
@@ -192,21 +192,12 @@ impl Blender {
             (12, triangles),
             (13, views),
         ];
+        let mut all = entries(&buffers, &[(0, &visibility_view)]);
+        all.extend(source.iter().cloned());
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.shader.0),
             layout: &pipeline.get_bind_group_layout(0),
-            entries: &buffers
-                .into_iter()
-                .map(|(binding, b)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: b.as_entire_binding(),
-                })
-                .chain([wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&visibility_view),
-                }])
-                .chain(entries.iter().cloned())
-                .collect::<Vec<_>>(),
+            entries: &all,
         });
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -290,6 +281,47 @@ fn upload_view_maps(gpu: &Gpu, table: &FaceTable) -> Result<([wgpu::Buffer; 3], 
     ))
 }
 
+/// Bind-group entries: storage buffers and texture views, by binding.
+pub(crate) fn entries<'b>(
+    buffers: &[(u32, &'b wgpu::Buffer)],
+    textures: &[(u32, &'b wgpu::TextureView)],
+) -> Vec<wgpu::BindGroupEntry<'b>> {
+    let buffers = buffers.iter().map(|&(binding, b)| wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    });
+    let textures = textures.iter().map(|&(binding, t)| wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(t),
+    });
+    buffers.chain(textures).collect()
+}
+
+/// `image`'s texels, each as `N` values `texel` gives, row by row into a layer `w` wide and `h`
+/// tall (at least the image's size), zero beyond the image or without one: a texture array's
+/// layer as `texture_array` uploads it.
+pub(crate) fn padded_layer<T: Copy, U: Pod, const N: usize>(
+    image: Option<&Image<T>>,
+    (w, h): (u32, u32),
+    texel: impl Fn(T) -> [U; N],
+) -> Vec<u8> {
+    let mut out = vec![U::zeroed(); w as usize * h as usize * N];
+    if let Some(img) = image {
+        for (y, row) in img.pixels().chunks(img.width() as usize).enumerate() {
+            for (x, &t) in row.iter().enumerate() {
+                let at = (y * w as usize + x) * N;
+                out[at..at + N].copy_from_slice(&texel(t));
+            }
+        }
+    }
+    bytemuck::cast_slice(&out).to_vec()
+}
+
+/// A colour as the half floats of an `Rgba16Float` texel.
+pub(crate) fn halves(c: trompe::frame::Rgba) -> [half::f16; 4] {
+    c.to_array().map(half::f16::from_f32)
+}
+
 /// `layers` images of `w × h`, each given by `texels(layer)` (row-major, `w × h` of them), as
 /// the layers of one texture array of `format`, `texel` bytes a texel.
 pub(crate) fn texture_array(
@@ -309,20 +341,23 @@ pub(crate) fn texture_array(
     }
     let bytes = u64::from(w) * u64::from(h) * u64::from(texel) * u64::from(layers.max(1));
     trompe::memory::check(|| format!("{layers} {label} of {w} × {h}"), bytes)?;
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: layers.max(1),
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let what = format!("{layers} {label} of {w} × {h}");
+    let texture = gpu.allocating((&what, bytes), || {
+        gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: layers.max(1),
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    })?;
     for layer in 0..layers {
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {

@@ -19,7 +19,9 @@
 use crate::device::{Gpu, GpuError};
 use crate::methods::DeviceError;
 use crate::raster::v4;
-use crate::texturing::{Blender, check_settings, texture_array, unsupported};
+use crate::texturing::{
+    Blender, check_settings, entries, halves, padded_layer, texture_array, unsupported,
+};
 use bytemuck::{Pod, Zeroable};
 use trompe::camera::{Intrinsics, Pinhole};
 use trompe::geom::Mesh;
@@ -170,20 +172,7 @@ impl<'a> GpuViews<'a> {
             "views' images",
             (iw, ih, layers),
             (wgpu::TextureFormat::Rgba16Float, 8),
-            |layer| {
-                let mut texels = vec![half::f16::ZERO; iw as usize * ih as usize * 4];
-                if let Some(img) = &views[layer as usize].image {
-                    for (y, row) in img.pixels().chunks(img.width() as usize).enumerate() {
-                        let at = y * iw as usize * 4;
-                        for (x, c) in row.iter().enumerate() {
-                            for (k, v) in c.to_array().into_iter().enumerate() {
-                                texels[at + x * 4 + k] = half::f16::from_f32(v);
-                            }
-                        }
-                    }
-                }
-                bytemuck::cast_slice(&texels).to_vec()
-            },
+            |layer| padded_layer(views[layer as usize].image.as_ref(), (iw, ih), halves),
         )?;
         let depths = texture_array(
             gpu,
@@ -191,14 +180,9 @@ impl<'a> GpuViews<'a> {
             (dw, dh, layers),
             (wgpu::TextureFormat::R32Float, 4),
             |layer| {
-                let mut texels = vec![0.0f32; dw as usize * dh as usize];
-                if let Some(d) = depth_of(layer as usize) {
-                    let gd = d.gd();
-                    for (y, row) in gd.pixels().chunks(gd.width() as usize).enumerate() {
-                        texels[y * dw as usize..][..row.len()].copy_from_slice(row);
-                    }
-                }
-                bytemuck::cast_slice(&texels).to_vec()
+                padded_layer(depth_of(layer as usize).map(DepthMap::gd), (dw, dh), |g| {
+                    [g]
+                })
             },
         )?;
         Ok(GpuViews {
@@ -214,25 +198,11 @@ impl<'a> GpuViews<'a> {
     /// The mesh through `camera`, blended from the views: the image and its pixels' counts, as
     /// [`trompe::views::blend::render`] makes them.
     pub fn render(&self, camera: &Pinhole) -> Result<Blend, GpuError> {
-        let entries = [
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: self.faces.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(&self.images),
-            },
-            wgpu::BindGroupEntry {
-                binding: 8,
-                resource: self.views.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 9,
-                resource: wgpu::BindingResource::TextureView(&self.depths),
-            },
-        ];
-        self.blender.render(self.gpu, camera, &entries)
+        let source = entries(
+            &[(1, &self.faces), (8, &self.views)],
+            &[(3, &self.images), (9, &self.depths)],
+        );
+        self.blender.render(self.gpu, camera, &source)
     }
 }
 

@@ -6,7 +6,6 @@
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 use trompe::camera::Pinhole;
-use trompe::frame::metrics::flip;
 use trompe::layers::{self, BuildSettings};
 use trompe::scene::Scene;
 use trompe::texturing::{BlendSettings, Holes, Weighting};
@@ -24,47 +23,11 @@ const WEIGHTINGS: [(Weighting, bool); 6] = [
     (Weighting::ViewMap, true),
 ];
 
-/// A box behind the Duck beside a ball on a ground plane: objects that hide each other, so a
-/// view has several visibility layers.
-const SCENE: &str = r#"
-[camera]
-position = [0.9, 0.7, 1.4]
-look_at = [0.0, 0.15, 0.0]
-fov_y = 45.0
-resolution = [160, 120]
-[light]
-direction = [0.4, 1.0, 0.6]
-intensity = 2.51
-[render]
-background = [0.3, 0.3, 0.35]
-[[object]]
-name = "ground"
-shape = "plane"
-scale = 1.6
-material = { type = "diffuse", color = [0.5, 0.5, 0.45] }
-[[object]]
-name = "box"
-shape = "cube"
-fit = 0.4
-translate = [0.0, 0.0, -0.3]
-rotate = [0.0, 25.0, 0.0]
-material = { type = "diffuse", color = [0.3, 0.5, 0.8] }
-[[object]]
-name = "duck"
-mesh = "assets/gltf/Duck.glb"
-fit = 0.3
-translate = [0.1, 0.0, 0.25]
-[[object]]
-name = "ball"
-shape = "sphere"
-fit = 0.2
-translate = [-0.25, 0.0, 0.1]
-material = { type = "diffuse", color = [0.8, 0.4, 0.3] }
-"#;
-
 pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
+    // A box behind the Duck beside a ball on a ground plane: objects that hide each other, so
+    // a view has several visibility layers.
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let scene = Scene::from_toml(SCENE, &root.join("layers-gpu-test.toml")).unwrap();
+    let scene = Scene::load(&root.join("tests/fixtures/layers/scene.toml")).unwrap();
     let settings = CaptureSettings {
         count: 6,
         size: (160, 120),
@@ -103,29 +66,7 @@ pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
         ] {
             let cpu = layers::render::render(&camera, &set, &settings).unwrap();
             let on_gpu = uploaded.render(&camera).unwrap();
-            let f = flip(&cpu.image, &on_gpu.image, None).unwrap();
-            let worst = cpu
-                .image
-                .pixels()
-                .iter()
-                .zip(on_gpu.image.pixels())
-                .map(|(a, b)| (*a - *b).abs().max_element())
-                .fold(0.0f32, f32::max);
-
-            println!(
-                "{} at {name}: mean FLIP {f:.5}, largest channel difference {worst:.5}; \
-                 covered {} / {}, holes {} / {}",
-                weighting, on_gpu.covered, cpu.covered, on_gpu.holes, cpu.holes
-            );
-            // The goal: mean FLIP ≤ 0.01 against the CPU twin.
-            assert!(f <= 0.01, "{weighting} at {name}: FLIP {f}");
-            let covered_gap = on_gpu.covered.abs_diff(cpu.covered);
-            assert!(
-                covered_gap * 200 <= cpu.covered,
-                "covered {covered_gap} apart"
-            );
-            let holes_gap = on_gpu.holes.abs_diff(cpu.holes);
-            assert!(holes_gap * 200 <= cpu.covered, "holes {holes_gap} apart");
+            crate::blends_agree(&format!("{weighting} at {name}"), &cpu, &on_gpu);
         }
     }
 }

@@ -24,6 +24,34 @@ fn on_gpu(name: &str, test: fn(&Gpu)) -> Trial {
     })
 }
 
+/// The GPU's projective-texturing frame against the CPU's, printed as `what`: mean FLIP ≤ 0.01
+/// (the goal), and the pixels covered and the holes each within 0.5 % of the covered pixels
+/// (two rasterizers' coverage may differ on a few silhouette pixels).
+pub fn blends_agree(what: &str, cpu: &trompe::texturing::Blend, on_gpu: &trompe::texturing::Blend) {
+    let f = trompe::frame::metrics::flip(&cpu.image, &on_gpu.image, None).unwrap();
+    let worst = (cpu.image.pixels().iter().zip(on_gpu.image.pixels()))
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0.0f32, f32::max);
+    println!(
+        "{what}: mean FLIP {f:.5}, largest channel difference {worst:.5}; covered {} / {}, \
+         holes {} / {}",
+        on_gpu.covered, cpu.covered, on_gpu.holes, cpu.holes
+    );
+    assert!(f <= 0.01, "{what}: FLIP {f}");
+    let (covered, holes) = (
+        on_gpu.covered.abs_diff(cpu.covered),
+        on_gpu.holes.abs_diff(cpu.holes),
+    );
+    assert!(
+        covered * 200 <= cpu.covered,
+        "{what}: covered {covered} apart"
+    );
+    assert!(
+        holes * 200 <= cpu.covered.max(1),
+        "{what}: holes {holes} apart"
+    );
+}
+
 /// A test that needs no device.
 fn plain(name: &str, test: fn()) -> Trial {
     Trial::test(name, move || -> Result<(), Failed> {

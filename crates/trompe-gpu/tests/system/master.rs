@@ -6,7 +6,6 @@
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 use trompe::camera::Pinhole;
-use trompe::frame::metrics::flip;
 use trompe::geom::Mesh;
 use trompe::master::{DEFAULT_SCALE, Encoding, encode_views};
 use trompe::texturing::{BlendSettings, Holes, Weighting};
@@ -81,24 +80,7 @@ pub fn master_textures_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
             )
             .unwrap();
             let on_gpu = uploaded.render(camera).unwrap();
-            let f = flip(&cpu.image, &on_gpu.image, None).unwrap();
-            println!(
-                "{} at {name}: mean FLIP {f:.5}; covered {} / {}, holes {} / {}",
-                weighting, on_gpu.covered, cpu.covered, on_gpu.holes, cpu.holes
-            );
-            // The goal: mean FLIP ≤ 0.01 against the CPU twin.
-            assert!(f <= 0.01, "{weighting} at {name}: FLIP {f}");
-            // The two rasterizers cover the same pixels but for a few on silhouettes.
-            let covered_gap = on_gpu.covered.abs_diff(cpu.covered);
-            assert!(
-                covered_gap * 200 <= cpu.covered,
-                "covered {covered_gap} apart"
-            );
-            assert!(
-                on_gpu.holes * 100 <= on_gpu.covered.max(1),
-                "{} holes",
-                on_gpu.holes
-            );
+            crate::blends_agree(&format!("{weighting} at {name}"), &cpu, &on_gpu);
         }
     }
 }

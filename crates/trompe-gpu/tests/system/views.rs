@@ -6,7 +6,6 @@
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 use trompe::camera::Pinhole;
-use trompe::frame::metrics::flip;
 use trompe::geom::Mesh;
 use trompe::texturing::{BlendSettings, Holes, Weighting};
 use trompe::views::ViewSet;
@@ -82,20 +81,7 @@ pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
                 .unwrap()
                 .render(&camera)
                 .unwrap();
-            let f = flip(&cpu.image, &on_gpu.image, None).unwrap();
-            println!(
-                "{} at {name}: mean FLIP {f:.5}; covered {} / {}, holes {} / {}",
-                weighting, on_gpu.covered, cpu.covered, on_gpu.holes, cpu.holes
-            );
-            // The goal: mean FLIP ≤ 0.01 against the CPU twin.
-            assert!(f <= 0.01, "{weighting} at {name}: FLIP {f}");
-            let covered_gap = on_gpu.covered.abs_diff(cpu.covered);
-            assert!(
-                covered_gap * 200 <= cpu.covered,
-                "covered {covered_gap} apart"
-            );
-            let holes_gap = on_gpu.holes.abs_diff(cpu.holes);
-            assert!(holes_gap * 200 <= cpu.covered, "holes {holes_gap} apart");
+            crate::blends_agree(&format!("{weighting} at {name}"), &cpu, &on_gpu);
         }
     }
 }
