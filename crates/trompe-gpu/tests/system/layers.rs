@@ -8,20 +8,10 @@ use std::path::PathBuf;
 use trompe::camera::Pinhole;
 use trompe::layers::{self, BuildSettings};
 use trompe::scene::Scene;
-use trompe::texturing::{BlendSettings, Holes, Weighting};
+
 use trompe::views::capture::{CaptureSettings, capture_of};
 use trompe_gpu::Gpu;
 use trompe_gpu::layers::GpuLayers;
-
-/// Every weighting the GPU blends, and the per-point ones again prefiltered to the pixel.
-const WEIGHTINGS: [(Weighting, bool); 6] = [
-    (Weighting::Ulr { beta: 0.1 }, false),
-    (Weighting::Vdtm, false),
-    (Weighting::ViewMap, false),
-    (Weighting::BestFace, false),
-    (Weighting::Ulr { beta: 0.1 }, true),
-    (Weighting::ViewMap, true),
-];
 
 pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
     // A box behind the Duck beside a ball on a ground plane: objects that hide each other, so
@@ -46,18 +36,7 @@ pub fn image_layers_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
     let between = Pinhole::look_at(eye.as_vec3(), target, Vec3::Y, 45.0, 320, 240).unwrap();
     // The same, far smaller: a pixel spans several texels of the layers.
     let small = Pinhole::look_at(eye.as_vec3(), target, Vec3::Y, 45.0, 48, 36).unwrap();
-    for (weighting, prefilter) in WEIGHTINGS {
-        let settings = BlendSettings {
-            weighting,
-            prefilter,
-            holes: Holes::Fill(glam::Vec4::new(1.0, 0.0, 1.0, 1.0)),
-            ..BlendSettings::default()
-        };
-        let weighting = format!(
-            "{}{}",
-            weighting.name(),
-            if prefilter { ", prefiltered" } else { "" }
-        );
+    for (settings, weighting) in crate::every_blend() {
         let uploaded = GpuLayers::new(gpu, &set, &settings).unwrap();
         for (name, camera) in [
             ("view 2", views[2].pinhole()),

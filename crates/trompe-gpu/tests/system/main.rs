@@ -24,6 +24,34 @@ fn on_gpu(name: &str, test: fn(&Gpu)) -> Trial {
     })
 }
 
+/// Every weighting the GPU blends, and the per-point ones again prefiltered to the pixel, with
+/// holes filled magenta (so a hole is a pixel to compare on both devices): the settings and their
+/// name.
+pub fn every_blend() -> Vec<(trompe::texturing::BlendSettings, String)> {
+    use trompe::texturing::{BlendSettings, Holes, Weighting};
+    let ulr = Weighting::Ulr { beta: 0.1 };
+    [
+        (ulr, false),
+        (Weighting::Vdtm, false),
+        (Weighting::ViewMap, false),
+        (Weighting::BestFace, false),
+        (ulr, true),
+        (Weighting::ViewMap, true),
+    ]
+    .into_iter()
+    .map(|(weighting, prefilter)| {
+        let settings = BlendSettings {
+            weighting,
+            prefilter,
+            holes: Holes::Fill(glam::Vec4::new(1.0, 0.0, 1.0, 1.0)),
+            ..BlendSettings::default()
+        };
+        let filtered = if prefilter { ", prefiltered" } else { "" };
+        (settings, format!("{}{filtered}", weighting.name()))
+    })
+    .collect()
+}
+
 /// The GPU's projective-texturing frame against the CPU's, printed as `what`: mean FLIP ≤ 0.01
 /// (the goal), and the pixels covered and the holes each within 0.5 % of the covered pixels
 /// (two rasterizers' coverage may differ on a few silhouette pixels).

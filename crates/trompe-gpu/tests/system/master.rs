@@ -8,20 +8,10 @@ use std::path::PathBuf;
 use trompe::camera::Pinhole;
 use trompe::geom::Mesh;
 use trompe::master::{DEFAULT_SCALE, Encoding, encode_views};
-use trompe::texturing::{BlendSettings, Holes, Weighting};
+use trompe::texturing::{BlendSettings, Weighting};
 use trompe::views::capture::{CaptureSettings, capture};
 use trompe_gpu::Gpu;
 use trompe_gpu::master::GpuMasters;
-
-/// Every weighting the GPU blends, and the per-point ones again prefiltered to the pixel.
-const WEIGHTINGS: [(Weighting, bool); 6] = [
-    (Weighting::Ulr { beta: 0.1 }, false),
-    (Weighting::Vdtm, false),
-    (Weighting::ViewMap, false),
-    (Weighting::BestFace, false),
-    (Weighting::Ulr { beta: 0.1 }, true),
-    (Weighting::ViewMap, true),
-];
 
 /// The Duck captured from a ring of 12 views at 160 × 120 and encoded, and three cameras: view
 /// 3's own, one between views 0 and 1, a little higher, and the same at 48 × 36.
@@ -60,18 +50,7 @@ pub fn master_textures_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
         pinholes.as_slice(),
         enc.masters.as_slice(),
     );
-    for (weighting, prefilter) in WEIGHTINGS {
-        let settings = BlendSettings {
-            weighting,
-            prefilter,
-            holes: Holes::Fill(glam::Vec4::new(1.0, 0.0, 1.0, 1.0)),
-            ..BlendSettings::default()
-        };
-        let weighting = format!(
-            "{}{}",
-            weighting.name(),
-            if prefilter { ", prefiltered" } else { "" }
-        );
+    for (settings, weighting) in crate::every_blend() {
         let uploaded = GpuMasters::new(gpu, &mesh, masters, &settings).unwrap();
         let names = ["view 3", "between views 0 and 1", "between, 48 × 36"];
         for (name, camera) in names.iter().zip(&cameras) {

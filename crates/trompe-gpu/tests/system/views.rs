@@ -7,26 +7,16 @@ use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 use trompe::camera::Pinhole;
 use trompe::geom::Mesh;
-use trompe::texturing::{BlendSettings, Holes, Weighting};
+use trompe::texturing::BlendSettings;
 use trompe::views::ViewSet;
 use trompe::views::capture::{CaptureSettings, capture};
 use trompe::views::visibility::DepthMap;
 use trompe_gpu::Gpu;
 use trompe_gpu::views::GpuViews;
 
-/// Every weighting the GPU blends, and the per-point ones again prefiltered to the pixel.
-const WEIGHTINGS: [(Weighting, bool); 6] = [
-    (Weighting::Ulr { beta: 0.1 }, false),
-    (Weighting::Vdtm, false),
-    (Weighting::ViewMap, false),
-    (Weighting::BestFace, false),
-    (Weighting::Ulr { beta: 0.1 }, true),
-    (Weighting::ViewMap, true),
-];
-
 /// The Duck captured from a ring of 12 views at 160 × 120, with its depth maps, and a camera
-/// between views 0 and 1, a little higher, at 320 × 240.
-fn duck_views() -> (Mesh, ViewSet, Vec<DepthMap>, Pinhole) {
+/// between views 0 and 1, a little higher, at 320 × 240 and at 48 × 36.
+fn duck_views() -> (Mesh, ViewSet, Vec<DepthMap>, [Pinhole; 2]) {
     let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/gltf/Duck.glb");
     let settings = CaptureSettings {
         count: 12,
@@ -40,34 +30,15 @@ fn duck_views() -> (Mesh, ViewSet, Vec<DepthMap>, Pinhole) {
     let eye = (a + b) * 0.5 + DVec3::Y * 0.05 * a.length();
     let target = mesh.bounds().center();
     let between = Pinhole::look_at(eye.as_vec3(), target, Vec3::Y, 40.0, 320, 240).unwrap();
-    (mesh, set, depth, between)
+    // The same, far smaller: a pixel spans several texels of the views.
+    let small = Pinhole::look_at(eye.as_vec3(), target, Vec3::Y, 40.0, 48, 36).unwrap();
+    (mesh, set, depth, [between, small])
 }
 
 pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
-    let (mesh, set, depth, between) = duck_views();
+    let (mesh, set, depth, [between, small]) = duck_views();
     let views = set.views.as_slice();
-    // The camera between, far smaller: a pixel spans several texels of the views.
-    let small = Pinhole::look_at(
-        between.position().as_vec3(),
-        mesh.bounds().center(),
-        Vec3::Y,
-        40.0,
-        48,
-        36,
-    )
-    .unwrap();
-    for (weighting, prefilter) in WEIGHTINGS {
-        let settings = BlendSettings {
-            weighting,
-            prefilter,
-            holes: Holes::Fill(glam::Vec4::new(1.0, 0.0, 1.0, 1.0)),
-            ..BlendSettings::default()
-        };
-        let weighting = format!(
-            "{}{}",
-            weighting.name(),
-            if prefilter { ", prefiltered" } else { "" }
-        );
+    for (settings, weighting) in crate::every_blend() {
         // View 3 left out and seen from its own camera (leave-one-out), then the new camera.
         for (name, camera, exclude) in [
             ("view 3 left out", views[3].pinhole(), Some(3)),
@@ -89,16 +60,7 @@ pub fn calibrated_views_render_on_the_gpu_as_on_the_cpu(gpu: &Gpu) {
 /// The prefilter is at work where a pixel spans several texels: the far smaller camera's
 /// prefiltered frame is not the plain one, and the GPU's is the CPU's prefiltered frame.
 pub fn the_gpu_prefilters_as_the_cpu_where_a_pixel_spans_texels(gpu: &Gpu) {
-    let (mesh, set, depth, between) = duck_views();
-    let small = Pinhole::look_at(
-        between.position().as_vec3(),
-        mesh.bounds().center(),
-        Vec3::Y,
-        40.0,
-        48,
-        36,
-    )
-    .unwrap();
+    let (mesh, set, depth, [_, small]) = duck_views();
     let render = |prefilter: bool| {
         let settings = BlendSettings {
             prefilter,
@@ -134,7 +96,7 @@ pub fn the_gpu_prefilters_as_the_cpu_where_a_pixel_spans_texels(gpu: &Gpu) {
 }
 
 pub fn the_same_views_render_the_same_bits_on_repeated_runs(gpu: &Gpu) {
-    let (mesh, set, depth, between) = duck_views();
+    let (mesh, set, depth, [between, _]) = duck_views();
     let settings = BlendSettings::default();
     let uploaded = GpuViews::new(gpu, &mesh, (&set.views, &depth), &settings, None).unwrap();
     let first = uploaded.render(&between).unwrap();
