@@ -8,7 +8,6 @@ use std::path::PathBuf;
 use trompe::camera::Pinhole;
 use trompe::layers::{self, BuildSettings};
 use trompe::scene::Scene;
-
 use trompe::views::capture::{CaptureSettings, capture_of};
 use trompe_gpu::Gpu;
 use trompe_gpu::layers::GpuLayers;
