@@ -58,6 +58,14 @@ impl<'a> GpuLayers<'a> {
         settings: &BlendSettings,
     ) -> Result<Self, DeviceError> {
         check_settings(settings)?;
+        if set.layers.len() != set.views.len() {
+            let what = format!(
+                "{} views but {} views' layers",
+                set.views.len(),
+                set.layers.len()
+            );
+            return Err(GpuError::Unsupported { what }.into());
+        }
         // The objects' triangles, one after another: a face's number in the frame.
         let corners: Vec<[glam::Vec3; 3]> = set
             .meshes

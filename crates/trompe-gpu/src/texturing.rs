@@ -340,8 +340,8 @@ pub(crate) fn texture_array(
         )));
     }
     let bytes = u64::from(w) * u64::from(h) * u64::from(texel) * u64::from(layers.max(1));
-    trompe::memory::check(|| format!("{layers} {label} of {w} × {h}"), bytes)?;
     let what = format!("{layers} {label} of {w} × {h}");
+    trompe::memory::check(|| what.clone(), bytes)?;
     let texture = gpu.allocating((&what, bytes), || {
         gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
