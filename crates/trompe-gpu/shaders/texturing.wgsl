@@ -143,39 +143,44 @@ const MAX_FOOTPRINT_TAPS: u32 = 8u;
 // texels, at most MAX_FOOTPRINT_TAPS; `at`'s own lookup where none gives a colour), one lookup
 // otherwise (src/texturing/mod.rs `prefiltered`).
 fn colour(view: u32, at: At) -> vec4<f32> {
-    if (params.mode.w == 0u) {
-        return lookup(view, at);
-    }
+    // The taps across the footprint: n × n of them where it spans n ≥ 2 texels, else none.
+    var n = 0u;
     let p = texel(view, at);
-    if (p.z == 0.0) {
-        return lookup(view, at);
-    }
-    var texels = 0.0;
-    for (var k = 0u; k < 2u; k++) {
-        let q = texel(view, offset(at, select(0.0, 1.0, k == 0u), select(1.0, 0.0, k == 0u)));
-        if (q.z != 0.0) {
-            texels = max(texels, length(q.xy - p.xy));
-        }
-    }
-    if (!(texels >= 2.0 && texels < 3e38)) {
-        return lookup(view, at);
-    }
-    let n = min(u32(floor(texels)), MAX_FOOTPRINT_TAPS);
-    var sum = vec4<f32>(0.0);
-    var count = 0u;
-    for (var j = 0u; j < n; j++) {
-        for (var i = 0u; i < n; i++) {
-            let s = (f32(i) + 0.5) / f32(n) - 0.5;
-            let t = (f32(j) + 0.5) / f32(n) - 0.5;
-            let c = lookup(view, offset(at, s, t));
-            if (c.w > 0.0) {
-                sum += c;
-                count += 1u;
+    if (params.mode.w != 0u && p.z != 0.0) {
+        var texels = 0.0;
+        for (var k = 0u; k < 2u; k++) {
+            let q = texel(view, offset(at, select(0.0, 1.0, k == 0u), select(1.0, 0.0, k == 0u)));
+            if (q.z != 0.0) {
+                texels = max(texels, length(q.xy - p.xy));
             }
         }
+        if (texels >= 2.0 && texels < 3e38) {
+            n = min(u32(floor(texels)), MAX_FOOTPRINT_TAPS);
+        }
     }
-    if (count == 0u) {
-        return lookup(view, at);
+    // One lookup a tap, then `at`'s own where no tap gave a colour (the only one without taps):
+    // a single place that looks up, so the shader holds one copy of the source's lookup.
+    let taps = n * n;
+    var sum = vec4<f32>(0.0);
+    var count = 0u;
+    for (var k = 0u; k <= taps; k++) {
+        if (k == taps && count > 0u) {
+            break;
+        }
+        var q = at;
+        if (k < taps) {
+            let s = (f32(k % n) + 0.5) / f32(n) - 0.5;
+            let t = (f32(k / n) + 0.5) / f32(n) - 0.5;
+            q = offset(at, s, t);
+        }
+        let c = lookup(view, q);
+        if (k == taps) {
+            return c;
+        }
+        if (c.w > 0.0) {
+            sum += c;
+            count += 1u;
+        }
     }
     return vec4<f32>((sum / f32(count)).xyz, 1.0);
 }
@@ -191,9 +196,13 @@ fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return atan2(length(cross(a, b)), dot(a, b));
 }
 
-// The blend of the views that take part in one pass, by the per-point weights; w = 0 when no
-// view gives a colour.
-fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
+// The views a blend weighs and their weights, chosen by one weighting for one pass
+// (`choose_per_point`, `choose_view_map`, the best-face table) and blended by `blend_chosen`.
+var<private> chosen_views: array<u32, BLEND_MAX>;
+var<private> chosen_weights: array<f32, BLEND_MAX>;
+
+// The per-point weights of the views that take part in one pass, into `chosen_*`: how many.
+fn choose_per_point(at: At, clearly: bool) -> u32 {
     let x = position(at);
     let v2 = x - params.eye.xyz;
     let k = min(params.size.w, K_MAX);
@@ -230,58 +239,57 @@ fn blend_per_point(at: At, clearly: bool) -> vec4<f32> {
         n += 1u;
     }
     if (n == 0u || k == 0u) {
-        return vec4<f32>(0.0);
+        return 0u;
     }
+    // A view looking along the eye's ray exactly takes the point alone.
+    chosen_views[0] = idx[0];
+    chosen_weights[0] = 1.0;
     if (pen[0] <= EXACT) {
-        return colour(idx[0], at);
+        return 1u;
     }
     let taken = min(n, k);
     var threshold = worst * (1.0 + 1e-3);
     if (n > k) {
         threshold = pen[k];
     }
-    var views: array<u32, BLEND_MAX>;
-    var weights: array<f32, BLEND_MAX>;
+    var raw: array<f32, K_MAX>;
     var total = 0.0;
     for (var j = 0u; j < taken; j++) {
         var w = 1.0 / pen[j];
         if (ulr) {
             w = max(1.0 - pen[j] / threshold, 0.0);
         }
-        views[j] = idx[j];
-        weights[j] = w;
+        raw[j] = w;
         total += w;
     }
+    // Weights that do not sum to a positive number: the best view alone (chosen above).
     if (!(total > 0.0)) {
-        return colour(idx[0], at);
+        return 1u;
     }
     for (var j = 0u; j < taken; j++) {
-        weights[j] /= total;
+        chosen_views[j] = idx[j];
+        chosen_weights[j] = raw[j] / total;
     }
-    return blend_colours(&views, &weights, taken, at);
+    return taken;
 }
 
 // The most views one blend weighs: the per-point weightings' k, or the view map's three.
 const BLEND_MAX: u32 = max(K_MAX, 3u);
 
-// The colours the views `views[0..n]` give `at`, weighted by `weights` (a view of weight 0
-// left out): a view that gives none is dropped and the others renormalized (src/texturing/
-// mod.rs `blend`); w = 0 when none gives a colour.
-fn blend_colours(
-    views: ptr<function, array<u32, BLEND_MAX>>,
-    weights: ptr<function, array<f32, BLEND_MAX>>,
-    n: u32,
-    at: At,
-) -> vec4<f32> {
+// The colours the chosen views `chosen_views[0..n]` give `at`, weighted by `chosen_weights` (a
+// view of weight 0 left out): a view that gives none is dropped and the others renormalized
+// (src/texturing/mod.rs `blend`); w = 0 when none gives a colour. The shader's one call of it
+// holds its one copy of `colour`.
+fn blend_chosen(n: u32, at: At) -> vec4<f32> {
     var sum = vec3<f32>(0.0);
     var kept = 0.0;
     var dropped = false;
     for (var j = 0u; j < n; j++) {
-        let w = (*weights)[j];
+        let w = chosen_weights[j];
         if (w <= 0.0) {
             continue;
         }
-        let c = colour((*views)[j], at);
+        let c = colour(chosen_views[j], at);
         if (c.w > 0.0) {
             sum += c.xyz * w;
             kept += w;
@@ -304,10 +312,10 @@ fn map_view(face: u32, sample: u32) -> u32 {
     return (map_views[i / 2u] >> (16u * (i % 2u))) & 0xffffu;
 }
 
-// The view-map blend of the views that take part in one pass: the (at most three) views of
-// the spherical triangle the direction to the eye falls in, by its barycentric coordinates,
-// those that take part renormalized; w = 0 when none gives a colour.
-fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
+// The view-map weights of the views that take part in one pass, into `chosen_*`: the (at most
+// three) views of the spherical triangle the direction to the eye falls in, by its barycentric
+// coordinates, those that take part renormalized; how many.
+fn choose_view_map(at: At, face: u32, clearly: bool) -> u32 {
     let omega = normalize(params.eye.xyz - position(at));
     var views: array<u32, BLEND_MAX>;
     var weights: array<f32, BLEND_MAX>;
@@ -354,12 +362,13 @@ fn blend_view_map(at: At, face: u32, clearly: bool) -> vec4<f32> {
         kept_weight += weights[e];
     }
     if (kept_weight <= 0.0) {
-        return vec4<f32>(0.0);
+        return 0u;
     }
     for (var e = 0u; e < n; e++) {
-        weights[e] /= kept_weight;
+        chosen_views[e] = views[e];
+        chosen_weights[e] = weights[e] / kept_weight;
     }
-    return blend_colours(&views, &weights, n, at);
+    return n;
 }
 
 @compute @workgroup_size(8, 8)
@@ -379,17 +388,21 @@ fn blend_views(@builtin(global_invocation_id) id: vec3<u32>) {
     var c = vec4<f32>(0.0);
     for (var round = 0u; round < 2u; round++) {
         let clearly = round == 0u;
+        var n = 0u;
         if (params.mode.x == 2u) {
             // The table's view alone, where it takes part in this pass.
             let entry = best[v.x - 1u];
             if (entry > 0u && takes_part(entry - 1u, at, clearly)) {
-                c = colour(entry - 1u, at);
+                chosen_views[0] = entry - 1u;
+                chosen_weights[0] = 1.0;
+                n = 1u;
             }
         } else if (params.mode.x == 3u) {
-            c = blend_view_map(at, v.x - 1u, clearly);
+            n = choose_view_map(at, v.x - 1u, clearly);
         } else {
-            c = blend_per_point(at, clearly);
+            n = choose_per_point(at, clearly);
         }
+        c = blend_chosen(n, at);
         if (c.w > 0.0) {
             break;
         }
