@@ -8,15 +8,16 @@
 //! ties broken by point index, so the frame is the same for any thread count.
 
 use super::HybridReflections;
-use crate::camera::{C3rc, Pinhole, Projection};
+use super::plan::{DEPTH_SLACK, KeptNode, Placement, ReflectorCamera, SplatPlan, is_reflector};
+use crate::camera::{Pinhole, Projection};
 use crate::frame::{Frame, Image, NO_OBJECT};
 use crate::geom::Ray;
 use crate::progress::Progress;
 use crate::render::shading::{lambert, lit};
 use crate::render::{RenderError, Tracer, shade_pixels};
-use crate::scene::{Scene, Surface, View};
+use crate::scene::Scene;
 use crate::trace::{Bvh, Exact, Hit, RayQuery, SecondaryQuery};
-use glam::{DMat4, DVec3, Mat3, Vec3};
+use glam::{DVec3, Mat3, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -24,9 +25,6 @@ use std::time::{Duration, Instant};
 /// Bytes a pixel costs in a hybrid frame beyond a traced one: the G-buffer hit, the splat key,
 /// the resolved radiance.
 pub const BYTES_PER_PIXEL: u64 = 128;
-
-/// Relative depth slack between a splat's image point and the surface the eye sees there.
-const DEPTH_SLACK: f32 = 0.02;
 
 /// What one frame did (paper 2 Table 2's columns, and more).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -138,18 +136,9 @@ pub struct HybridFrame {
     /// Per pixel, the object whose point the splats put there ([`NO_OBJECT`] where none did:
     /// not a reflector, or the environment shows).
     pub reached: Image<u32>,
-}
-
-/// A reflector triangle's camera, with what splatting needs.
-struct Camera3 {
-    /// The reflector object.
-    object: u32,
-    /// World space.
-    world: C3rc,
-    /// Largest sweep parameter any diffuse point can have.
-    lambda_max: f64,
-    /// The reflector triangle's area on screen, pixels (0 when it cannot be projected).
-    pixels: f64,
+    /// Per pixel, the point whose splat won it, in the plan's numbering
+    /// ([`Placement::offsets`]; [`NO_OBJECT`] where none did).
+    pub winners: Image<u32>,
 }
 
 /// Renders `scene` at time `t` with the hybrid method over `clouds`.
@@ -209,26 +198,22 @@ pub fn render_frame_from(
         .collect();
     stats.gbuffer = start.elapsed();
 
-    let cameras = reflector_cameras(&view, &gbuffer, clouds);
-    stats.c3rcs = cameras.len() as u64;
     stats.reflector_pixels = gbuffer
         .iter()
         .flatten()
         .filter(|h| is_reflector(&view.surfaces[h.object as usize]))
         .count() as u64;
-    let placed = Placed::at(clouds, scene, t);
-
     let splat_size = clouds.settings.splat.clamp(1, 2);
     let start = Instant::now();
-    let culled: Vec<(Vec<(u32, u32)>, u64)> = cameras
-        .par_iter()
-        .map(|cam| cull(cam, clouds, &placed, splat_size))
-        .collect();
+    let seen = super::plan::seen_reflectors(
+        &view,
+        gbuffer.iter().flatten().map(|h| (h.object, h.triangle)),
+    );
+    let plan = SplatPlan::new(clouds, scene, &view, t, &seen, splat_size);
     stats.cull = start.elapsed();
-    for (leaves, tested) in &culled {
-        stats.leaves_kept += leaves.len() as u64;
-        stats.nodes_tested += tested;
-    }
+    stats.c3rcs = plan.cameras.len() as u64;
+    stats.leaves_kept = plan.nodes_kept();
+    stats.nodes_tested = plan.nodes_tested;
 
     let start = Instant::now();
     let keys: Vec<AtomicU64> = (0..gbuffer.len())
@@ -245,10 +230,10 @@ pub fn render_frame_from(
         seen: &seen,
         size: splat_size,
     };
-    let counts = cameras
+    let counts = plan
+        .cameras
         .par_iter()
-        .zip(&culled)
-        .map(|(cam, (leaves, _))| project(cam, leaves, clouds, &placed, &splat))
+        .map(|cam| project(cam, clouds, &plan.placement, &splat))
         .reduce(|| [0u64; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
     stats.points_projected = counts[0];
     stats.projections = counts[1];
@@ -260,7 +245,8 @@ pub fn render_frame_from(
     stats.project = start.elapsed();
 
     let start = Instant::now();
-    let (placements, offsets) = (&placed.world, &placed.offsets);
+    let placed = &plan.placement;
+    let placements = &placed.world;
     let normal_from_object: Vec<Mat3> = placements
         .iter()
         .map(|m| Mat3::from_mat4(m.as_mat4()).inverse().transpose())
@@ -276,9 +262,7 @@ pub fn render_frame_from(
             if key == u64::MAX {
                 return Reflected::Nothing;
             }
-            let global = (key & 0xFFFF_FFFF) as u32;
-            let c = offsets.partition_point(|&o| o <= global) - 1;
-            let i = (global - offsets[c]) as usize;
+            let (c, i) = placed.locate((key & 0xFFFF_FFFF) as u32);
             let cloud = &clouds.clouds[c];
             let q = placements[c].transform_point3(cloud.points.positions[i].as_dvec3());
             let mut n = (normal_from_object[c] * cloud.points.normals[i]).normalize_or_zero();
@@ -339,8 +323,17 @@ pub fn render_frame_from(
                 if k == u64::MAX {
                     return NO_OBJECT;
                 }
-                let global = (k & 0xFFFF_FFFF) as u32;
-                clouds.clouds[offsets.partition_point(|&o| o <= global) - 1].object
+                clouds.clouds[placed.locate((k & 0xFFFF_FFFF) as u32).0].object
+            })
+            .collect(),
+    )?;
+    let winners = Image::from_vec(
+        w,
+        h,
+        keys.iter()
+            .map(|k| match k.load(Ordering::Relaxed) {
+                u64::MAX => NO_OBJECT,
+                k => (k & 0xFFFF_FFFF) as u32,
             })
             .collect(),
     )?;
@@ -348,174 +341,8 @@ pub fn render_frame_from(
         frame,
         stats,
         reached,
+        winners,
     })
-}
-
-fn is_reflector(s: &Surface) -> bool {
-    !matches!(s, Surface::Diffuse(_))
-}
-
-/// One camera for every reflector triangle some pixel sees, in (object, triangle) order.
-fn reflector_cameras(
-    view: &View,
-    gbuffer: &[Option<Hit>],
-    clouds: &HybridReflections,
-) -> Vec<Camera3> {
-    let mut seen: Vec<Vec<bool>> = view
-        .meshes
-        .iter()
-        .map(|m| vec![false; m.triangle_count()])
-        .collect();
-    for h in gbuffer.iter().flatten() {
-        if is_reflector(&view.surfaces[h.object as usize]) {
-            seen[h.object as usize][h.triangle as usize] = true;
-        }
-    }
-    // The farthest any diffuse point can be from a reflector point: from the clouds' boxes.
-    let corners: Vec<DVec3> = clouds
-        .clouds
-        .iter()
-        .flat_map(|c| {
-            let b = view.meshes[c.object as usize].bounds();
-            (0..8).map(move |k| {
-                DVec3::new(
-                    if k & 1 == 0 { b.min.x } else { b.max.x } as f64,
-                    if k & 2 == 0 { b.min.y } else { b.max.y } as f64,
-                    if k & 4 == 0 { b.min.z } else { b.max.z } as f64,
-                )
-            })
-        })
-        .collect();
-    let eye = view.camera.position();
-    let mut out = Vec::new();
-    for (o, flags) in seen.iter().enumerate() {
-        let mesh = &view.meshes[o];
-        for (tri, _) in flags.iter().enumerate().filter(|(_, s)| **s) {
-            let idx = mesh.triangles[tri];
-            let v = idx.map(|i| mesh.positions[i as usize].as_dvec3());
-            let n = idx.map(|i| mesh.normals[i as usize].as_dvec3());
-            let Some(world) = C3rc::reflector(v, n, eye) else {
-                continue;
-            };
-            // |Q − p| ≤ max over the box corners of the distance to a vertex, and λ = |Q − p| /
-            // |Σ bᵢ dᵢ|, whose smallest value is the distance from the origin to the triangle
-            // of the dᵢ.
-            let far = corners
-                .iter()
-                .map(|q| v.iter().map(|vi| (*q - *vi).length()).fold(0.0, f64::max))
-                .fold(0.0, f64::max);
-            let shortest = origin_to_triangle(world.d);
-            let lambda_max = if shortest > 1e-6 {
-                far / shortest * (1.0 + 1e-9)
-            } else {
-                f64::INFINITY
-            };
-            let screen = v.map(|p| view.camera.project(p).map(|ip| ip.uv));
-            let pixels = match screen {
-                [Some(a), Some(b), Some(c)] => 0.5 * (b - a).perp_dot(c - a).abs(),
-                _ => 0.0,
-            };
-            out.push(Camera3 {
-                object: o as u32,
-                world,
-                lambda_max,
-                pixels,
-            });
-        }
-    }
-    out
-}
-
-/// The camera moved into an object's space (affine maps keep the sweep, its λ and barycentrics).
-fn into_object(c: &C3rc, inverse: &DMat4) -> C3rc {
-    C3rc {
-        v: c.v.map(|p| inverse.transform_point3(p)),
-        d: c.d.map(|d| inverse.transform_vector3(d)),
-    }
-}
-
-/// The nodes `(cloud, node)` whose boxes the camera may see and whose points it reads: leaves,
-/// or inner nodes whose points it needs so few of (a stride of a leaf's worth or more, see
-/// [`stride`]) that reading them thinned beats descending; and the nodes tested.
-fn cull(
-    cam: &Camera3,
-    clouds: &HybridReflections,
-    placed: &Placed,
-    splat: u32,
-) -> (Vec<(u32, u32)>, u64) {
-    let (inverse, scales) = (&placed.inverse, &placed.scales);
-    let mut kept = Vec::new();
-    let mut tested = 0u64;
-    let leaf_points = clouds.settings.tree.leaf_points.max(1);
-    let lod = clouds.settings.level_of_detail;
-    for (c, cloud) in clouds.clouds.iter().enumerate() {
-        if cloud.tree.nodes.is_empty() {
-            continue;
-        }
-        let local = into_object(&cam.world, &inverse[c]);
-        let mut stack = vec![0u32];
-        while let Some(id) = stack.pop() {
-            let node = &cloud.tree.nodes[id as usize];
-            tested += 1;
-            let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
-            if !local.may_see_box(lo, hi, cam.lambda_max) {
-                continue;
-            }
-            let coarse = || {
-                let step = stride(cam, &local, node, cloud.spacing, scales[c], splat, lod);
-                (node.points.1 as usize).div_ceil(step) <= leaf_points
-            };
-            if node.leaf || coarse() {
-                kept.push((c as u32, id));
-            } else {
-                stack.extend(node.first..node.first + node.count);
-            }
-        }
-    }
-    kept.sort_unstable();
-    (kept, tested)
-}
-
-/// Where each cloud is this frame.
-struct Placed {
-    /// Object → world.
-    world: Vec<DMat4>,
-    /// World → object.
-    inverse: Vec<DMat4>,
-    /// World units per object unit.
-    scales: Vec<f64>,
-    /// Each cloud's first point in the frame's point numbering.
-    offsets: Vec<u32>,
-}
-
-impl Placed {
-    /// The clouds of `clouds` as `scene` places them at time `t`.
-    fn at(clouds: &HybridReflections, scene: &Scene, t: f32) -> Placed {
-        let world: Vec<DMat4> = clouds
-            .clouds
-            .iter()
-            .map(|c| {
-                scene.objects[c.object as usize]
-                    .world_from_object_at(t)
-                    .as_dmat4()
-            })
-            .collect();
-        let offsets = clouds
-            .clouds
-            .iter()
-            .scan(0u32, |acc, c| {
-                let o = *acc;
-                *acc += c.points.len() as u32;
-                Some(o)
-            })
-            .collect();
-        Placed {
-            inverse: world.iter().map(|m| m.inverse()).collect(),
-            scales: world.iter().map(mean_scale).collect(),
-            world,
-            offsets,
-        }
-    }
 }
 
 /// Where splats go and what they are tested against.
@@ -531,39 +358,34 @@ struct Splat<'a> {
 /// Projects the points of `leaves` through `cam` and splats them; returns points projected,
 /// valid projections and accepted splats.
 fn project(
-    cam: &Camera3,
-    leaves: &[(u32, u32)],
+    cam: &ReflectorCamera,
     clouds: &HybridReflections,
-    placed: &Placed,
+    placed: &Placement,
     splat: &Splat,
 ) -> [u64; 3] {
-    let Placed {
+    let Placement {
         world: placements,
         inverse,
-        scales,
         offsets,
+        ..
     } = placed;
     let (w, h) = splat.camera.resolution();
     let eye = splat.camera.position();
     let mut counts = [0u64; 3];
     let mut local = None;
-    for &(c, node) in leaves {
+    for &KeptNode {
+        cloud: c,
+        node,
+        stride,
+    } in &cam.nodes
+    {
         let cloud = &clouds.clouds[c as usize];
         if local.map(|(lc, _)| lc) != Some(c) {
-            local = Some((c, into_object(&cam.world, &inverse[c as usize])));
+            local = Some((c, cam.local(&inverse[c as usize])));
         }
         let Some((_, lcam)) = local else { continue };
         let node = &cloud.tree.nodes[node as usize];
-        let step = stride(
-            cam,
-            &lcam,
-            node,
-            cloud.spacing,
-            scales[c as usize],
-            splat.size,
-            clouds.settings.level_of_detail,
-        );
-        for i in (node.points.0..node.points.0 + node.points.1).step_by(step) {
+        for i in (node.points.0..node.points.0 + node.points.1).step_by(stride.max(1) as usize) {
             counts[0] += 1;
             let q = cloud.points.positions[i as usize].as_dvec3();
             let global = offsets[c as usize] + i;
@@ -606,75 +428,6 @@ fn project(
         }
     }
     counts
-}
-
-/// World units per object unit of a placement: its mean scale.
-fn mean_scale(m: &DMat4) -> f64 {
-    let (s, _, _) = m.to_scale_rotation_translation();
-    (s.x.abs() * s.y.abs() * s.z.abs()).cbrt()
-}
-
-/// Points a splat's area should receive for the reflection to show no holes.
-pub const POINTS_PER_SPLAT: f64 = 4.0;
-
-/// Every how many points of `node` the camera needs (level of detail, beyond paper 2): a
-/// surface of `spacing`-apart points facing the reflector at sweep `λ` puts about
-/// `A(λ) / spacing²` points into the reflector triangle's `pixels`, where `A(λ) = |n(λ)|/2` is
-/// the area of the sweeping triangle. Where that is more than [`POINTS_PER_SPLAT`] a splat, the
-/// leaf is read with a stride. `A` is taken at its least over the node's sweep range,
-/// `λ ≥` the distance from the triangle to the node's box (construction rays are unit, so
-/// `|Σ bᵢ dᵢ| ≤ 1`); surfaces seen obliquely only hold more points. A sweep that folds
-/// (`A` reaches 0) gets every point.
-fn stride(
-    cam: &Camera3,
-    local: &C3rc,
-    node: &super::kdtree::Node,
-    spacing: f32,
-    scale: f64,
-    splat: u32,
-    lod: bool,
-) -> usize {
-    if !lod || cam.pixels <= 0.0 || spacing.is_nan() || spacing <= 0.0 {
-        return 1;
-    }
-    // Distance from the triangle's box to the node's box, in object space, then world.
-    let (tlo, thi) = local.hull_box(0.0, 0.0);
-    let gap = (node.lo.as_dvec3() - thi)
-        .max(tlo - node.hi.as_dvec3())
-        .max(DVec3::ZERO)
-        .length();
-    let lambda_lo = gap * scale;
-    let area = cam.world.least_sweep_area(lambda_lo, cam.lambda_max);
-    let per_pixel = area / (f64::from(spacing) * f64::from(spacing) * cam.pixels);
-    let k = per_pixel * f64::from(splat * splat) / POINTS_PER_SPLAT;
-    if k.is_finite() && k >= 2.0 {
-        (k.floor() as usize).min(node.points.1 as usize).max(1)
-    } else {
-        1
-    }
-}
-
-/// The distance from the origin to the triangle `t`.
-fn origin_to_triangle(t: [DVec3; 3]) -> f64 {
-    let (a, b, c) = (t[0], t[1], t[2]);
-    let n = (b - a).cross(c - a);
-    let mut best = a.length().min(b.length()).min(c.length());
-    for (p, q) in [(a, b), (b, c), (c, a)] {
-        let e = q - p;
-        let s = (-p.dot(e) / e.length_squared().max(1e-300)).clamp(0.0, 1.0);
-        best = best.min((p + e * s).length());
-    }
-    if n.length_squared() > 1e-300 {
-        // The origin's foot on the plane, if inside the triangle.
-        let foot = n * (a.dot(n) / n.length_squared());
-        let inside = [(a, b), (b, c), (c, a)]
-            .iter()
-            .all(|(p, q)| (*q - *p).cross(foot - *p).dot(n) >= 0.0);
-        if inside {
-            best = best.min(foot.length());
-        }
-    }
-    best
 }
 
 /// What a reflector pixel's splats resolved to.
@@ -740,63 +493,5 @@ impl SecondaryQuery for SplatAnswers<'_> {
             },
             None => self.exact.secondary_hit(reflector, ray),
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::hybrid::HybridSettings;
-
-    #[test]
-    fn culling_real_trees_drops_no_leaf_with_a_seen_point() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/c3rc-bunny.toml");
-        let mut scene = Scene::load(&path).unwrap();
-        (scene.camera.width, scene.camera.height) = (120, 80);
-        let clouds = HybridReflections::prepare(&scene, HybridSettings::default()).unwrap();
-        let view = scene.view(0.0).unwrap();
-        let bvh = Bvh::build(view.meshes.clone()).unwrap();
-        let gbuffer: Vec<Option<Hit>> = (0..80)
-            .flat_map(|y| (0..120).map(move |x| (x, y)))
-            .map(|(x, y)| {
-                let ray = view
-                    .camera
-                    .ray(crate::frame::pixel_centre(x as f64, y as f64));
-                bvh.closest_hit(&ray, f32::INFINITY)
-            })
-            .collect();
-        let cameras = reflector_cameras(&view, &gbuffer, &clouds);
-        assert!(cameras.len() > 100);
-        let placed = Placed::at(&clouds, &scene, 0.0);
-        let inverse = &placed.inverse;
-        let (mut kept, mut dropped_leaves) = (0, 0);
-        for cam in cameras.iter().step_by(7) {
-            let (nodes, _) = cull(cam, &clouds, &placed, 2);
-            kept += nodes.len();
-            for (c, cloud) in clouds.clouds.iter().enumerate() {
-                // The points the kept nodes read (thinned or not).
-                let mut read = vec![false; cloud.points.len()];
-                for &(_, id) in nodes.iter().filter(|(nc, _)| *nc == c as u32) {
-                    let (first, count) = cloud.tree.nodes[id as usize].points;
-                    read[first as usize..(first + count) as usize].fill(true);
-                }
-                let local = into_object(&cam.world, &inverse[c]);
-                for node in cloud.tree.nodes.iter().filter(|n| n.leaf) {
-                    if read[node.first as usize] {
-                        continue;
-                    }
-                    dropped_leaves += 1;
-                    for i in node.first..node.first + node.count {
-                        let q = cloud.points.positions[i as usize].as_dvec3();
-                        assert!(
-                            !local.sees(q, cam.lambda_max),
-                            "a dropped leaf holds point {i}, which the camera sees"
-                        );
-                    }
-                }
-            }
-        }
-        println!("kept {kept} leaves, dropped {dropped_leaves}");
-        assert!(kept > 0 && dropped_leaves > kept);
     }
 }

@@ -21,10 +21,12 @@
 
 pub mod frame;
 pub mod kdtree;
+pub mod plan;
 pub mod points;
 
 pub use frame::{FrameStats, HybridFrame, render_frame, render_frame_from};
 pub use kdtree::{KdTree, TreeSettings, TreeStats};
+pub use plan::{KeptNode, Placement, ReflectorCamera, SplatPlan};
 pub use points::PointSet;
 
 use crate::geom::Aabb;

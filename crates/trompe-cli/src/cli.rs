@@ -135,6 +135,9 @@ pub enum Command {
         #[arg(long, value_name = "RUNS",
               value_parser = clap::value_parser!(u32).range(1..=1000))]
         goal: Option<u32>,
+        /// With the `gpu` suite: run only these workloads (comma-separated).
+        #[arg(long, value_enum, value_delimiter = ',', value_name = "WORKLOADS")]
+        only: Vec<crate::bench::gpu::GpuWorkload>,
     },
 }
 
@@ -904,11 +907,12 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             suite: BenchSuite::Gpu,
             quick,
+            only,
             ..
         } => {
             let inputs = trompe::eval::fixtures::Shipped::locate();
             let (heading, figures) =
-                with_spinner("timing", || crate::bench::gpu::gpu(&inputs, quick))?;
+                with_spinner("timing", || crate::bench::gpu::gpu(&inputs, quick, &only))?;
             let report = crate::bench::BenchReport { heading, figures };
             crate::output::report("bench", &report, &report)?;
         }

@@ -221,8 +221,12 @@ impl GpuRequest {
             })?;
         let info = adapter.get_info();
         let limits = adapter.limits();
+        // 64-bit floats where the adapter has them: the C3RC projection's roots in the CPU's
+        // precision (`crate::hybrid`).
+        let features = adapter.features() & wgpu::Features::SHADER_F64;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("trompe"),
+            required_features: features,
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -285,6 +289,11 @@ impl Gpu {
     /// The adapter's name.
     pub fn name(&self) -> &str {
         &self.info.name
+    }
+
+    /// Whether shaders on this device compute in 64-bit floats.
+    pub fn has_f64(&self) -> bool {
+        self.device.features().contains(wgpu::Features::SHADER_F64)
     }
 
     /// The limits the device was opened with (the adapter's own).

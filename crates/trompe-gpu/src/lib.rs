@@ -11,6 +11,8 @@
 //!   and the impostor methods: the same tracer with what mirrors and glass send out answered
 //!   by walking impostors.
 //! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
+//! - [`hybrid`]: paper 2's hybrid reflections — points projected through continuous 3-ray
+//!   cameras in a compute shader and splatted, the tracer shading with them.
 //! - [`raster`]: the visibility pass — triangles drawn by the GPU rasterizer through any
 //!   impostor camera or the eye, under a depth-peeling ceiling if asked.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
@@ -36,6 +38,7 @@
 pub mod build;
 pub mod bvh;
 pub mod device;
+pub mod hybrid;
 pub mod layers;
 pub mod master;
 pub mod methods;

@@ -9,6 +9,7 @@
 //! | `raster` | the eye's hits drawn by the GPU rasterizer into a visibility buffer, shaded at depth 1 (mirrors and glass look the panorama up), shadows traced |
 //! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), graph cameras' frustum by frustum; all kept across frames, placed and lit by the library's [`Sequence`] |
 //! | `octahedral` | the atlases the library bakes drawn by the engines' shader (`shaders/octahedral_impostor.wgsl`), one instanced draw an atlas, then shaded ([`crate::octahedral`]); kept while nothing moves |
+//! | `c3rc` | the G-buffer traced, the library's plan of cameras and culled kd-tree nodes on the CPU, every point projected through its continuous 3-ray camera in a compute shader and splatted (the nearest to the mirror by two 32-bit atomic minimum passes), then the tracer with the splats answering first reflections ([`crate::hybrid`]) |
 //! | `layered`, `projective` | the layers the library photographs and builds (paper 4), or its photographs whole (the paper's baseline), uploaded once and blended by the GPU's texturing shader ([`crate::layers`], [`crate::views`]), over the panorama |
 //! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
@@ -51,6 +52,7 @@ pub fn has_gpu_path(kind: MethodKind) -> bool {
             | MethodKind::Octahedral
             | MethodKind::Layered
             | MethodKind::Projective
+            | MethodKind::C3rc
     )
 }
 
@@ -129,6 +131,8 @@ pub enum DeviceRenderer<'a> {
     Octahedral(Box<GpuOctahedral<'a>>),
     /// The layered and projective methods on the GPU.
     Photographed(Box<GpuPhotographed<'a>>),
+    /// The `c3rc` method on the GPU.
+    Hybrid(Box<crate::hybrid::GpuHybridMethod<'a>>),
 }
 
 /// The layered or projective method on the GPU, over one scene: the library's photographs of it
@@ -229,6 +233,11 @@ impl<'a> DeviceRenderer<'a> {
                     })
                     .into());
                 }
+                if kind == MethodKind::C3rc {
+                    return Ok(DeviceRenderer::Hybrid(Box::new(
+                        crate::hybrid::GpuHybridMethod::new(gpu, scene, settings.hybrid),
+                    )));
+                }
                 // The raster method's glass looks the panorama up: it refracts nothing.
                 let (primary, refraction) = match kind {
                     MethodKind::Raster => (Primary::Rasterized, Refraction::Exact),
@@ -270,6 +279,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Gpu(m) => m.kind,
             DeviceRenderer::Octahedral(_) => MethodKind::Octahedral,
             DeviceRenderer::Photographed(m) => m.kind,
+            DeviceRenderer::Hybrid(_) => MethodKind::C3rc,
         }
     }
 
@@ -280,6 +290,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Gpu(m) => m.gpu.name(),
             DeviceRenderer::Octahedral(m) => m.gpu.name(),
             DeviceRenderer::Photographed(m) => m.gpu.name(),
+            DeviceRenderer::Hybrid(m) => m.device_name(),
         }
     }
 
@@ -294,6 +305,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Cpu(renderer) => Ok(renderer.frame(t, camera, progress)?),
             DeviceRenderer::Octahedral(m) => m.frame(t, camera, progress),
             DeviceRenderer::Photographed(m) => m.frame(t, camera, progress),
+            DeviceRenderer::Hybrid(m) => m.frame(t, camera, progress),
             DeviceRenderer::Gpu(m) => {
                 let GpuMethod {
                     gpu,

@@ -45,6 +45,19 @@ pub fn impostor_shader_source() -> String {
     .join("\n")
 }
 
+/// The hybrid method's source: the tracer with the first reflections off mirrors and glass
+/// answered by the points splatted through continuous 3-ray cameras (`crate::hybrid`), and the
+/// passes that splat them.
+pub fn splat_shader_source(f64: bool) -> String {
+    [
+        crate::bvh::SHADER,
+        include_str!("../shaders/trace.wgsl"),
+        &crate::hybrid::c3rc_source(f64),
+        include_str!("../shaders/splat.wgsl"),
+    ]
+    .join("\n")
+}
+
 /// The class of the triangles of mirror and glass objects (`shaders/impostor_secondary.wgsl`'s
 /// `SPECULAR`).
 const SPECULAR: u32 = 2;
@@ -54,6 +67,9 @@ const GLASS_CLASS: u32 = 4;
 /// exactly (the shader's `SEES_EXACTLY`), or itself and the glass (`SEES_GLASS_AND_ITSELF`).
 const SEES_EXACTLY: u32 = 1 << 31;
 const SEES_GLASS_AND_ITSELF: u32 = 1 << 30;
+
+/// The hybrid method's module's label (its pipelines are cached by it).
+pub(crate) const SPLAT_MODULE: &str = "trace.wgsl with splats";
 
 /// Storage buffers the impostor methods' shader reads and writes.
 const IMPOSTOR_STORAGE_BUFFERS: u32 = 15;
@@ -255,6 +271,13 @@ pub enum Secondary<'s> {
         /// The view's BVH.
         bvh: &'s Bvh,
     },
+    /// The points splatted through continuous 3-ray cameras where the ray is the eye's first
+    /// reflection, the exact BVH otherwise (paper 2: the `c3rc` method, [`crate::hybrid`]);
+    /// with the view's BVH.
+    Splats {
+        /// The view's BVH.
+        bvh: &'s Bvh,
+    },
 }
 
 impl<'a> GpuTracer<'a> {
@@ -345,6 +368,10 @@ impl<'a> GpuTracer<'a> {
                 impostors = Some(upload_impostors(gpu, view, answers, &first_material)?);
                 bvh
             }
+            Secondary::Splats { bvh } => {
+                impostors = None;
+                bvh
+            }
         };
         let specular = |o: u32| match view.surfaces.get(o as usize) {
             Some(Surface::Diffuse(_)) | None => crate::bvh::EVERY_TRIANGLE,
@@ -424,9 +451,14 @@ impl<'a> GpuTracer<'a> {
             gpu.storage_with("materials", bytemuck::cast_slice(&materials)),
             gpu.storage_with("texels", texel_bytes),
         ];
-        let pipeline = match impostors {
-            None => gpu.compute_pipeline("trace.wgsl", &shader_source(), "trace_pixels"),
-            Some(_) => gpu.compute_pipeline(
+        let pipeline = match (impostors.is_some(), secondary) {
+            (_, Secondary::Splats { .. }) => gpu.compute_pipeline(
+                SPLAT_MODULE,
+                &splat_shader_source(gpu.has_f64()),
+                "trace_pixels",
+            ),
+            (false, _) => gpu.compute_pipeline("trace.wgsl", &shader_source(), "trace_pixels"),
+            (true, _) => gpu.compute_pipeline(
                 "trace.wgsl with impostors",
                 &impostor_shader_source(),
                 "trace_pixels",
@@ -445,6 +477,46 @@ impl<'a> GpuTracer<'a> {
 
     /// The frame through `camera`.
     pub fn frame(&self, camera: &Pinhole) -> Result<Frame, GpuError> {
+        self.frame_with(camera, &[], None)
+    }
+
+    /// With rasterized primaries: the visibility buffer through `camera`, drawn into a new
+    /// texture (recorded in `encoder`) for [`GpuTracer::frame_with`] and the passes before it.
+    pub(crate) fn visibility(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Pinhole,
+    ) -> Option<wgpu::Texture> {
+        let raster = self.raster.as_ref()?;
+        Some(self.draw_visibility(encoder, raster, camera))
+    }
+
+    /// The scene's buffers as the shaders bind them: nodes, corners, triangles, materials,
+    /// texels.
+    pub(crate) fn scene_entries(&self) -> [(u32, &wgpu::Buffer); 5] {
+        let [nodes, corners, triangles, materials, texels] = &self.scene;
+        [
+            (0, nodes),
+            (1, corners),
+            (5, triangles),
+            (6, materials),
+            (7, texels),
+        ]
+    }
+
+    /// The view uniform through `camera`.
+    pub(crate) fn view_through(&self, camera: &Pinhole) -> GpuView {
+        self.uniform.through(camera)
+    }
+
+    /// [`GpuTracer::frame`], the shader also bound to `extra` (what its secondary rays read),
+    /// and the eye's hits read from `drawn` where given ([`GpuTracer::visibility`]'s).
+    pub(crate) fn frame_with(
+        &self,
+        camera: &Pinhole,
+        extra: &[(u32, &wgpu::Buffer)],
+        drawn: Option<&wgpu::Texture>,
+    ) -> Result<Frame, GpuError> {
         let gpu = self.gpu;
         let (w, h) = trompe::camera::Projection::resolution(camera);
         let uniform = self.uniform.through(camera);
@@ -458,10 +530,11 @@ impl<'a> GpuTracer<'a> {
             gpu.check_texture("the visibility buffer", w, h)?;
         }
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let visibility = match &self.raster {
-            Some(raster) => self.draw_visibility(&mut encoder, raster, camera),
+        let visibility = match (drawn, &self.raster) {
+            (Some(drawn), _) => drawn.clone(),
+            (None, Some(raster)) => self.draw_visibility(&mut encoder, raster, camera),
             // Not read: a binding stands in.
-            None => visibility_texture(gpu, 1, 1),
+            (None, None) => visibility_texture(gpu, 1, 1),
         };
         let visibility_view = visibility.create_view(&Default::default());
         let backs = match &self.glass {
@@ -491,6 +564,7 @@ impl<'a> GpuTracer<'a> {
             ]
             .into_iter()
             .chain(walks)
+            .chain(extra.iter().copied())
             .map(|(binding, b)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),

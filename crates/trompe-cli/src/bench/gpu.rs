@@ -5,8 +5,9 @@
 //! resolution (Table 2's); the impostor secondary pass — paper 1's walk of reflected rays —
 //! beside the exact BVH pass on the same rays, on each device, as the reflected mesh grows 16×
 //! to over a million triangles; the projective-texturing methods (calibrated views, image
-//! layers, master textures) blended by the GPU beside the CPU's render of the same frame; and
-//! the exact ray query alone on incoherent rays.
+//! layers, master textures) blended by the GPU beside the CPU's render of the same frame; paper
+//! 2's reflection frames (its Table 2's scenes) by the `c3rc` method on each device and by the
+//! GPU's exact tracer; and the exact ray query alone on incoherent rays.
 //!
 //! Without a hardware GPU the adapter is Mesa's lavapipe, which runs the shaders on the CPU's
 //! cores: its figures say what the shaders cost there, not what a GPU does.
@@ -22,6 +23,29 @@ use trompe::scene::Scene;
 use trompe::trace::{Bvh, RayQuery};
 use trompe_gpu::{DeviceRenderer, Gpu, GpuBvh};
 
+/// The GPU suite's workloads, to run some alone (`trompe bench gpu --only`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GpuWorkload {
+    /// Every method with a GPU path on every reflection scene.
+    Methods,
+    /// The `trace` and `impostor` frames against output resolution.
+    Resolution,
+    /// The impostor frame against impostor resolution.
+    ImpostorResolution,
+    /// The impostor walk of reflected rays beside the exact BVH pass.
+    Secondary,
+    /// Impostors drawn by the GPU rasterizer beside the library's build.
+    Builds,
+    /// Calibrated views and image layers blended on each device.
+    Texturing,
+    /// Master textures rendered on each device.
+    Master,
+    /// Paper 2's reflection frames by the `c3rc` method on each device and the GPU's tracer.
+    C3rc,
+    /// The exact ray query alone on incoherent rays.
+    Query,
+}
+
 /// Frames each device renders of a scene after its first.
 const FRAMES: u32 = 3;
 
@@ -34,17 +58,28 @@ fn method_pair(
     kind: MethodKind,
     settings: MethodSettings,
 ) -> Result<(Duration, Duration), BenchError> {
+    Ok((
+        frame_time(None, scene, kind, &settings)?,
+        frame_time(Some(gpu), scene, kind, &settings)?,
+    ))
+}
+
+/// The mean frame time of `kind` on `device` (the CPU without one) after its first frame, at
+/// the scene's time through its camera.
+pub(super) fn frame_time(
+    device: Option<&Gpu>,
+    scene: &Scene,
+    kind: MethodKind,
+    settings: &MethodSettings,
+) -> Result<Duration, BenchError> {
     let t = scene.render.time;
-    let time = |device: Option<&Gpu>| -> Result<Duration, BenchError> {
-        let mut renderer = DeviceRenderer::new(scene, kind, settings.clone(), device)?;
+    let mut renderer = DeviceRenderer::new(scene, kind, settings.clone(), device)?;
+    renderer.frame(t, None, &())?;
+    let start = Instant::now();
+    for _ in 0..FRAMES {
         renderer.frame(t, None, &())?;
-        let start = Instant::now();
-        for _ in 0..FRAMES {
-            renderer.frame(t, None, &())?;
-        }
-        Ok(start.elapsed() / FRAMES)
-    };
-    Ok((time(None)?, time(Some(gpu))?))
+    }
+    Ok(start.elapsed() / FRAMES)
 }
 
 fn ms(d: Duration) -> f64 {
@@ -72,7 +107,9 @@ fn incoherent_rays(n: usize, lo: Vec3, hi: Vec3) -> Vec<Ray> {
 pub fn gpu(
     inputs: &trompe::eval::fixtures::Shipped,
     quick: bool,
+    only: &[GpuWorkload],
 ) -> Result<(String, Vec<Figure>), BenchError> {
+    let wants = |w: GpuWorkload| only.is_empty() || only.contains(&w);
     let gpu = trompe_gpu::GpuRequest::new().open()?;
     let adapter = gpu.report();
     let heading = format!(
@@ -91,48 +128,80 @@ pub fn gpu(
     };
     let mut out = Vec::new();
 
-    // The trace method on every reflection scene.
-    let (w, h) = if quick { (160, 120) } else { (320, 240) };
-    for name in [
-        "teapot-in-bunny",
-        "intersecting",
-        "reflections",
-        "room",
-        "teapots",
-    ] {
-        let mut scene =
-            Scene::load(&inputs.scenes.join(format!("{name}.toml"))).map_err(Box::new)?;
-        scene.camera.width = w;
-        scene.camera.height = h;
-        for kind in MethodKind::ALL
-            .into_iter()
-            .filter(|k| trompe_gpu::has_gpu_path(*k))
-        {
-            let (cpu, on_gpu) = method_pair(&gpu, &scene, kind, MethodSettings::default())?;
-            out.push(Figure {
-                name: format!("{kind}, {name}, {w} × {h}: GPU frame"),
-                value: ms(on_gpu),
-                unit: "ms",
-                versus: versus(on_gpu, cpu),
-            });
+    if wants(GpuWorkload::Methods) {
+        // The trace method on every reflection scene.
+        let (w, h) = if quick { (160, 120) } else { (320, 240) };
+        for name in [
+            "teapot-in-bunny",
+            "intersecting",
+            "reflections",
+            "room",
+            "teapots",
+        ] {
+            let mut scene =
+                Scene::load(&inputs.scenes.join(format!("{name}.toml"))).map_err(Box::new)?;
+            scene.camera.width = w;
+            scene.camera.height = h;
+            for kind in MethodKind::ALL
+                .into_iter()
+                .filter(|k| trompe_gpu::has_gpu_path(*k))
+            {
+                let (cpu, on_gpu) = method_pair(&gpu, &scene, kind, MethodSettings::default())?;
+                out.push(Figure {
+                    name: format!("{kind}, {name}, {w} × {h}: GPU frame"),
+                    value: ms(on_gpu),
+                    unit: "ms",
+                    versus: versus(on_gpu, cpu),
+                });
+            }
         }
     }
 
-    // Frame time against output resolution (paper 1's Table 1), teapot in the bunny.
-    let sizes: &[(u32, u32)] = if quick {
-        &[(160, 120), (320, 240)]
-    } else {
-        &[(320, 240), (640, 480), (1280, 720), (1920, 1080)]
-    };
     let base = Scene::load(&inputs.scenes.join("teapot-in-bunny.toml")).map_err(Box::new)?;
-    for &(w, h) in sizes {
-        let mut scene = base.clone();
-        scene.camera.width = w;
-        scene.camera.height = h;
-        for kind in [MethodKind::Trace, MethodKind::Impostor] {
-            let (cpu, on_gpu) = method_pair(&gpu, &scene, kind, MethodSettings::default())?;
+    if wants(GpuWorkload::Resolution) {
+        // Frame time against output resolution (paper 1's Table 1), teapot in the bunny.
+        let sizes: &[(u32, u32)] = if quick {
+            &[(160, 120), (320, 240)]
+        } else {
+            &[(320, 240), (640, 480), (1280, 720), (1920, 1080)]
+        };
+        for &(w, h) in sizes {
+            let mut scene = base.clone();
+            scene.camera.width = w;
+            scene.camera.height = h;
+            for kind in [MethodKind::Trace, MethodKind::Impostor] {
+                let (cpu, on_gpu) = method_pair(&gpu, &scene, kind, MethodSettings::default())?;
+                out.push(Figure {
+                    name: format!("{kind}, teapot-in-bunny, {w} × {h}: GPU frame"),
+                    value: ms(on_gpu),
+                    unit: "ms",
+                    versus: versus(on_gpu, cpu),
+                });
+            }
+        }
+    }
+
+    if wants(GpuWorkload::ImpostorResolution) {
+        // Frame time against impostor resolution (paper 1's Table 2), teapot in the bunny at
+        // 640 × 480, impostors kept.
+        let resolutions: &[u32] = if quick {
+            &[64, 128]
+        } else {
+            &[128, 256, 512, 1024]
+        };
+        for &r in resolutions {
+            let mut scene = base.clone();
+            (scene.camera.width, scene.camera.height) = if quick { (160, 120) } else { (640, 480) };
+            let settings = MethodSettings {
+                impostor_resolution: r,
+                ..MethodSettings::default()
+            };
+            let (cpu, on_gpu) = method_pair(&gpu, &scene, MethodKind::Impostor, settings)?;
             out.push(Figure {
-                name: format!("{kind}, teapot-in-bunny, {w} × {h}: GPU frame"),
+                name: format!(
+                    "impostor, teapot-in-bunny, {} × {}, impostors {r}²: GPU frame",
+                    scene.camera.width, scene.camera.height
+                ),
                 value: ms(on_gpu),
                 unit: "ms",
                 versus: versus(on_gpu, cpu),
@@ -140,79 +209,67 @@ pub fn gpu(
         }
     }
 
-    // Frame time against impostor resolution (paper 1's Table 2), teapot in the bunny at
-    // 640 × 480, impostors kept.
-    let resolutions: &[u32] = if quick {
-        &[64, 128]
-    } else {
-        &[128, 256, 512, 1024]
-    };
-    for &r in resolutions {
-        let mut scene = base.clone();
-        (scene.camera.width, scene.camera.height) = if quick { (160, 120) } else { (640, 480) };
-        let settings = MethodSettings {
-            impostor_resolution: r,
-            ..MethodSettings::default()
-        };
-        let (cpu, on_gpu) = method_pair(&gpu, &scene, MethodKind::Impostor, settings)?;
-        out.push(Figure {
-            name: format!(
-                "impostor, teapot-in-bunny, {} × {}, impostors {r}²: GPU frame",
-                scene.camera.width, scene.camera.height
-            ),
-            value: ms(on_gpu),
-            unit: "ms",
-            versus: versus(on_gpu, cpu),
-        });
+    if wants(GpuWorkload::Secondary) {
+        out.extend(secondary_pass(&gpu, inputs, quick)?);
+    }
+    if wants(GpuWorkload::Builds) {
+        out.extend(impostor_builds(&gpu, inputs, quick)?);
+    }
+    if wants(GpuWorkload::Texturing) {
+        out.extend(super::texturing::gpu_renders(&gpu, inputs, quick)?);
+    }
+    if wants(GpuWorkload::Master) {
+        out.extend(super::master::gpu_renders(&gpu, inputs, quick)?);
+    }
+    if wants(GpuWorkload::C3rc) {
+        out.extend(super::hybrid::gpu_frames(&gpu, inputs, quick)?);
     }
 
-    out.extend(secondary_pass(&gpu, inputs, quick)?);
-    out.extend(impostor_builds(&gpu, inputs, quick)?);
-    out.extend(super::texturing::gpu_renders(&gpu, inputs, quick)?);
-    out.extend(super::master::gpu_renders(&gpu, inputs, quick)?);
-
-    // The exact ray query alone: the same rays through the CPU BVH and its GPU walk, the bunny
-    // then 16 of them.
-    let bunny = trompe::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
-    let rays_n = if quick { 1 << 15 } else { 1 << 18 };
-    for copies in [1u32, 16] {
-        let meshes: Vec<Arc<Mesh>> = (0..copies)
-            .map(|i| {
-                let at = Vec3::new((i % 4) as f32, 0.0, (i / 4) as f32) * 0.8;
-                Arc::new(bunny.transformed(&Mat4::from_translation(at)))
-            })
-            .collect();
-        let triangles: usize = meshes.iter().map(|m| m.triangle_count()).sum();
-        let (lo, hi) = meshes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), m| {
-            let b = m.bounds();
-            (lo.min(b.min), hi.max(b.max))
-        });
-        let bvh = Bvh::build(meshes)?;
-        let rays = incoherent_rays(rays_n, lo, hi);
-        let start = Instant::now();
-        let hits: Vec<_> = rays
-            .par_iter()
-            .map(|r| bvh.closest_hit(r, f32::INFINITY))
-            .collect();
-        let cpu = start.elapsed();
-        drop(hits);
-        let on_gpu = GpuBvh::upload(&gpu, &bvh)?;
-        on_gpu.leaf_hits(&rays[..1024.min(rays.len())], f32::INFINITY, false)?;
-        let start = Instant::now();
-        on_gpu.leaf_hits(&rays, f32::INFINITY, false)?;
-        let gpu_time = start.elapsed();
-        let mrays = |d: Duration| rays.len() as f64 / d.as_secs_f64().max(1e-12) / 1e6;
-        out.push(Figure {
-            name: format!(
-                "BVH, {} incoherent rays, {}k triangles: GPU",
-                rays.len(),
-                triangles / 1000
-            ),
-            value: mrays(gpu_time),
-            unit: "Mrays/s",
-            versus: Some((mrays(gpu_time) / mrays(cpu), "CPU".to_string())),
-        });
+    if wants(GpuWorkload::Query) {
+        // The exact ray query alone: the same rays through the CPU BVH and its GPU walk, the bunny
+        // then 16 of them.
+        let bunny = trompe::geom::io::load(&inputs.assets.join("meshes/bunny.obj"))?.mesh;
+        let rays_n = if quick { 1 << 15 } else { 1 << 18 };
+        for copies in [1u32, 16] {
+            let meshes: Vec<Arc<Mesh>> = (0..copies)
+                .map(|i| {
+                    let at = Vec3::new((i % 4) as f32, 0.0, (i / 4) as f32) * 0.8;
+                    Arc::new(bunny.transformed(&Mat4::from_translation(at)))
+                })
+                .collect();
+            let triangles: usize = meshes.iter().map(|m| m.triangle_count()).sum();
+            let (lo, hi) = meshes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), m| {
+                let b = m.bounds();
+                (lo.min(b.min), hi.max(b.max))
+            });
+            let bvh = Bvh::build(meshes)?;
+            let rays = incoherent_rays(rays_n, lo, hi);
+            let start = Instant::now();
+            let hits: Vec<_> = rays
+                .par_iter()
+                .map(|r| bvh.closest_hit(r, f32::INFINITY))
+                .collect();
+            let cpu = start.elapsed();
+            drop(hits);
+            let on_gpu = GpuBvh::upload(&gpu, &bvh)?;
+            on_gpu.leaf_hits(&rays[..1024.min(rays.len())], f32::INFINITY, false)?;
+            let start = Instant::now();
+            on_gpu.leaf_hits(&rays, f32::INFINITY, false)?;
+            let gpu_time = start.elapsed();
+            let mrays = |d: Duration| rays.len() as f64 / d.as_secs_f64().max(1e-12) / 1e6;
+            out.push(Figure {
+                name: format!(
+                    "BVH, {} incoherent rays, {}k triangles: GPU",
+                    rays.len(),
+                    triangles / 1000
+                ),
+                value: mrays(gpu_time),
+                unit: "Mrays/s",
+                versus: Some((mrays(gpu_time) / mrays(cpu), "CPU".to_string())),
+            });
+        }
     }
+
     Ok((heading, out))
 }
 

@@ -61,17 +61,76 @@ pub struct Tables {
     pub rows: Vec<Row>,
 }
 
+/// The scene `c3rc-bunny.toml` with its bunny replaced by each model of [`MODELS`].
+fn table_scenes(inputs: &Shipped) -> Result<Vec<(&'static str, Scene)>, BenchError> {
+    let base = Scene::load(&inputs.scenes.join("c3rc-bunny.toml")).map_err(Box::new)?;
+    let fit = base.objects[1].mesh.bounds().extent().max_element();
+    MODELS
+        .into_iter()
+        .map(|(name, file)| {
+            let mesh = trompe::geom::io::load(&inputs.assets.join(file))?.mesh;
+            let mut scene = base.clone();
+            scene.objects[1].mesh = Arc::new(fitted(&mesh, fit));
+            scene.objects[1].name = name.to_string();
+            Ok((name, scene))
+        })
+        .collect()
+}
+
+/// Paper 2 Table 2's frames by the `c3rc` method on the GPU (the `trompe_gpu::hybrid` pass),
+/// each beside the same method on the CPU and beside the GPU's exact tracer, at 1920 × 1080
+/// (`quick`: 320 × 240), each model at the dense spacing and at twice it.
+pub fn gpu_frames(
+    gpu: &trompe_gpu::Gpu,
+    inputs: &Shipped,
+    quick: bool,
+) -> Result<Vec<super::Figure>, BenchError> {
+    use trompe::methods::{MethodKind, MethodSettings};
+    let (w, h) = if quick { (320, 240) } else { (1920, 1080) };
+    let mut out = Vec::new();
+    for (name, mut scene) in table_scenes(inputs)? {
+        (scene.camera.width, scene.camera.height) = (w, h);
+        let dense = HybridReflections::prepare(&scene, HybridSettings::default())?;
+        let spacing = dense.clouds.first().map_or(0.01, |c| c.spacing);
+        let exact = super::gpu::frame_time(
+            Some(gpu),
+            &scene,
+            MethodKind::Trace,
+            &MethodSettings::default(),
+        )?;
+        for (k, widen) in [1.0f32, 2.0].into_iter().enumerate() {
+            let settings = MethodSettings {
+                hybrid: HybridSettings {
+                    spacing: Some(spacing * widen),
+                    ..HybridSettings::default()
+                },
+                ..MethodSettings::default()
+            };
+            let on = |device| super::gpu::frame_time(device, &scene, MethodKind::C3rc, &settings);
+            let (cpu, on_gpu) = (on(None)?, on(Some(gpu))?);
+            let ms = on_gpu.as_secs_f64() * 1e3;
+            for (peer, time) in [("CPU", cpu), ("the GPU's exact tracer", exact)] {
+                out.push(super::Figure {
+                    name: format!("c3rc, {name}{k} (paper 2 Table 2), {w} × {h}: GPU frame"),
+                    value: ms,
+                    unit: "ms",
+                    versus: Some((
+                        on_gpu.as_secs_f64() / time.as_secs_f64().max(1e-12),
+                        peer.to_string(),
+                    )),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// The tables on the shipped scene `c3rc-bunny.toml`, its bunny replaced by each model.
 pub fn tables(inputs: &Shipped, quick: bool) -> Result<Tables, BenchError> {
     let base = Scene::load(&inputs.scenes.join("c3rc-bunny.toml")).map_err(Box::new)?;
-    let fit = base.objects[1].mesh.bounds().extent().max_element();
     let runs = if quick { 1 } else { 3 };
     let mut rows = Vec::new();
-    for (name, file) in MODELS {
-        let mesh = trompe::geom::io::load(&inputs.assets.join(file))?.mesh;
-        let mut scene = base.clone();
-        scene.objects[1].mesh = Arc::new(fitted(&mesh, fit));
-        scene.objects[1].name = name.to_string();
+    for (name, scene) in table_scenes(inputs)? {
         let t = scene.render.time;
         let (exact, exact_time) = median_of(runs, || render_at(&scene, t, Method::Trace, &()))?;
         let (imp, impostor_time) =

@@ -241,6 +241,26 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
     let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
     let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
     assert!(score.flip < 0.01, "GPU against CPU: FLIP {}", score.flip);
+    // Paper 2's hybrid reflections: the splats projected and resolved on the GPU.
+    for (device, out) in [("cpu", &cpu), ("gpu", &gpu)] {
+        let o = trompe(&[
+            "render",
+            "scenes/c3rc-bunny.toml",
+            "--method",
+            "c3rc",
+            "--device",
+            device,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        // The report, on the terminal beside the progress.
+        let printed = stderr(&o);
+        assert!(printed.contains("valid projections"), "{printed}");
+    }
+    let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
+    println!("c3rc: GPU against CPU FLIP {:.5}", score.flip);
+    assert!(score.flip < 0.02, "c3rc, GPU against CPU: FLIP {}", score.flip);
     // A time that is not a number is refused on the GPU as on the CPU.
     fails_cleanly(
         &trompe(&[

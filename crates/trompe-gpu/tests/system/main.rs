@@ -5,6 +5,7 @@
 
 mod build;
 mod bvh;
+mod hybrid;
 mod layers;
 mod master;
 mod octahedral;
@@ -111,6 +112,18 @@ fn main() {
         on_gpu(
             "bvh::an_empty_scene_misses_and_no_rays_is_no_work",
             bvh::an_empty_scene_misses_and_no_rays_is_no_work,
+        ),
+        on_gpu(
+            "hybrid::the_gpu_projects_points_through_c3rcs_as_the_cpu",
+            hybrid::the_gpu_projects_points_through_c3rcs_as_the_cpu,
+        ),
+        on_gpu(
+            "hybrid::c3rc_frames_on_the_gpu_are_the_cpus",
+            hybrid::c3rc_frames_on_the_gpu_are_the_cpus,
+        ),
+        on_gpu(
+            "hybrid::a_c3rc_frame_on_the_gpu_is_the_same_twice",
+            hybrid::a_c3rc_frame_on_the_gpu_is_the_same_twice,
         ),
         on_gpu(
             "build::gpu_built_impostors_match_the_cpu_built_texel_for_texel",
