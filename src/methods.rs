@@ -564,17 +564,7 @@ impl<'a> Renderer<'a> {
             State::Relief(kept) => {
                 let (mut pipeline, time) = match kept.take() {
                     Some(relief) => relief,
-                    None => {
-                        let view = scene.view(t)?;
-                        let shader = SoftwareShader::new(&view, &scene.lighting, &scene.render)
-                            .map_err(RenderError::from)?;
-                        let objects: Vec<usize> = (0..view.meshes.len()).collect();
-                        let settings = self.settings.relief.clone();
-                        let pipeline = timings.time("start the relief pipeline", || {
-                            Pipeline::new(shader, &objects, settings)
-                        })?;
-                        (pipeline, t)
-                    }
+                    None => (start_relief(scene, t, &self.settings, &mut timings)?, t),
                 };
                 // Relief impostors are of a still scene: the scene as it stood when the
                 // pipeline started, seen through the camera of now.
@@ -583,21 +573,14 @@ impl<'a> Renderer<'a> {
                     None => scene.camera.at(t)?,
                 };
                 let out = pipeline.frame(&camera);
-                let threshold = pipeline.settings().threshold;
-                let regenerations = pipeline.regenerations;
+                let report;
+                (report, state) = match &out {
+                    Ok(out) => relief_report(scene, &pipeline, time, &out.objects),
+                    Err(_) => Default::default(),
+                };
                 *kept = Some((pipeline, time));
                 let mut out = out?;
                 timings.0.append(&mut out.timings.0);
-                state = out
-                    .objects
-                    .iter()
-                    .map(|o| {
-                        let name = scene.objects.get(o.object).map_or("?", |s| s.name.as_str());
-                        o.line(name, threshold)
-                    })
-                    .collect();
-                let report =
-                    format!("still scene at t {time:.2} s, {regenerations} impostors made");
                 (out.frame, report)
             }
         };
@@ -609,6 +592,48 @@ impl<'a> Renderer<'a> {
             state,
         })
     }
+}
+
+/// The `relief` method's pipeline over `scene` as it stands at `t` (relief impostors are of a
+/// still scene): the software shader started on its own thread, every object given a slot —
+/// on either device.
+pub fn start_relief(
+    scene: &Scene,
+    t: f32,
+    settings: &MethodSettings,
+    timings: &mut Timings,
+) -> Result<Pipeline, MethodError> {
+    let view = scene.view(t)?;
+    let shader =
+        SoftwareShader::new(&view, &scene.lighting, &scene.render).map_err(RenderError::from)?;
+    let objects: Vec<usize> = (0..view.meshes.len()).collect();
+    let settings = settings.relief.clone();
+    Ok(timings.time("start the relief pipeline", || {
+        Pipeline::new(shader, &objects, settings)
+    })?)
+}
+
+/// A `relief` frame's report (the still scene's time, the impostors made) and its per-object
+/// state lines.
+pub fn relief_report(
+    scene: &Scene,
+    pipeline: &Pipeline,
+    time: f32,
+    objects: &[crate::relief::pipeline::ObjectFrame],
+) -> (String, Vec<String>) {
+    let threshold = pipeline.settings().threshold;
+    let state = objects
+        .iter()
+        .map(|o| {
+            let name = scene.objects.get(o.object).map_or("?", |s| s.name.as_str());
+            o.line(name, threshold)
+        })
+        .collect();
+    let made = pipeline.regenerations;
+    (
+        format!("still scene at t {time:.2} s, {made} impostors made"),
+        state,
+    )
 }
 
 /// Every object's pose at `t`.

@@ -33,7 +33,7 @@ use crate::frame::Rgba;
 use glam::{DVec3, Vec3};
 use thiserror::Error;
 
-pub use pipeline::{ObjectState, Pipeline, PipelineSettings};
+pub use pipeline::{ObjectState, Pipeline, PipelineSettings, PreparedFrame, ReliefDraw};
 pub use prewarp::{Coefficients, Eye, Prewarped, prewarp};
 pub use shader::SoftwareShader;
 pub use walk::{WalkReport, WalkSettings, walk};

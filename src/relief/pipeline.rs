@@ -235,6 +235,33 @@ pub struct FrameOutput {
     pub timings: Timings,
 }
 
+/// A frame before its texture-mapping phase ([`Pipeline::prepare`]): what the frame loop decided
+/// and pre-warped, the objects rasterized, and the impostors to map over them — the split paper
+/// 3 §6 makes between the CPU, which pre-warps, and the graphics hardware, which maps.
+#[derive(Clone, Debug)]
+pub struct PreparedFrame {
+    /// The objects drawn directly (those without relief, and the fallbacks), with their depth.
+    pub background: Frame,
+    /// The impostors to texture-map over it, in order.
+    pub draws: Vec<ReliefDraw>,
+    /// Per relief object.
+    pub objects: Vec<ObjectFrame>,
+    /// Step timings so far.
+    pub timings: Timings,
+}
+
+/// One pre-warped impostor to texture-map ([`super::texture::draw`]).
+#[derive(Clone, Debug)]
+pub struct ReliefDraw {
+    /// Its object's id.
+    pub object: u32,
+    /// The pre-warped image: the same `Arc` while the pre-warp stands (Schaufler's test), a new
+    /// one when the frame loop pre-warped again.
+    pub image: Arc<Prewarped>,
+    /// Its base plane.
+    pub frame: super::ReliefFrame,
+}
+
 /// An impostor in use, with its critical pairs and their calibration.
 struct Current {
     impostor: ReliefImpostor,
@@ -374,6 +401,28 @@ impl Pipeline {
 
     /// Renders the next frame through `camera`.
     pub fn frame(&mut self, camera: &Pinhole) -> Result<FrameOutput, ReliefError> {
+        let PreparedFrame {
+            background: mut frame,
+            draws,
+            objects,
+            mut timings,
+        } = self.prepare(camera)?;
+        timings.time("texture map", || {
+            for d in &draws {
+                draw(&d.image, &d.frame, camera, &mut frame, d.object);
+            }
+        });
+        Ok(FrameOutput {
+            frame,
+            objects,
+            timings,
+        })
+    }
+
+    /// The frame through `camera` up to its texture-mapping phase: impostors collected,
+    /// decided, pre-warped; the rest rasterized. [`Pipeline::frame`] maps the impostors on the
+    /// CPU; the GPU crate maps them on the graphics hardware.
+    pub fn prepare(&mut self, camera: &Pinhole) -> Result<PreparedFrame, ReliefError> {
         let mut timings = Timings::default();
         timings.time("collect", || self.collect())?;
         let eye = camera.position();
@@ -403,33 +452,34 @@ impl Pipeline {
         let rasterized: Vec<usize> = (0..view.meshes.len())
             .filter(|o| !relief.contains(o) || fallback.contains(o))
             .collect();
-        let mut frame = raster_subset(
+        let frame = raster_subset(
             view,
             self.shader.lighting(),
             camera,
             &rasterized,
             &mut timings,
         )?;
-        timings.time("texture map", || {
-            for (slot, d) in self.slots.iter().zip(&decided) {
-                if let (Some((_, image)), Some(cur), false) =
-                    (&slot.last, &slot.current, d.state == ObjectState::Fallback)
-                {
-                    draw(
-                        image,
-                        &cur.impostor.frame,
-                        camera,
-                        &mut frame,
-                        slot.object as u32,
-                    );
+        let draws = self
+            .slots
+            .iter()
+            .zip(&decided)
+            .filter_map(|(slot, d)| match (&slot.last, &slot.current) {
+                (Some((_, image)), Some(cur)) if d.state != ObjectState::Fallback => {
+                    Some(ReliefDraw {
+                        object: slot.object as u32,
+                        image: image.clone(),
+                        frame: cur.impostor.frame,
+                    })
                 }
-            }
-        });
+                _ => None,
+            })
+            .collect();
         outputs.extend(decided);
         self.previous_eye = Some(eye);
         self.frame += 1;
-        Ok(FrameOutput {
-            frame,
+        Ok(PreparedFrame {
+            background: frame,
+            draws,
             objects: outputs,
             timings,
         })

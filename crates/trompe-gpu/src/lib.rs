@@ -13,6 +13,8 @@
 //! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
 //! - [`hybrid`]: paper 2's hybrid reflections — points projected through continuous 3-ray
 //!   cameras in a compute shader and splatted, the tracer shading with them.
+//! - [`relief`]: paper 3's texture-mapping phase — the library's pre-warped relief textures
+//!   mapped with per-pixel depth onto their base quads, uploads double-buffered.
 //! - [`raster`]: the visibility pass — triangles drawn by the GPU rasterizer through any
 //!   impostor camera or the eye, under a depth-peeling ceiling if asked.
 //! - [`build`]: paper 1's impostors drawn by the GPU rasterizer, resolved by the library.
@@ -45,6 +47,7 @@ pub mod methods;
 pub mod octahedral;
 pub mod present;
 pub mod raster;
+pub mod relief;
 pub mod texturing;
 pub mod trace;
 pub mod views;

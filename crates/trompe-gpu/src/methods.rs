@@ -10,8 +10,9 @@
 //! | `impostor`, `pinhole-impostor` | the tracer, what mirrors and glass send out answered by walking their impostors in the shader ([`crate::walk`]); impostors drawn by the GPU rasterizer ([`crate::build`]), graph cameras' frustum by frustum; all kept across frames, placed and lit by the library's [`Sequence`] |
 //! | `octahedral` | the atlases the library bakes drawn by the engines' shader (`shaders/octahedral_impostor.wgsl`), one instanced draw an atlas, then shaded ([`crate::octahedral`]); kept while nothing moves |
 //! | `c3rc` | the G-buffer traced, the library's plan of cameras and culled kd-tree nodes on the CPU, every point projected through its continuous 3-ray camera in a compute shader and splatted (the nearest to the mirror by two 32-bit atomic minimum passes), then the tracer with the splats answering first reflections ([`crate::hybrid`]) |
+//! | `relief` | the library's relief pipeline (the software shader's thread, the frame loop's decisions and pre-warps) on the CPU, as paper 3 splits it; each pre-warped relief texture mapped by the GPU onto its base quad with per-pixel depth over the objects drawn directly, uploads double-buffered ([`crate::relief`]) |
 //! | `layered`, `projective` | the layers the library photographs and builds (paper 4), or its photographs whole (the paper's baseline), uploaded once and blended by the GPU's texturing shader ([`crate::layers`], [`crate::views`]), over the panorama |
-//! | every other | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
+//! | `envmap` | not yet: `--device gpu` refuses it, `--device auto` runs it on the CPU |
 //!
 //! Invariant: a frame's pixels depend only on the scene, the method, the time and the camera,
 //! on either device; the two devices' frames of one input agree within the bounds the tests
@@ -53,6 +54,7 @@ pub fn has_gpu_path(kind: MethodKind) -> bool {
             | MethodKind::Layered
             | MethodKind::Projective
             | MethodKind::C3rc
+            | MethodKind::Relief
     )
 }
 
@@ -133,6 +135,8 @@ pub enum DeviceRenderer<'a> {
     Photographed(Box<GpuPhotographed<'a>>),
     /// The `c3rc` method on the GPU.
     Hybrid(Box<crate::hybrid::GpuHybridMethod<'a>>),
+    /// The `relief` method on the GPU.
+    Relief(Box<crate::relief::GpuReliefMethod<'a>>),
 }
 
 /// The layered or projective method on the GPU, over one scene: the library's photographs of it
@@ -233,6 +237,13 @@ impl<'a> DeviceRenderer<'a> {
                     })
                     .into());
                 }
+                if kind == MethodKind::Relief {
+                    // The CPU renderer's checks of the settings, before any work.
+                    Renderer::new(scene, kind, settings.clone())?;
+                    return Ok(DeviceRenderer::Relief(Box::new(
+                        crate::relief::GpuReliefMethod::new(gpu, scene, settings),
+                    )));
+                }
                 if kind == MethodKind::C3rc {
                     return Ok(DeviceRenderer::Hybrid(Box::new(
                         crate::hybrid::GpuHybridMethod::new(gpu, scene, settings.hybrid),
@@ -280,6 +291,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Octahedral(_) => MethodKind::Octahedral,
             DeviceRenderer::Photographed(m) => m.kind,
             DeviceRenderer::Hybrid(_) => MethodKind::C3rc,
+            DeviceRenderer::Relief(_) => MethodKind::Relief,
         }
     }
 
@@ -291,6 +303,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Octahedral(m) => m.gpu.name(),
             DeviceRenderer::Photographed(m) => m.gpu.name(),
             DeviceRenderer::Hybrid(m) => m.device_name(),
+            DeviceRenderer::Relief(m) => m.device_name(),
         }
     }
 
@@ -306,6 +319,7 @@ impl<'a> DeviceRenderer<'a> {
             DeviceRenderer::Octahedral(m) => m.frame(t, camera, progress),
             DeviceRenderer::Photographed(m) => m.frame(t, camera, progress),
             DeviceRenderer::Hybrid(m) => m.frame(t, camera, progress),
+            DeviceRenderer::Relief(m) => m.frame(t, camera, progress),
             DeviceRenderer::Gpu(m) => {
                 let GpuMethod {
                     gpu,

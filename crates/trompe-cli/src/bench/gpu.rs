@@ -7,7 +7,8 @@
 //! to over a million triangles; the projective-texturing methods (calibrated views, image
 //! layers, master textures) blended by the GPU beside the CPU's render of the same frame; paper
 //! 2's reflection frames (its Table 2's scenes) by the `c3rc` method on each device and by the
-//! GPU's exact tracer; and the exact ray query alone on incoherent rays.
+//! GPU's exact tracer; paper 3's walk frame, its relief impostors mapped by each device; and the
+//! exact ray query alone on incoherent rays.
 //!
 //! Without a hardware GPU the adapter is Mesa's lavapipe, which runs the shaders on the CPU's
 //! cores: its figures say what the shaders cost there, not what a GPU does.
@@ -42,6 +43,8 @@ pub enum GpuWorkload {
     Master,
     /// Paper 2's reflection frames by the `c3rc` method on each device and the GPU's tracer.
     C3rc,
+    /// Paper 3's walk frame: pre-warped relief impostors mapped by the GPU and by the CPU.
+    Relief,
     /// The exact ray query alone on incoherent rays.
     Query,
 }
@@ -223,6 +226,9 @@ pub fn gpu(
     }
     if wants(GpuWorkload::C3rc) {
         out.extend(super::hybrid::gpu_frames(&gpu, inputs, quick)?);
+    }
+    if wants(GpuWorkload::Relief) {
+        out.extend(super::relief::gpu_walk(&gpu, inputs, quick)?);
     }
 
     if wants(GpuWorkload::Query) {

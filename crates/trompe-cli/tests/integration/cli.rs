@@ -124,11 +124,11 @@ fn bad_inputs_exit_non_zero_with_a_clear_message() {
             "--device",
             "gpu",
             "--method",
-            "relief",
+            "envmap",
             "-o",
             out,
         ]),
-        "--method relief has no GPU path yet",
+        "--method envmap has no GPU path yet",
     );
     let missing = scene(
         "missing.toml",

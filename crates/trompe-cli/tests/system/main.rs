@@ -260,7 +260,11 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
     }
     let score = metrics::compare(&read(&cpu), &read(&gpu), None).unwrap();
     println!("c3rc: GPU against CPU FLIP {:.5}", score.flip);
-    assert!(score.flip < 0.02, "c3rc, GPU against CPU: FLIP {}", score.flip);
+    assert!(
+        score.flip < 0.02,
+        "c3rc, GPU against CPU: FLIP {}",
+        score.flip
+    );
     // A time that is not a number is refused on the GPU as on the CPU.
     fails_cleanly(
         &trompe(&[

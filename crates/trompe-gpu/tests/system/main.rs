@@ -9,6 +9,7 @@ mod hybrid;
 mod layers;
 mod master;
 mod octahedral;
+mod relief;
 mod trace;
 mod views;
 mod walk;
@@ -124,6 +125,22 @@ fn main() {
         on_gpu(
             "hybrid::a_c3rc_frame_on_the_gpu_is_the_same_twice",
             hybrid::a_c3rc_frame_on_the_gpu_is_the_same_twice,
+        ),
+        on_gpu(
+            "relief::relief_frames_on_the_gpu_are_the_cpus",
+            relief::relief_frames_on_the_gpu_are_the_cpus,
+        ),
+        on_gpu(
+            "relief::a_relief_frame_where_no_impostor_changes_draws_identically_twice",
+            relief::a_relief_frame_where_no_impostor_changes_draws_identically_twice,
+        ),
+        on_gpu(
+            "relief::the_relief_method_on_the_gpu_is_the_cpus",
+            relief::the_relief_method_on_the_gpu_is_the_cpus,
+        ),
+        on_gpu(
+            "relief::a_new_pre_warp_is_never_drawn_half_written",
+            relief::a_new_pre_warp_is_never_drawn_half_written,
         ),
         on_gpu(
             "build::gpu_built_impostors_match_the_cpu_built_texel_for_texel",

@@ -287,12 +287,12 @@ pub fn what_the_gpu_does_not_run_is_refused_before_any_work(gpu: &Gpu) {
         .expect("scenes/c3rc-bunny.toml");
     match DeviceRenderer::new(
         &scene,
-        MethodKind::Relief,
+        MethodKind::EnvMap,
         MethodSettings::default(),
         Some(gpu),
     ) {
         Err(e) => assert!(e.to_string().contains("no GPU path"), "{e}"),
-        Ok(_) => panic!("relief: accepted on the GPU"),
+        Ok(_) => panic!("envmap: accepted on the GPU"),
     }
 }
 
