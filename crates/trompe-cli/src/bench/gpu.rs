@@ -67,6 +67,17 @@ fn method_pair(
     ))
 }
 
+/// The mean frame time of the GPU's exact tracer on `scene` after its first frame: the peer of
+/// the GPU methods' frames.
+pub(super) fn exact_frame_time(gpu: &Gpu, scene: &Scene) -> Result<Duration, BenchError> {
+    frame_time(
+        Some(gpu),
+        scene,
+        MethodKind::Trace,
+        &MethodSettings::default(),
+    )
+}
+
 /// The mean frame time of `kind` on `device` (the CPU without one) after its first frame, at
 /// the scene's time through its camera.
 pub(super) fn frame_time(

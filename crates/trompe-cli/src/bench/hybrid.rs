@@ -92,12 +92,7 @@ pub fn gpu_frames(
         (scene.camera.width, scene.camera.height) = (w, h);
         let dense = HybridReflections::prepare(&scene, HybridSettings::default())?;
         let spacing = dense.clouds.first().map_or(0.01, |c| c.spacing);
-        let exact = super::gpu::frame_time(
-            Some(gpu),
-            &scene,
-            MethodKind::Trace,
-            &MethodSettings::default(),
-        )?;
+        let exact = super::gpu::exact_frame_time(gpu, &scene)?;
         for (k, widen) in [1.0f32, 2.0].into_iter().enumerate() {
             let settings = MethodSettings {
                 hybrid: HybridSettings {

@@ -186,7 +186,6 @@ pub fn gpu_walk(
     inputs: &trompe::eval::fixtures::Shipped,
     quick: bool,
 ) -> Result<Vec<Figure>, BenchError> {
-    use trompe::methods::{MethodKind, MethodSettings};
     let (w, h) = if quick { (320, 240) } else { (1920, 1080) };
     let mut scene = Scene::load(&inputs.scenes.join("relief-walk.toml")).map_err(Box::new)?;
     (scene.camera.width, scene.camera.height) = (w, h);
@@ -234,12 +233,7 @@ pub fn gpu_walk(
         }
     }
     let per = |d: Duration| d.as_secs_f64() * 1e3 / f64::from(timed.max(1));
-    let exact = super::gpu::frame_time(
-        Some(gpu),
-        &scene,
-        MethodKind::Trace,
-        &MethodSettings::default(),
-    )?;
+    let exact = super::gpu::exact_frame_time(gpu, &scene)?;
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     let name = |what: &str| {
         format!("relief walk (paper 3), {w} × {h}, {timed} frames, impostors of {SIDE}²: {what}")

@@ -125,15 +125,7 @@ pub fn c3rc_frames_on_the_gpu_are_the_cpus(gpu: &Gpu) {
         let started = std::time::Instant::now();
         let g = uploaded.frame(&clouds, &scene, &view, t).unwrap();
         let took = started.elapsed();
-        let pixels = cpu.frame.object_id.pixels().len();
-        let ids = (cpu.frame.object_id.pixels().iter())
-            .zip(g.frame.object_id.pixels())
-            .filter(|(a, b)| a == b)
-            .count() as f64
-            / pixels as f64;
-        let flip = trompe::frame::metrics::compare(&cpu.frame.color, &g.frame.color, None)
-            .unwrap()
-            .flip;
+        let (ids, flip) = crate::agreement(&cpu.frame, &g.frame);
         let (cpu_reached, gpu_reached) = (cpu.stats.pixels_splatted, g.stats.pixels_splatted);
         let both = (cpu.winners.pixels().iter())
             .zip(g.winners.pixels())

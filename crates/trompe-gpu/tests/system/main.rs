@@ -82,6 +82,20 @@ pub fn blends_agree(what: &str, cpu: &trompe::texturing::Blend, on_gpu: &trompe:
     );
 }
 
+/// How closely two frames of one view agree: the share of pixels with the same object id, and
+/// the mean FLIP of their colours.
+pub fn agreement(cpu: &trompe::frame::Frame, on_gpu: &trompe::frame::Frame) -> (f64, f64) {
+    let ids = (cpu.object_id.pixels().iter())
+        .zip(on_gpu.object_id.pixels())
+        .filter(|(a, b)| a == b)
+        .count() as f64
+        / cpu.object_id.pixels().len().max(1) as f64;
+    let flip = trompe::frame::metrics::compare(&cpu.color, &on_gpu.color, None)
+        .unwrap()
+        .flip;
+    (ids, flip)
+}
+
 /// A test that needs no device.
 fn plain(name: &str, test: fn()) -> Trial {
     Trial::test(name, move || -> Result<(), Failed> {

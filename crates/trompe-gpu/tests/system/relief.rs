@@ -63,15 +63,7 @@ pub fn relief_frames_on_the_gpu_are_the_cpus(gpu: &Gpu) {
         let on_gpu = mapper
             .map(&prepared.background, &prepared.draws, &camera)
             .unwrap();
-        let pixels = cpu.object_id.pixels().len();
-        let ids = (cpu.object_id.pixels().iter())
-            .zip(on_gpu.frame.object_id.pixels())
-            .filter(|(a, b)| a == b)
-            .count() as f64
-            / pixels as f64;
-        let flip = trompe::frame::metrics::compare(&cpu.color, &on_gpu.frame.color, None)
-            .unwrap()
-            .flip;
+        let (ids, flip) = crate::agreement(&cpu, &on_gpu.frame);
         let relief_pixels = (cpu.object_id.pixels().iter())
             .filter(|&&id| prepared.draws.iter().any(|d| d.object == id))
             .count();
@@ -239,14 +231,7 @@ pub fn the_relief_method_on_the_gpu_is_the_cpus(gpu: &Gpu) {
             Pinhole::look_at(eye, centre, spec.up, spec.fov_y, spec.width, spec.height).unwrap();
         let c = cpu.frame(0.0, Some(camera.clone()), &()).unwrap();
         let g = on_gpu.frame(0.0, Some(camera), &()).unwrap();
-        let ids = (c.frame.object_id.pixels().iter())
-            .zip(g.frame.object_id.pixels())
-            .filter(|(a, b)| a == b)
-            .count() as f64
-            / c.frame.object_id.pixels().len() as f64;
-        let flip = trompe::frame::metrics::compare(&c.frame.color, &g.frame.color, None)
-            .unwrap()
-            .flip;
+        let (ids, flip) = crate::agreement(&c.frame, &g.frame);
         println!(
             "frame {i}: {}; ids {:.3} %, FLIP {flip:.5}",
             g.report,

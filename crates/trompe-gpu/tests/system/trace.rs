@@ -258,18 +258,7 @@ material = { type = "mirror", tint = [0.9, 0.9, 0.9] }
                 g.report
             );
         }
-        let ids = c
-            .frame
-            .object_id
-            .pixels()
-            .iter()
-            .zip(g.frame.object_id.pixels())
-            .filter(|(a, b)| a == b)
-            .count() as f64
-            / c.frame.object_id.pixels().len() as f64;
-        let flip = trompe::frame::metrics::compare(&c.frame.color, &g.frame.color, None)
-            .unwrap()
-            .flip;
+        let (ids, flip) = crate::agreement(&c.frame, &g.frame);
         eprintln!("t = {t}: ids {:.3} % equal, FLIP {flip:.5}", ids * 100.0);
         assert!(
             ids >= 0.995 && flip <= 0.01,
