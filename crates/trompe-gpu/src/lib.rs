@@ -11,6 +11,8 @@
 //!   and the impostor methods: the same tracer with what mirrors and glass send out answered
 //!   by walking impostors.
 //! - [`walk`]: paper 1's ray–impostor walk as a shader, over impostors the library built.
+//! - [`c3rc`]: paper 2's continuous 3-ray camera — a point's every projection through the cubic,
+//!   in f64 where the adapter has it.
 //! - [`hybrid`]: paper 2's hybrid reflections — points projected through continuous 3-ray
 //!   cameras in a compute shader and splatted, the tracer shading with them.
 //! - [`relief`]: paper 3's texture-mapping phase — the library's pre-warped relief textures
@@ -39,6 +41,7 @@
 
 pub mod build;
 pub mod bvh;
+pub mod c3rc;
 pub mod device;
 pub mod hybrid;
 pub mod layers;

@@ -52,7 +52,7 @@ pub fn splat_shader_source(f64: bool) -> String {
     [
         crate::bvh::SHADER,
         include_str!("../shaders/trace.wgsl"),
-        &crate::hybrid::c3rc_source(f64),
+        &crate::c3rc::c3rc_source(f64),
         include_str!("../shaders/splat.wgsl"),
     ]
     .join("\n")

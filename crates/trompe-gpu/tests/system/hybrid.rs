@@ -7,7 +7,8 @@ use trompe::frame::NO_OBJECT;
 use trompe::hybrid::{HybridReflections, HybridSettings};
 use trompe::methods::{MethodKind, MethodSettings};
 use trompe_gpu::Gpu;
-use trompe_gpu::hybrid::{GpuHybrid, project_pairs};
+use trompe_gpu::c3rc::project_pairs;
+use trompe_gpu::hybrid::GpuHybrid;
 
 fn rng(seed: &mut u64) -> f64 {
     *seed = seed
@@ -159,7 +160,8 @@ pub fn c3rc_frames_on_the_gpu_are_the_cpus(gpu: &Gpu) {
 }
 
 /// The same frame twice gives the same bits, and `--device gpu` runs the method through the
-/// library's one interface, reporting the adapter.
+/// library's one interface, reporting the adapter; a scene without mirrors renders as on the
+/// CPU.
 pub fn a_c3rc_frame_on_the_gpu_is_the_same_twice(gpu: &Gpu) {
     let (_, scene) = crate::trace::shipped_scenes()
         .into_iter()
@@ -180,4 +182,20 @@ pub fn a_c3rc_frame_on_the_gpu_is_the_same_twice(gpu: &Gpu) {
     assert!(second.report.contains("scene kept"), "{}", second.report);
     assert!(first.frame.color.pixels() == second.frame.color.pixels());
     assert!(first.frame.object_id.pixels() == second.frame.object_id.pixels());
+    // A scene without mirrors has no points and no cameras: the tracer's frame, on both devices.
+    let (_, scene) = crate::trace::shipped_scenes()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("diffuse.toml"))
+        .expect("scenes/diffuse.toml");
+    let frame = |device| {
+        trompe_gpu::DeviceRenderer::new(&scene, MethodKind::C3rc, MethodSettings::default(), device)
+            .and_then(|mut r| r.frame(scene.render.time, None, &()))
+            .unwrap()
+            .frame
+    };
+    let (ids, flip) = crate::agreement(&frame(None), &frame(Some(gpu)));
+    assert!(
+        ids >= 0.999 && flip <= 0.01,
+        "no mirrors: ids {ids}, FLIP {flip}"
+    );
 }
