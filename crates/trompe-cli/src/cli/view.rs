@@ -50,10 +50,9 @@ pub struct ViewArgs {
     /// Window: close after this many seconds (for scripted runs).
     #[arg(long)]
     quit_after: Option<f32>,
-    /// Where the methods with a GPU path run (trace, raster, impostor, pinhole-impostor): the
-    /// CPU, the GPU (hardware first, else lavapipe), or auto (a hardware GPU if there is one).
-    /// The other methods run on the CPU either way; the split screen's reference is the CPU's
-    /// trace.
+    /// Where the methods with a GPU path run (every one but envmap): the CPU, the GPU
+    /// (hardware first, else lavapipe), or auto (a hardware GPU if there is one). The other
+    /// methods run on the CPU either way; the split screen's reference is the CPU's trace.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
 }
