@@ -33,7 +33,9 @@ use crate::frame::Rgba;
 use glam::{DVec3, Vec3};
 use thiserror::Error;
 
-pub use pipeline::{ObjectState, Pipeline, PipelineSettings, PreparedFrame, ReliefDraw};
+pub use pipeline::{
+    ObjectState, Pipeline, PipelineSettings, PreparedDraws, PreparedFrame, ReliefDraw,
+};
 pub use prewarp::{Coefficients, Eye, Prewarped, prewarp};
 pub use shader::SoftwareShader;
 pub use walk::{WalkReport, WalkSettings, walk};

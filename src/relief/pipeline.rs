@@ -250,6 +250,20 @@ pub struct PreparedFrame {
     pub timings: Timings,
 }
 
+/// A frame's decisions and pre-warps, before anything is drawn ([`Pipeline::prepare_draws`]):
+/// the objects to draw directly, and the impostors to map over them.
+#[derive(Clone, Debug)]
+pub struct PreparedDraws {
+    /// The objects to draw directly: those without relief, and the fallbacks.
+    pub rasterized: Vec<usize>,
+    /// The impostors to texture-map over them, in order.
+    pub draws: Vec<ReliefDraw>,
+    /// Per relief object.
+    pub objects: Vec<ObjectFrame>,
+    /// Step timings so far.
+    pub timings: Timings,
+}
+
 /// One pre-warped impostor to texture-map ([`super::texture::draw`]).
 #[derive(Clone, Debug)]
 pub struct ReliefDraw {
@@ -423,6 +437,40 @@ impl Pipeline {
     /// decided, pre-warped; the rest rasterized. [`Pipeline::frame`] maps the impostors on the
     /// CPU; the GPU crate maps them on the graphics hardware.
     pub fn prepare(&mut self, camera: &Pinhole) -> Result<PreparedFrame, ReliefError> {
+        let PreparedDraws {
+            rasterized,
+            draws,
+            objects,
+            mut timings,
+        } = self.prepare_draws(camera)?;
+        let background = raster_subset(
+            self.shader.view(),
+            self.shader.lighting(),
+            camera,
+            &rasterized,
+            &mut timings,
+        )?;
+        Ok(PreparedFrame {
+            background,
+            draws,
+            objects,
+            timings,
+        })
+    }
+
+    /// The scene the pipeline stands on (still: as it was when the pipeline started).
+    pub fn view(&self) -> &View {
+        self.shader.view()
+    }
+
+    /// Its lighting.
+    pub fn lighting(&self) -> &crate::scene::Lighting {
+        self.shader.lighting()
+    }
+
+    /// The frame through `camera` up to its drawing: impostors collected, decided,
+    /// pre-warped; which objects are drawn directly ([`raster_subset`] draws them on the CPU).
+    pub fn prepare_draws(&mut self, camera: &Pinhole) -> Result<PreparedDraws, ReliefError> {
         let mut timings = Timings::default();
         timings.time("collect", || self.collect())?;
         let eye = camera.position();
@@ -452,13 +500,6 @@ impl Pipeline {
         let rasterized: Vec<usize> = (0..view.meshes.len())
             .filter(|o| !relief.contains(o) || fallback.contains(o))
             .collect();
-        let frame = raster_subset(
-            view,
-            self.shader.lighting(),
-            camera,
-            &rasterized,
-            &mut timings,
-        )?;
         let draws = self
             .slots
             .iter()
@@ -477,8 +518,8 @@ impl Pipeline {
         outputs.extend(decided);
         self.previous_eye = Some(eye);
         self.frame += 1;
-        Ok(PreparedFrame {
-            background: frame,
+        Ok(PreparedDraws {
+            rasterized,
             draws,
             objects: outputs,
             timings,
@@ -827,6 +868,21 @@ fn render_thread(
     }
 }
 
+/// How the objects drawn directly are shaded: at depth 1 (mirrors and glass take the
+/// panorama's radiance), shadow rays offset as a scene's are, by 10⁻⁴ of `meshes`' radius.
+pub fn raster_settings(meshes: &[Arc<crate::geom::Mesh>]) -> crate::scene::RenderSettings {
+    let radius = meshes
+        .iter()
+        .map(|m| m.bounds())
+        .reduce(|a, b| a.union(b))
+        .map_or(1.0, |b| b.radius());
+    crate::scene::RenderSettings {
+        max_depth: 1,
+        time: 0.0,
+        ray_epsilon: 1e-4 * radius,
+    }
+}
+
 /// Rasterizes the objects `objects` of `view` through `camera` (ids kept), the environment
 /// behind them.
 pub fn raster_subset(
@@ -842,18 +898,7 @@ pub fn raster_subset(
         meshes: objects.iter().map(|&o| view.meshes[o].clone()).collect(),
         surfaces: objects.iter().map(|&o| view.surfaces[o].clone()).collect(),
     };
-    // Shadow rays offset as a scene's are: 10⁻⁴ of the objects' radius.
-    let radius = subset
-        .meshes
-        .iter()
-        .map(|m| m.bounds())
-        .reduce(|a, b| a.union(b))
-        .map_or(1.0, |b| b.radius());
-    let settings = crate::scene::RenderSettings {
-        max_depth: 1,
-        time: 0.0,
-        ray_epsilon: 1e-4 * radius,
-    };
+    let settings = raster_settings(&subset.meshes);
     let mut frame = crate::render::render_raster(&subset, lighting, &settings, &(), timings)?;
     for id in frame.object_id.pixels_mut() {
         if let Some(&o) = objects.get(*id as usize) {

@@ -4,7 +4,8 @@
 // margin) and seen through the eye, each pixel taking the depth of the relief point it shows —
 // on the eye's line through the base point, at the carried displacement — and drawn only where
 // that is nearer than what the frame holds, so the rest of the frame interpenetrates it. One
-// dispatch an impostor, over the pixels its quad can cover, in the frame loop's order.
+// dispatch an impostor, over the pixels its quad can cover, in the frame loop's order, into the
+// buffers the tracer's raster pass drew the other objects into.
 
 struct Draw {
     // xyz: the eye; w: its height above the base plane.
@@ -27,10 +28,10 @@ struct Draw {
     frame: vec4<u32>,
 }
 
+// The frame as trace.wgsl writes it: colour; depth (x) and object id (y, bits); normal.
 @group(0) @binding(0) var<storage, read_write> colour: array<vec4<f32>>;
-// Per pixel: the shading normal (xyz) and the depth (w).
-@group(0) @binding(1) var<storage, read_write> surface: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> ids: array<u32>;
+@group(0) @binding(1) var<storage, read_write> depth_id: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> normals: array<vec4<f32>>;
 // The pre-warped colour (sRGB, decoded by the sampler-free load), and per texel its
 // displacement (r) and whether anything landed there (g: 1, or 0 where empty).
 @group(0) @binding(3) var relief_colour: texture_2d<f32>;
@@ -99,9 +100,9 @@ fn map_relief(@builtin(global_invocation_id) id: vec3<u32>) {
     let s = 1.0 - d / draw.eye.w;
     let distance = s * t;
     let pixel = y * draw.frame.x + x;
-    if (s > 0.0 && distance < surface[pixel].w) {
+    if (s > 0.0 && distance < depth_id[pixel].x) {
         colour[pixel] = vec4<f32>(found.colour / found.weight, 1.0);
-        surface[pixel] = vec4<f32>(f, distance);
-        ids[pixel] = draw.frame.y;
+        depth_id[pixel] = vec4<f32>(distance, bitcast<f32>(draw.frame.y), 0.0, 0.0);
+        normals[pixel] = vec4<f32>(f, 0.0);
     }
 }

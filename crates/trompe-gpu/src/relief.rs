@@ -1,8 +1,10 @@
 //! Paper 3 split as the paper splits it ("Relief texture mapping re-used by 3D image warping"
 //! §2, §6; its CPU twin is the library's `trompe::relief`): the software shader's thread and
-//! the frame loop's pre-warp stay on the CPU ([`Pipeline::prepare`]); the GPU texture-maps each
-//! pre-warped relief texture onto its base quad with per-pixel depth and composites it over the
-//! objects drawn directly (`shaders/relief.wgsl`).
+//! the frame loop's decisions and pre-warps stay on the CPU ([`Pipeline::prepare_draws`]); the
+//! GPU draws the objects without relief with its rasterizer (the tracer's raster pass, shaded as
+//! the library's `raster_subset` shades them), then texture-maps each pre-warped relief texture
+//! onto its base quad with per-pixel depth over them (`shaders/relief.wgsl`), the frame on the
+//! device until it is read back. [`ReliefMapper::map`] maps over a frame the caller gives.
 //!
 //! Uploads are double-buffered: each object has two texture pairs, a new pre-warp is written
 //! into the one the last frame did not read and the pair swapped after, so the frame being
@@ -15,14 +17,16 @@
 
 use crate::device::{Gpu, GpuError};
 use crate::raster::v4;
+use crate::trace::{GpuTracer, Recorded};
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec3, Vec4};
+use glam::{DVec3, Vec4};
 use std::collections::HashMap;
 use std::sync::Arc;
 use trompe::camera::{Pinhole, Projection};
 use trompe::frame::Frame;
 use trompe::methods::{MethodError, MethodFrame, MethodSettings};
 use trompe::relief::{Pipeline, Prewarped, ReliefDraw};
+use trompe::render::Primary;
 use trompe::scene::Scene;
 
 /// One impostor's dispatch as the shader reads it (`relief.wgsl`'s `Draw`).
@@ -100,41 +104,66 @@ impl<'a> ReliefMapper<'a> {
                 ),
             });
         }
-        let pixels = u64::from(w) * u64::from(h);
-        gpu.check_storage("the frame", pixels * 16)?;
+        gpu.check_storage("the frame", u64::from(w) * u64::from(h) * 16)?;
+        let colour: Vec<Vec4> = background.color.pixels().to_vec();
+        let depth_id: Vec<[f32; 4]> = (background.depth.pixels().iter())
+            .zip(background.object_id.pixels())
+            .map(|(d, id)| [*d, f32::from_bits(*id), 0.0, 0.0])
+            .collect();
+        let normal: Vec<Vec4> = (background.normal.pixels().iter())
+            .map(|n| n.extend(0.0))
+            .collect();
+        let usage = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        let with = |label: &str, bytes: &[u8]| {
+            let b = gpu.buffer(label, bytes.len() as u64, usage);
+            gpu.queue.write_buffer(&b, 0, bytes);
+            b
+        };
+        let recorded = Recorded {
+            encoder: gpu.device.create_command_encoder(&Default::default()),
+            outputs: [
+                with("relief frame colour", bytemuck::cast_slice(&colour)),
+                with("relief frame depth and id", bytemuck::cast_slice(&depth_id)),
+                with("relief frame normal", bytemuck::cast_slice(&normal)),
+            ],
+            size: (w, h),
+        };
+        self.map_over(recorded, draws, camera)
+    }
+
+    /// `draws` texture-mapped through `camera` over the frame `tracer` draws (its raster pass:
+    /// the objects without relief, drawn by the GPU rasterizer and shaded at depth 1), the
+    /// frame never leaving the device until it is read back.
+    pub(crate) fn map_drawn(
+        &mut self,
+        tracer: &GpuTracer,
+        draws: &[ReliefDraw],
+        camera: &Pinhole,
+    ) -> Result<MappedFrame, GpuError> {
+        let recorded = tracer.record(camera, &[], None)?;
+        self.map_over(recorded, draws, camera)
+    }
+
+    /// Records `draws`' dispatches after `recorded`'s passes, over its buffers, and reads the
+    /// frame back.
+    fn map_over(
+        &mut self,
+        mut recorded: Recorded,
+        draws: &[ReliefDraw],
+        camera: &Pinhole,
+    ) -> Result<MappedFrame, GpuError> {
+        let gpu = self.gpu;
         let mut uploads = 0;
         for d in draws {
             uploads += usize::from(self.upload(d)?);
         }
-        let colour: Vec<Vec4> = background.color.pixels().to_vec();
-        let surface: Vec<Vec4> = (background.normal.pixels().iter())
-            .zip(background.depth.pixels())
-            .map(|(n, d)| n.extend(*d))
-            .collect();
-        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let with = |label: &str, bytes: &[u8]| {
-            let b = gpu.buffer(
-                label,
-                bytes.len() as u64,
-                usage | wgpu::BufferUsages::COPY_DST,
-            );
-            gpu.queue.write_buffer(&b, 0, bytes);
-            b
-        };
-        let outputs = [
-            with("relief frame colour", bytemuck::cast_slice(&colour)),
-            with("relief frame surface", bytemuck::cast_slice(&surface)),
-            with(
-                "relief frame ids",
-                bytemuck::cast_slice(background.object_id.pixels()),
-            ),
-        ];
         let pipeline = gpu.compute_pipeline(
             "relief.wgsl",
             include_str!("../shaders/relief.wgsl"),
             "map_relief",
         );
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
         for d in draws {
             let Some(rect) = covered_rect(d, camera) else {
                 continue;
@@ -152,49 +181,29 @@ impl<'a> ReliefMapper<'a> {
             let uniform = gpu.uniform_with("relief draw", bytemuck::bytes_of(&uniform));
             let colour_view = pair.colour.create_view(&Default::default());
             let depth_view = pair.depth.create_view(&Default::default());
+            let [colour, depth_id, normal] = &recorded.outputs;
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("relief draw"),
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &[
-                    (
-                        0,
-                        wgpu::BindingResource::Buffer(outputs[0].as_entire_buffer_binding()),
-                    ),
-                    (
-                        1,
-                        wgpu::BindingResource::Buffer(outputs[1].as_entire_buffer_binding()),
-                    ),
-                    (
-                        2,
-                        wgpu::BindingResource::Buffer(outputs[2].as_entire_buffer_binding()),
-                    ),
+                    (0, colour.as_entire_binding()),
+                    (1, depth_id.as_entire_binding()),
+                    (2, normal.as_entire_binding()),
                     (3, wgpu::BindingResource::TextureView(&colour_view)),
                     (4, wgpu::BindingResource::TextureView(&depth_view)),
                     (5, uniform.as_entire_binding()),
                 ]
                 .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource }),
             });
-            let mut pass = encoder.begin_compute_pass(&Default::default());
+            let mut pass = recorded.encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(rect[2].div_ceil(8), rect[3].div_ceil(8), 1);
         }
-        let read = gpu.read_back(encoder, &outputs, "the relief frame")?;
-        let colour: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read[0]);
-        let surface: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read[1]);
-        let ids: Vec<u32> = bytemuck::pod_collect_to_vec(&read[2]);
-        let mut frame = background.clone();
-        for (i, ((c, s), id)) in colour.iter().zip(&surface).zip(&ids).enumerate() {
-            if i as u64 >= pixels {
-                break;
-            }
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            frame.color.set(x, y, Vec4::from_array(*c));
-            frame.depth.set(x, y, s[3]);
-            frame.normal.set(x, y, Vec3::new(s[0], s[1], s[2]));
-            frame.object_id.set(x, y, *id);
-        }
-        Ok(MappedFrame { frame, uploads })
+        Ok(MappedFrame {
+            frame: recorded.read(gpu)?,
+            uploads,
+        })
     }
 
     /// Writes `d`'s pre-warp into its object's back pair and swaps, unless the front pair
@@ -348,15 +357,51 @@ fn dispatch(d: &ReliefDraw, camera: &Pinhole, rect: [u32; 4]) -> Option<GpuDraw>
     })
 }
 
+/// The objects `objects` of `view` on the device, drawn by the GPU rasterizer and shaded as the
+/// library's `relief::pipeline::raster_subset` shades them; the other objects' meshes left
+/// empty, so the ids stay the scene's.
+fn directly_drawn<'a>(
+    gpu: &'a Gpu,
+    view: &trompe::scene::View,
+    lighting: &trompe::scene::Lighting,
+    objects: &[usize],
+) -> Result<GpuTracer<'a>, GpuError> {
+    let meshes: Vec<Arc<trompe::geom::Mesh>> = (view.meshes.iter().enumerate())
+        .map(|(o, m)| match objects.contains(&o) {
+            true => m.clone(),
+            false => Arc::new(trompe::geom::Mesh {
+                materials: m.materials.clone(),
+                ..trompe::geom::Mesh::default()
+            }),
+        })
+        .collect();
+    let drawn: Vec<Arc<trompe::geom::Mesh>> = objects
+        .iter()
+        .filter_map(|&o| view.meshes.get(o).cloned())
+        .collect();
+    let settings = trompe::relief::pipeline::raster_settings(&drawn);
+    let subset = trompe::scene::View {
+        lens: None,
+        camera: view.camera.clone(),
+        meshes,
+        surfaces: view.surfaces.clone(),
+    };
+    GpuTracer::new(gpu, &subset, lighting, &settings, Primary::Rasterized)
+}
+
 /// The `relief` method on the GPU, over one scene: the library's pipeline (the software
 /// shader's thread, the frame loop's decisions and pre-warps) started on the first frame and
-/// kept, each frame's impostors texture-mapped by the GPU.
+/// kept; each frame, the objects drawn directly are drawn by the GPU rasterizer (the `raster`
+/// method's pass, as the library's `raster_subset` draws them) and the impostors texture-mapped
+/// over them, on the device.
 pub struct GpuReliefMethod<'a> {
     scene: &'a Scene,
     settings: MethodSettings,
     /// The pipeline and the time its still scene stands at.
     kept: Option<(Pipeline, f32)>,
     mapper: ReliefMapper<'a>,
+    /// The objects drawn directly, uploaded: kept while the same objects are.
+    drawn: Option<(Vec<usize>, GpuTracer<'a>)>,
 }
 
 impl<'a> GpuReliefMethod<'a> {
@@ -367,6 +412,7 @@ impl<'a> GpuReliefMethod<'a> {
             settings,
             kept: None,
             mapper: ReliefMapper::new(gpu),
+            drawn: None,
         }
     }
 
@@ -400,17 +446,33 @@ impl<'a> GpuReliefMethod<'a> {
             Some(c) => c,
             None => scene.camera.at(t).map_err(MethodError::from)?,
         };
-        let prepared = pipeline.prepare(&camera).map_err(MethodError::from);
+        let prepared = pipeline.prepare_draws(&camera).map_err(MethodError::from);
         let (report, state) = match &prepared {
             Ok(p) => trompe::methods::relief_report(scene, &pipeline, time, &p.objects),
             Err(_) => Default::default(),
         };
-        self.kept = Some((pipeline, time));
-        let mut prepared = prepared?;
+        let mut prepared = match prepared {
+            Ok(p) => p,
+            Err(e) => {
+                self.kept = Some((pipeline, time));
+                return Err(e.into());
+            }
+        };
         timings.0.append(&mut prepared.timings.0);
-        let mapped = timings.time("GPU texture map", || {
-            self.mapper
-                .map(&prepared.background, &prepared.draws, &camera)
+        let gpu = self.mapper.gpu;
+        let tracer = match &mut self.drawn {
+            Some((objects, tracer)) if *objects == prepared.rasterized => tracer,
+            slot => {
+                let view = pipeline.view();
+                let tracer = timings.time("upload the objects drawn directly", || {
+                    directly_drawn(gpu, view, pipeline.lighting(), &prepared.rasterized)
+                })?;
+                &slot.insert((prepared.rasterized.clone(), tracer)).1
+            }
+        };
+        self.kept = Some((pipeline, time));
+        let mapped = timings.time("GPU frame", || {
+            self.mapper.map_drawn(tracer, &prepared.draws, &camera)
         })?;
         trompe::render::check_radiance(&mapped.frame).map_err(MethodError::from)?;
         progress.advance(u64::from(mapped.frame.color.height()));

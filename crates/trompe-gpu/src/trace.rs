@@ -447,7 +447,13 @@ impl<'a> GpuTracer<'a> {
         let scene = [
             nodes,
             corners,
-            gpu.storage_with("triangles", triangle_bytes),
+            // At least one triangle's worth: a binding holds one element, read by no one in a
+            // scene without triangles.
+            gpu.storage_with("triangles", &{
+                let mut bytes = triangle_bytes.to_vec();
+                bytes.resize(bytes.len().max(size_of::<GpuTriangle>()), 0);
+                bytes
+            }),
             gpu.storage_with("materials", bytemuck::cast_slice(&materials)),
             gpu.storage_with("texels", texel_bytes),
         ];
@@ -517,6 +523,17 @@ impl<'a> GpuTracer<'a> {
         extra: &[(u32, &wgpu::Buffer)],
         drawn: Option<&wgpu::Texture>,
     ) -> Result<Frame, GpuError> {
+        self.record(camera, extra, drawn)?.read(self.gpu)
+    }
+
+    /// [`GpuTracer::frame_with`]'s pass recorded, not yet submitted: later passes may draw over
+    /// its buffers before [`Recorded::read`] reads the frame back.
+    pub(crate) fn record(
+        &self,
+        camera: &Pinhole,
+        extra: &[(u32, &wgpu::Buffer)],
+        drawn: Option<&wgpu::Texture>,
+    ) -> Result<Recorded, GpuError> {
         let gpu = self.gpu;
         let (w, h) = trompe::camera::Projection::resolution(camera);
         let uniform = self.uniform.through(camera);
@@ -587,9 +604,31 @@ impl<'a> GpuTracer<'a> {
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
-        let read = gpu.read_back(encoder, &outputs, "the frame")?;
+        Ok(Recorded {
+            encoder,
+            outputs,
+            size: (w, h),
+        })
+    }
+}
+
+/// A frame's passes recorded into `encoder`, writing `outputs` — colour, (depth, object id
+/// bits) and normal, a `vec4<f32>` a pixel each, as `shaders/trace.wgsl` writes them.
+pub(crate) struct Recorded {
+    pub(crate) encoder: wgpu::CommandEncoder,
+    pub(crate) outputs: [wgpu::Buffer; 3],
+    pub(crate) size: (u32, u32),
+}
+
+impl Recorded {
+    /// Submits the passes and reads the frame back: depth, normal and id where a surface was
+    /// found, the colour everywhere.
+    pub(crate) fn read(self, gpu: &Gpu) -> Result<Frame, GpuError> {
+        let (w, h) = self.size;
+        let pixels = u64::from(w) * u64::from(h);
+        let read = gpu.read_back(self.encoder, &self.outputs, "the frame")?;
         let texels = |i: usize| -> Vec<[f32; 4]> {
-            bytemuck::pod_collect_to_vec(&read[i][..out_bytes as usize])
+            bytemuck::pod_collect_to_vec(&read[i][..pixels as usize * 16])
         };
         let (color, depth_id, normal) = (texels(0), texels(1), texels(2));
         let mut frame = Frame::new(w, h)?;
