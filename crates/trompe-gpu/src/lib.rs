@@ -26,6 +26,8 @@
 //! - [`layers`]: image layers, each object through its layer's sub-frustum (paper 4 §5).
 //! - [`master`]: paper 5's rendering path — every master texture a layer of one texture
 //!   array, the mesh's one atlas point a pixel, the views blended in a compute shader.
+//! - [`textured`]: a mesh textured from views or masters, uploaded once, blended with any
+//!   weighting through any camera (the viewer's photograph modes).
 //! - [`octahedral`]: engines' octahedral impostors drawn by their shader, instanced, and shaded.
 //! - [`present`]: the viewer's window shown through a wgpu surface on the same device.
 //!
@@ -51,6 +53,7 @@ pub mod octahedral;
 pub mod present;
 pub mod raster;
 pub mod relief;
+pub mod textured;
 pub mod texturing;
 pub mod trace;
 pub mod views;
@@ -62,3 +65,4 @@ pub use methods::{
     Device, DeviceError, DeviceRenderer, check_device, has_gpu_path, open, open_for,
 };
 pub use present::WindowSurface;
+pub use textured::{PhotoSource, TexturedMesh};

@@ -65,23 +65,10 @@ impl<'a> GpuMasters<'a> {
             );
             return Err(GpuError::Unsupported { what }.into());
         }
-        let table = trompe::master::render::face_table(
-            mesh,
-            (layout, cameras, masters),
-            settings.weighting,
-        )?;
+        let blender = blender(gpu, mesh, (layout, cameras, masters), settings)?;
         let corners: Vec<[glam::Vec3; 3]> = (0..mesh.triangle_count())
             .map(|t| mesh.corners(t))
             .collect();
-        let centres: Vec<glam::DVec3> = cameras.iter().map(|c| c.position()).collect();
-        let blender = Blender::new(
-            gpu,
-            &corners,
-            &centres,
-            &table,
-            settings,
-            ("master.wgsl", MASTER_SHADER),
-        )?;
         let faces: Vec<GpuFace> = corners
             .iter()
             .zip(&layout.faces)
@@ -131,12 +118,50 @@ impl<'a> GpuMasters<'a> {
         })
     }
 
+    /// Blends with `settings` from now on: the weighting's per-face table and the shader made
+    /// again from `mesh`, `layout`, `cameras` and `masters`, which must be those uploaded; the
+    /// masters stay where they are.
+    pub fn reweigh(
+        &mut self,
+        mesh: &Mesh,
+        (layout, cameras, masters): (&Layout, &[Pinhole], &[Image<Rgba>]),
+        settings: &BlendSettings,
+    ) -> Result<(), DeviceError> {
+        check_settings(settings)?;
+        self.blender = blender(self.gpu, mesh, (layout, cameras, masters), settings)?;
+        Ok(())
+    }
+
     /// The mesh through `camera`, blended from the masters: the image and its pixels' counts,
     /// as [`trompe::master::render::render`] makes them.
     pub fn render(&self, camera: &Pinhole) -> Result<Blend, GpuError> {
         let source = entries(&[(1, &self.faces)], &[(3, &self.masters)]);
         self.blender.render(self.gpu, camera, &source)
     }
+}
+
+/// The blend of `masters` over `mesh` with `settings`: the weighting's per-face table, the
+/// views' centres and the whole shader.
+fn blender(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    (layout, cameras, masters): (&Layout, &[Pinhole], &[Image<Rgba>]),
+    settings: &BlendSettings,
+) -> Result<Blender, DeviceError> {
+    let table =
+        trompe::master::render::face_table(mesh, (layout, cameras, masters), settings.weighting)?;
+    let corners: Vec<[glam::Vec3; 3]> = (0..mesh.triangle_count())
+        .map(|t| mesh.corners(t))
+        .collect();
+    let centres: Vec<glam::DVec3> = cameras.iter().map(|c| c.position()).collect();
+    Ok(Blender::new(
+        gpu,
+        &corners,
+        &centres,
+        &table,
+        settings,
+        ("master.wgsl", MASTER_SHADER),
+    )?)
 }
 
 /// Renders `mesh` through `camera` from the encoding `trompe master encode` wrote in `dir`, on

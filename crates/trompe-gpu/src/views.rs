@@ -61,6 +61,8 @@ pub struct GpuViews<'a> {
     views: wgpu::Buffer,
     images: wgpu::TextureView,
     depths: wgpu::TextureView,
+    /// The view left out of every blend, if any.
+    exclude: Option<usize>,
 }
 
 impl<'a> GpuViews<'a> {
@@ -126,29 +128,11 @@ impl<'a> GpuViews<'a> {
             );
             return Err(GpuError::Unsupported { what }.into());
         }
-        let table = match depth {
-            Some(depth) => {
-                let source = ViewSource::new(views, depth, settings.tolerance, exclude);
-                trompe::texturing::face_table(settings.weighting, meshes, &source)
-            }
-            None => {
-                trompe::layers::render::projective_face_table(meshes, views, settings.weighting)
-            }
-        }
-        .map_err(GpuError::from)?;
+        let blender = blender(gpu, meshes, (views, depth), settings, exclude)?;
         let corners: Vec<[glam::Vec3; 3]> = meshes
             .iter()
             .flat_map(|m| (0..m.triangle_count()).map(|t| m.corners(t)))
             .collect();
-        let centres: Vec<glam::DVec3> = views.iter().map(|v| v.pose.centre()).collect();
-        let blender = Blender::new(
-            gpu,
-            &corners,
-            &centres,
-            &table,
-            settings,
-            ("views.wgsl", &views_source()),
-        )?;
         let faces: Vec<[[f32; 4]; 3]> = corners.iter().map(|c| c.map(|p| v4(p, 1.0))).collect();
         let face_bytes: &[u8] = bytemuck::cast_slice(&faces);
         gpu.check_storage("the mesh's faces", face_bytes.len() as u64)?;
@@ -192,7 +176,22 @@ impl<'a> GpuViews<'a> {
             views: gpu.storage_with("views", bytemuck::cast_slice(&gpu_views)),
             images,
             depths,
+            exclude,
         })
+    }
+
+    /// Blends with `settings` from now on: the weighting's per-face table and the shader made
+    /// again from `meshes` and `views` (and `depth`), which must be those uploaded; the images
+    /// and depth maps stay where they are.
+    pub fn reweigh(
+        &mut self,
+        meshes: &[&Mesh],
+        (views, depth): (&[CalibratedView], Option<&[DepthMap]>),
+        settings: &BlendSettings,
+    ) -> Result<(), DeviceError> {
+        check_settings(settings)?;
+        self.blender = blender(self.gpu, meshes, (views, depth), settings, self.exclude)?;
+        Ok(())
     }
 
     /// The mesh through `camera`, blended from the views: the image and its pixels' counts, as
@@ -204,6 +203,38 @@ impl<'a> GpuViews<'a> {
         );
         self.blender.render(self.gpu, camera, &source)
     }
+}
+
+/// The blend of `views` over `meshes` with `settings`: the weighting's per-face table, the
+/// views' centres and the whole shader.
+fn blender(
+    gpu: &Gpu,
+    meshes: &[&Mesh],
+    (views, depth): (&[CalibratedView], Option<&[DepthMap]>),
+    settings: &BlendSettings,
+    exclude: Option<usize>,
+) -> Result<Blender, DeviceError> {
+    let table = match depth {
+        Some(depth) => {
+            let source = ViewSource::new(views, depth, settings.tolerance, exclude);
+            trompe::texturing::face_table(settings.weighting, meshes, &source)
+        }
+        None => trompe::layers::render::projective_face_table(meshes, views, settings.weighting),
+    }
+    .map_err(GpuError::from)?;
+    let corners: Vec<[glam::Vec3; 3]> = meshes
+        .iter()
+        .flat_map(|m| (0..m.triangle_count()).map(|t| m.corners(t)))
+        .collect();
+    let centres: Vec<glam::DVec3> = views.iter().map(|v| v.pose.centre()).collect();
+    Ok(Blender::new(
+        gpu,
+        &corners,
+        &centres,
+        &table,
+        settings,
+        ("views.wgsl", &views_source()),
+    )?)
 }
 
 /// View `view` as the shader reads it: its depth map's pinhole (without one, its whole

@@ -1,10 +1,12 @@
-//! `trompe view SCENE`: the interactive viewer. A window (winit for the window and input) over
-//! `crate::viewer::Viewer`, shown through a wgpu surface on the GPU the methods run on with
-//! `--device gpu` (`trompe_gpu::present`), else through softbuffer with no GPU; or, with
-//! `--frames`, headless: a script's inputs replayed at fixed time steps and every frame written.
+//! `trompe view SCENE` (or `--views MODEL` / `--master ENCODING` with `--mesh`): the interactive
+//! viewer. A window (winit for the window and input) over `crate::viewer::Viewer`, shown through
+//! a wgpu surface on the GPU the methods run on with `--device gpu` (`trompe_gpu::present`),
+//! else through softbuffer with no GPU; or, with `--frames`, headless: a script's inputs replayed
+//! at fixed time steps and every frame written.
 
 use super::check_plan;
 use super::render::DeviceArg;
+use super::views::BlendArgs;
 use crate::viewer::script::{self, Script};
 use crate::viewer::{Input, Request, Viewer, hud};
 use anyhow::{Context, Result, bail};
@@ -15,7 +17,7 @@ use std::time::Instant;
 use trompe::files::{FolderKind, OutputPlan};
 use trompe::frame::io;
 use trompe::scene::Scene;
-use trompe_gpu::{Gpu, WindowSurface};
+use trompe_gpu::{Gpu, PhotoSource, TexturedMesh, WindowSurface};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -25,9 +27,32 @@ use winit::window::{Window, WindowId};
 /// `trompe view`.
 #[derive(clap::Args, Debug)]
 pub struct ViewArgs {
-    /// Scene file.
-    scene: PathBuf,
-    /// Frame size, WIDTHxHEIGHT (default: the scene camera's).
+    /// Scene file (or fly around a mesh textured from photographs: --views or --master).
+    #[arg(required_unless_present_any = ["views", "master"])]
+    scene: Option<PathBuf>,
+    /// Fly around --mesh textured from this COLMAP model's photographs (text or binary), seen
+    /// through their depth maps; the number keys switch weightings.
+    #[arg(long, value_name = "MODEL", conflicts_with_all = ["scene", "master"], requires = "mesh")]
+    views: Option<PathBuf>,
+    /// The photographs' folder, with --views (default: the model's folder, or its images/).
+    #[arg(long, requires = "views")]
+    images: Option<PathBuf>,
+    /// Fly around --mesh textured from this master encoding (a folder `trompe master encode`
+    /// wrote); the number keys switch weightings.
+    #[arg(
+        long,
+        value_name = "ENCODING",
+        conflicts_with = "scene",
+        requires = "mesh"
+    )]
+    master: Option<PathBuf>,
+    /// The mesh the photographs texture, with --views or --master.
+    #[arg(long, conflicts_with = "scene")]
+    mesh: Option<PathBuf>,
+    /// With --views or --master: how the photographs blend (--weights is the first shown).
+    #[command(flatten)]
+    blend: BlendArgs,
+    /// Frame size, WIDTHxHEIGHT (default: the scene camera's, or the first photograph's).
     #[arg(long, value_parser = super::views::parse_size)]
     size: Option<(u32, u32)>,
     /// Impostor resolution of the impostor methods.
@@ -50,9 +75,10 @@ pub struct ViewArgs {
     /// Window: close after this many seconds (for scripted runs).
     #[arg(long)]
     quit_after: Option<f32>,
-    /// Where the methods with a GPU path run (every one but envmap): the CPU, the GPU
-    /// (hardware first, else lavapipe), or auto (a hardware GPU if there is one). The other
-    /// methods run on the CPU either way; the split screen's reference is the CPU's trace.
+    /// Where the methods with a GPU path run (every one but envmap, and the photographs'
+    /// blends): the CPU, the GPU (hardware first, else lavapipe), or auto (a hardware GPU if
+    /// there is one). The other methods run on the CPU either way; the split screen's reference
+    /// is the CPU's trace, or the photographs' blend on the CPU.
     #[arg(long, value_enum, default_value_t = DeviceArg::Cpu)]
     device: DeviceArg,
 }
@@ -60,53 +86,151 @@ pub struct ViewArgs {
 impl ViewArgs {
     /// Runs the viewer: headless with --frames, else in a window.
     pub(super) fn run(self) -> Result<()> {
-        let scene = Scene::load(&self.scene).context("loading the scene")?;
-        scene
-            .warnings
-            .iter()
-            .for_each(|w| eprintln!("warning: {w}"));
-        let size = self
-            .size
-            .unwrap_or((scene.camera.width, scene.camera.height));
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            bail!("--fps {}: must be a positive number", self.fps);
+        }
         let script = match &self.script {
             Some(p) => Script::load(p)?,
             None => Script::default(),
         };
-        if !(self.fps.is_finite() && self.fps > 0.0) {
-            bail!("--fps {}: must be a positive number", self.fps);
-        }
         let mut plan = OutputPlan::new();
-        plan.creating_folders().reads([&self.scene]);
-        plan.reads(scene.files.iter().cloned());
-        plan.reads(self.script.iter().cloned());
+        plan.creating_folders().reads(self.script.iter().cloned());
+        match (&self.scene, &self.mesh) {
+            (Some(scene), _) => {
+                if self.blend.any_given() {
+                    bail!(
+                        "--weights, --k, --fill-holes, --prefilter and --seamless blend \
+                         photographs: give them with --views or --master, not a scene"
+                    );
+                }
+                let scene = Scene::load(scene).context("loading the scene")?;
+                scene
+                    .warnings
+                    .iter()
+                    .for_each(|w| eprintln!("warning: {w}"));
+                plan.reads(self.scene.iter().cloned())
+                    .reads(scene.files.iter().cloned());
+                let out = self.output(plan)?;
+                let gpu = self.open_gpu()?;
+                let viewer = Viewer::new(&scene, self.impostor_resolution, gpu.as_ref())?;
+                let size = (scene.camera.width, scene.camera.height);
+                self.show(viewer, script, size, (gpu.as_ref(), out))
+            }
+            (None, Some(mesh)) => {
+                let settings = self.blend.settings()?;
+                let mesh = super::load_mesh_read_by(mesh, &mut plan)?;
+                let photographs = self.photographs(&mesh, &mut plan)?;
+                let out = self.output(plan)?;
+                let gpu = self.open_gpu()?;
+                let textured =
+                    TexturedMesh::new(gpu.as_ref(), &mesh, photographs.source(), &settings)
+                        .context("preparing the photographs")?;
+                let viewer = Viewer::of_photographs(textured, &mesh)?;
+                let size = photographs.size();
+                self.show(viewer, script, size, (gpu.as_ref(), out))
+            }
+            (None, None) => {
+                bail!("give a scene file, or --views MODEL or --master ENCODING with --mesh")
+            }
+        }
+    }
+
+    /// Claims the output folder, once `plan` holds everything the viewer reads.
+    fn output(&self, mut plan: OutputPlan) -> Result<Output> {
         plan.writes_folder(&self.output, FolderKind::ViewerFrames);
         check_plan(&plan)?;
         trompe::files::claim_folder(&self.output, FolderKind::ViewerFrames)?;
-        let out = Output {
+        Ok(Output {
             dir: self.output.clone(),
             plan,
-        };
-        // The GPU the methods with a GPU path run on (the trace method's choice stands for them).
+        })
+    }
+
+    /// The GPU the methods with a GPU path run on (the trace method's choice stands for them).
+    fn open_gpu(&self) -> Result<Option<Gpu>> {
         let gpu = trompe_gpu::open_for(self.device.into(), trompe::methods::MethodKind::Trace)
             .context("opening the GPU")?;
         if let Some(g) = &gpu {
-            crate::output::note(format_args!(
-                "the methods with a GPU path ({}) run on {}",
-                trompe_gpu::methods::gpu_methods().join(", "),
-                g.name()
-            ));
+            let what = match self.scene {
+                Some(_) => trompe_gpu::methods::gpu_methods().join(", "),
+                None => "the photographs' blends".to_string(),
+            };
+            crate::output::note(format_args!("{what} run on {}", g.name()));
         }
-        let viewer = Viewer::new(&scene, self.impostor_resolution, gpu.as_ref())?;
+        Ok(gpu)
+    }
+
+    /// The photographs --views or --master names, loaded, with what they read added to `plan`.
+    fn photographs(&self, mesh: &trompe::Mesh, plan: &mut OutputPlan) -> Result<Loaded> {
+        if let Some(model) = &self.views {
+            let mut set = super::views::load_views(model, self.images.as_deref(), false)?;
+            plan.reads(trompe::views::colmap::model_files(model))
+                .reads(set.views.iter().map(|v| set.image_folder.join(&v.name)));
+            set.load_images()?;
+            let depth = trompe::views::visibility::DepthMap::of_all(&set.views, mesh)?;
+            return Ok(Loaded::Views(set.views, depth));
+        }
+        let Some(encoding) = &self.master else {
+            bail!("give --views MODEL or --master ENCODING with --mesh");
+        };
+        plan.reads([encoding])
+            .reads(trompe::master::job::files_of(encoding));
+        let (manifest, masters) = trompe::master::file::load(encoding)
+            .with_context(|| format!("loading the encoding {}", encoding.display()))?;
+        let cameras = manifest.views.iter().map(|v| v.pinhole()).collect();
+        Ok(Loaded::Masters(manifest.layout, cameras, masters))
+    }
+
+    /// Shows `viewer`: headless with --frames, else in a window; frames `size` unless --size.
+    fn show(
+        &self,
+        viewer: Viewer<'_>,
+        script: Script,
+        size: (u32, u32),
+        (gpu, out): (Option<&Gpu>, Output),
+    ) -> Result<()> {
+        let size = self.size.unwrap_or(size);
         match self.frames {
             Some(frames) => headless(viewer, &script, frames, self.fps, size, &out),
-            None => window(
-                viewer.live(),
-                script,
-                (size, gpu.as_ref()),
-                out,
-                self.quit_after,
-            ),
+            None => window(viewer.live(), script, (size, gpu), out, self.quit_after),
         }
+    }
+}
+
+/// Photographs loaded for the viewer.
+enum Loaded {
+    /// Calibrated views, their images loaded, and their depth maps.
+    Views(
+        Vec<trompe::views::CalibratedView>,
+        Vec<trompe::views::visibility::DepthMap>,
+    ),
+    /// A master encoding: its layout, its views' cameras, its masters.
+    Masters(
+        trompe::master::layout::Layout,
+        Vec<trompe::camera::Pinhole>,
+        Vec<trompe::Image<trompe::Rgba>>,
+    ),
+}
+
+impl Loaded {
+    fn source(&self) -> PhotoSource<'_> {
+        match self {
+            Loaded::Views(views, depth) => PhotoSource::Views { views, depth },
+            Loaded::Masters(layout, cameras, masters) => PhotoSource::Masters {
+                layout,
+                cameras,
+                masters,
+            },
+        }
+    }
+
+    /// The first photograph's size (1 × 1 without one).
+    fn size(&self) -> (u32, u32) {
+        use trompe::camera::Projection;
+        self.source()
+            .cameras()
+            .first()
+            .map_or((1, 1), |c| c.resolution())
     }
 }
 

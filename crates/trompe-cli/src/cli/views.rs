@@ -103,6 +103,15 @@ pub struct BlendArgs {
 }
 
 impl BlendArgs {
+    /// Whether any blend option differs from its default.
+    pub(super) fn any_given(&self) -> bool {
+        self.weights != WeightsArg::Ulr
+            || self.k != 4
+            || self.fill_holes
+            || self.prefilter
+            || self.seamless
+    }
+
     /// The library's settings.
     pub(super) fn settings(&self) -> anyhow::Result<trompe::texturing::BlendSettings> {
         if self.seamless && self.weights != WeightsArg::BestFace {

@@ -1,27 +1,36 @@
 //! The interactive viewer's state (beyond the papers; paper 3 §4 is about keeping frames
 //! flowing): a camera flown or orbited by input, a clock, and the methods to switch between —
-//! those of [`trompe::render`], each a [`Sequence`] that keeps its impostors between frames;
-//! paper 2's hybrid reflections, paper 4's layers and paper 3's relief pipeline, each made on
-//! first use. A window is a thin shell over it (the `trompe view` command); the same state, fed
-//! a [`script`], renders headless frames, so the viewer is tested without a display.
+//! those of [`mod@trompe::render`], each a [`trompe::render::Sequence`] that keeps its
+//! impostors between frames; paper 2's hybrid reflections, paper 4's layers and paper 3's relief
+//! pipeline, each made on first use — or, in place of a scene, a mesh textured from photographs
+//! or master textures, one weighting a key (`photographs.rs`). A window is a thin shell over it
+//! (the `trompe view` command); the same state, fed a [`script`], renders headless frames, so
+//! the viewer is tested without a display.
 //!
 //! Invariants: the viewer adds no rendering method of its own; a frame depends only on the
 //! inputs given and the time steps taken (never on the wall clock or the thread count), except
 //! for the relief method of a [`Viewer::live`] viewer, which shows impostors when its thread
 //! has made them.
 
+mod camera;
 pub mod hud;
+mod photographs;
+mod scene;
 pub mod script;
 
-use glam::{Vec3, Vec4};
+pub use camera::{FlyCamera, LOOK_PER_PIXEL, SPEED_PER_NOTCH};
+
+use glam::Vec4;
+use photographs::Photographs;
+use scene::SceneMethods;
 use std::time::Instant;
 use thiserror::Error;
-use trompe::camera::Pinhole;
 use trompe::frame::{Image, Rgba, metrics};
-use trompe::methods::{MethodError, MethodKind, MethodSettings, Renderer};
-use trompe::render::{Primary, RenderError, Timings};
+use trompe::geom::Mesh;
+use trompe::methods::MethodError;
+use trompe::render::{RenderError, Timings};
 use trompe::scene::Scene;
-use trompe_gpu::{DeviceRenderer, Gpu};
+use trompe_gpu::{Gpu, TexturedMesh};
 
 /// A control.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -109,81 +118,17 @@ pub enum ViewerError {
     /// A frame could not be made or compared.
     #[error(transparent)]
     Frame(#[from] trompe::frame::FrameError),
+    /// Photographs to fly around hold none.
+    #[error("the {what} hold no photograph to start from")]
+    NoPhotographs {
+        /// What was given: "views" or "masters".
+        what: &'static str,
+    },
 }
 
 /// Frames after its request that the relief method uses a new impostor, unless the viewer is
 /// [`Viewer::live`] (the frame waits for it if need be, so the same inputs give the same frames).
 pub const RELIEF_LATENCY: u32 = 2;
-
-/// Radians a pixel of mouse motion turns the camera.
-pub const LOOK_PER_PIXEL: f32 = 0.003;
-/// Factor a wheel notch multiplies the speed by.
-pub const SPEED_PER_NOTCH: f32 = 1.2;
-
-/// A camera flown or orbited around a target.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FlyCamera {
-    /// Eye.
-    pub eye: Vec3,
-    /// Radians about +y; 0 looks along −z.
-    pub yaw: f32,
-    /// Radians above the horizon.
-    pub pitch: f32,
-    /// What orbit mode turns around.
-    pub target: Vec3,
-    /// Orbiting (else flying).
-    pub orbit: bool,
-    /// Full vertical field of view, degrees.
-    pub fov_y: f64,
-    /// Near-plane distance.
-    pub near: f64,
-}
-
-impl FlyCamera {
-    /// Looking from `eye` at `target`, with the near plane at `near`.
-    pub fn looking_at(eye: Vec3, target: Vec3, fov_y: f64, near: f64) -> Self {
-        let d = (target - eye).try_normalize().unwrap_or(Vec3::NEG_Z);
-        Self {
-            eye,
-            yaw: d.x.atan2(-d.z),
-            pitch: d.y.clamp(-1.0, 1.0).asin(),
-            target,
-            orbit: false,
-            fov_y,
-            near,
-        }
-    }
-
-    /// The unit view direction.
-    pub fn direction(&self) -> Vec3 {
-        let (sy, cy) = self.yaw.sin_cos();
-        let (sp, cp) = self.pitch.sin_cos();
-        Vec3::new(sy * cp, sp, -cy * cp)
-    }
-
-    /// The pinhole of `w × h` pixels.
-    pub fn pinhole(&self, (w, h): (u32, u32)) -> Result<Pinhole, trompe::camera::CameraError> {
-        Ok(Pinhole::look_at(
-            self.eye,
-            self.eye + self.direction(),
-            Vec3::Y,
-            self.fov_y,
-            w,
-            h,
-        )?
-        .with_near(self.near))
-    }
-
-    fn turn(&mut self, dx: f32, dy: f32) {
-        let limit = 89f32.to_radians();
-        self.yaw += dx * LOOK_PER_PIXEL;
-        self.pitch = (self.pitch - dy * LOOK_PER_PIXEL).clamp(-limit, limit);
-        if self.orbit {
-            let distance = self.eye.distance(self.target);
-            self.eye = self.target - self.direction() * distance;
-        }
-    }
-}
 
 /// One frame the viewer made.
 pub struct ViewFrame {
@@ -197,27 +142,41 @@ pub struct ViewFrame {
     pub hud: Vec<String>,
 }
 
-/// The viewer: camera, clock, methods and their sequences.
+/// The viewer: camera, clock, what it shows and the methods to switch between.
 pub struct Viewer<'a> {
-    scene: &'a Scene,
+    subject: Subject<'a>,
     camera: FlyCamera,
     held: Vec<Key>,
     /// Scene units a second.
     speed: f32,
     time: f32,
     paused: bool,
-    /// The methods the number keys switch between, in [`MethodKind::for_scenes`] order, each
-    /// on the GPU where one was given and the method has a GPU path.
-    renderers: Vec<DeviceRenderer<'a>>,
-    /// `trace`, for the split screen (on the CPU: the reference).
-    exact: Renderer<'a>,
-    gpu: Option<&'a Gpu>,
-    impostor_resolution: u32,
-    /// The object orbited, if one was chosen.
-    selected: Option<usize>,
     current: usize,
     split: Split,
     help: bool,
+}
+
+/// What the viewer shows, with the methods the number keys switch between.
+enum Subject<'a> {
+    /// A scene, through its methods.
+    Scene(Box<SceneMethods<'a>>),
+    /// A mesh textured from photographs, one weighting a key.
+    Photographs(Box<Photographs<'a>>),
+}
+
+/// What a method shows through one camera.
+struct Shown {
+    /// Linear colour.
+    image: Image<Rgba>,
+    /// The split screen's reference through the same camera, when asked for.
+    reference: Option<Image<Rgba>>,
+    timings: Timings,
+    /// The method's name in the overlay.
+    name: String,
+    /// One line: what the method kept, rebuilt or saw.
+    report: String,
+    /// Lines of state.
+    state: Vec<String>,
 }
 
 impl<'a> Viewer<'a> {
@@ -238,38 +197,71 @@ impl<'a> Viewer<'a> {
             None => (c.position, c.look_at),
         };
         let target = if c.path.is_empty() { c.look_at } else { target };
-        let renderers = renderers(scene, impostor_resolution, false, gpu);
-        let exact = Renderer::new(scene, MethodKind::Trace, MethodSettings::default())?;
-        Ok(Self {
-            scene,
-            camera: FlyCamera::looking_at(eye, target, c.fov_y, c.near),
+        let methods = SceneMethods::new(scene, impostor_resolution, gpu)?;
+        let camera = FlyCamera::looking_at(eye, target, c.up, c.fov_y, c.near);
+        Ok(Self::showing(
+            Subject::Scene(Box::new(methods)),
+            camera,
+            0.5 * eye.distance(target),
+            scene.render.time,
+            1,
+        ))
+    }
+
+    /// A viewer of a mesh textured from photographs, from the first photograph's camera; the
+    /// number keys switch between the weightings (ULR, VDTM, the view map, best face), starting from
+    /// `textured`'s, and the key that orbits the next object goes to the next photograph.
+    pub fn of_photographs(textured: TexturedMesh<'a>, mesh: &Mesh) -> Result<Self, ViewerError> {
+        let photographs = Photographs::new(textured, mesh)?;
+        let camera = photographs.start();
+        let speed = 0.5 * camera.eye.distance(mesh.bounds().center());
+        let current = photographs.current();
+        Ok(Self::showing(
+            Subject::Photographs(Box::new(photographs)),
+            camera,
+            speed,
+            0.0,
+            current,
+        ))
+    }
+
+    fn showing(
+        subject: Subject<'a>,
+        camera: FlyCamera,
+        speed: f32,
+        time: f32,
+        current: usize,
+    ) -> Self {
+        Self {
+            subject,
+            camera,
             held: Vec::new(),
-            speed: (0.5 * eye.distance(target)).max(1e-3),
-            time: scene.render.time,
+            speed: speed.max(1e-3),
+            time,
             paused: false,
-            renderers,
-            exact,
-            gpu,
-            impostor_resolution,
-            selected: None,
-            current: 1,
+            current,
             split: Split::Off,
             help: false,
-        })
+        }
     }
 
     /// Lets the relief method use each impostor as soon as its rendering thread makes it, as an
     /// interactive window wants; by default it uses it [`RELIEF_LATENCY`] frames after the
     /// request, waiting if need be, so that a frame depends only on the inputs.
     pub fn live(mut self) -> Self {
-        self.renderers = renderers(self.scene, self.impostor_resolution, true, self.gpu);
+        if let Subject::Scene(m) = &mut self.subject {
+            m.go_live();
+        }
         self
     }
 
     /// The methods the number keys switch between, in order (key 1 is the first, key 0 the
     /// tenth).
-    pub fn methods(&self) -> impl Iterator<Item = &'static str> + '_ {
-        self.renderers.iter().map(|r| r.kind().name())
+    pub fn methods(&self) -> Vec<&'static str> {
+        match &self.subject {
+            Subject::Scene(m) => m.names(),
+            Subject::Photographs(p) => p.names(),
+        }
     }
 
     /// The camera.
@@ -308,7 +300,7 @@ impl<'a> Viewer<'a> {
     fn press(&mut self, key: Key) -> Option<Request> {
         match key {
             // After the sequences' numbers, the hybrid and layered methods'.
-            Key::Method(n) if n < self.renderers.len() => self.current = n,
+            Key::Method(n) if n < self.methods().len() => self.current = n,
             Key::Method(_) => {}
             Key::Orbit => {
                 self.camera.orbit = !self.camera.orbit;
@@ -318,22 +310,10 @@ impl<'a> Viewer<'a> {
                     self.camera.target = self.camera.eye + self.camera.direction() * distance;
                 }
             }
-            Key::NextObject if !self.scene.objects.is_empty() => {
-                let next = self
-                    .selected
-                    .map_or(0, |i| (i + 1) % self.scene.objects.len());
-                self.selected = Some(next);
-                let o = &self.scene.objects[next];
-                let centre = o
-                    .world_from_object_at(self.time)
-                    .transform_point3(o.mesh.bounds().center());
-                let c = &mut self.camera;
-                let distance = c.eye.distance(centre).max(1e-3);
-                let keep = FlyCamera::looking_at(c.eye, centre, c.fov_y, c.near);
-                (c.yaw, c.pitch, c.target, c.orbit) = (keep.yaw, keep.pitch, centre, true);
-                c.eye = centre - c.direction() * distance;
-            }
-            Key::NextObject => {}
+            Key::NextObject => match &mut self.subject {
+                Subject::Scene(m) => m.orbit_next(&mut self.camera, self.time),
+                Subject::Photographs(p) => p.next_photograph(&mut self.camera),
+            },
             Key::Pause => self.paused = !self.paused,
             Key::Split => {
                 self.split = match self.split {
@@ -377,8 +357,8 @@ impl<'a> Viewer<'a> {
             c.eye = c.target - c.direction() * distance;
         } else {
             let d = c.direction();
-            let side = d.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
-            let motion = d * forward + side * right + Vec3::Y * up;
+            let side = d.cross(c.up).try_normalize().unwrap_or(c.level().1);
+            let motion = d * forward + side * right + c.up * up;
             c.eye += motion * (self.speed * dt);
         }
     }
@@ -393,41 +373,39 @@ impl<'a> Viewer<'a> {
             ((size.1 as f32 * scale).round() as u32).max(1),
         );
         let camera = self.camera.pinhole(small)?;
-        let out = self.renderers[self.current].frame(self.time, Some(camera.clone()), &())?;
-        let (frame, timings, report, state) = (out.frame, out.timings, out.report, out.state);
-        let image = match self.split {
-            Split::Off => frame.color,
-            Split::Halves | Split::Flip => {
-                let exact = self.exact.frame(self.time, Some(camera), &())?.frame;
-                if self.split == Split::Flip {
-                    metrics::heat_map(&metrics::flip_map(&exact.color, &frame.color)?)
-                } else {
-                    let (w, h) = exact.color.size();
-                    let mut halves = Image::new(w, h, Vec4::ZERO)?;
-                    for y in 0..h {
-                        for x in 0..w {
-                            let from = if x < w / 2 {
-                                &exact.color
-                            } else {
-                                &frame.color
-                            };
-                            halves.set(x, y, from.get(x, y));
-                        }
+        let reference = self.split != Split::Off;
+        let shown = match &mut self.subject {
+            Subject::Scene(m) => m.frame(self.current, self.time, &camera, reference)?,
+            Subject::Photographs(p) => p.frame(self.current, &camera, reference)?,
+        };
+        let Shown {
+            image,
+            reference,
+            timings,
+            name,
+            report,
+            state,
+        } = shown;
+        let image = match (self.split, reference) {
+            (Split::Flip, Some(exact)) => metrics::heat_map(&metrics::flip_map(&exact, &image)?),
+            (Split::Halves, Some(exact)) => {
+                let (w, h) = exact.size();
+                let mut halves = Image::new(w, h, Vec4::ZERO)?;
+                for y in 0..h {
+                    for x in 0..w {
+                        let from = if x < w / 2 { &exact } else { &image };
+                        halves.set(x, y, from.get(x, y));
                     }
-                    halves
                 }
+                halves
             }
+            _ => image,
         };
         let image = enlarge(&image, size)?;
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        let kind = self.renderers[self.current].kind();
-        let name = kind.name();
-        let resolution = matches!(kind, MethodKind::Impostor | MethodKind::PinholeImpostor)
-            .then_some(self.impostor_resolution);
         let mut hud = vec![
             format!(
-                "{name}{}  {ms:.0} ms ({:.1} fps)  {}x{} of {}x{}",
-                resolution.map_or(String::new(), |r| format!(" {r}^2")),
+                "{name}  {ms:.0} ms ({:.1} fps)  {}x{} of {}x{}",
                 1e3 / ms.max(1e-9),
                 small.0,
                 small.1,
@@ -450,10 +428,17 @@ impl<'a> Viewer<'a> {
         );
         hud.extend(state);
         if self.split != Split::Off {
-            hud.push(format!("split: {:?} (trace against {name})", self.split));
+            let against = match &self.subject {
+                Subject::Scene(_) => "trace",
+                Subject::Photographs(_) => "the same blend on the CPU",
+            };
+            hud.push(format!(
+                "split: {:?} ({against} against {name})",
+                self.split
+            ));
         }
         if self.help {
-            hud.extend(HELP.iter().map(|s| s.to_string()));
+            hud.extend(self.help());
         }
         Ok(ViewFrame {
             image,
@@ -468,54 +453,58 @@ impl<'a> Viewer<'a> {
         let c = &self.camera;
         let at = c.eye + c.direction();
         format!(
-            "[camera]\nposition = [{:?}, {:?}, {:?}]\nlook_at = [{:?}, {:?}, {:?}]\nfov_y = {:?}\nresolution = [{}, {}]\nnear = {:?}\n",
-            c.eye.x, c.eye.y, c.eye.z, at.x, at.y, at.z, c.fov_y, size.0, size.1, c.near
+            "[camera]\nposition = [{:?}, {:?}, {:?}]\nlook_at = [{:?}, {:?}, {:?}]\nup = [{:?}, {:?}, {:?}]\nfov_y = {:?}\nresolution = [{}, {}]\nnear = {:?}\n",
+            c.eye.x,
+            c.eye.y,
+            c.eye.z,
+            at.x,
+            at.y,
+            at.z,
+            c.up.x,
+            c.up.y,
+            c.up.z,
+            c.fov_y,
+            size.0,
+            size.1,
+            c.near
         )
     }
 }
 
-/// Every method that renders a scene, prepared over `scene` as the viewer runs them: the
-/// impostor and environment methods find what the eye sees by rasterizing (faster; differs on
-/// silhouette pixels only); the relief method uses a new impostor [`RELIEF_LATENCY`] frames
-/// after its request, or as soon as it is made when `live`. A method with a GPU path runs on
-/// `gpu` when one is given.
-fn renderers<'a>(
-    scene: &'a Scene,
-    impostor_resolution: u32,
-    live: bool,
-    gpu: Option<&'a Gpu>,
-) -> Vec<DeviceRenderer<'a>> {
-    MethodKind::for_scenes()
-        .filter_map(|kind| {
-            let mut settings = MethodSettings {
-                impostor_resolution,
-                ..Default::default()
-            };
-            if matches!(
-                kind,
-                MethodKind::Impostor | MethodKind::PinholeImpostor | MethodKind::EnvMap
-            ) {
-                settings.primary = Primary::Rasterized;
-            }
-            settings.relief.deterministic = (!live).then_some(RELIEF_LATENCY);
-            let device = gpu.filter(|_| trompe_gpu::has_gpu_path(kind));
-            DeviceRenderer::new(scene, kind, settings, device).ok()
-        })
-        .collect()
+impl Viewer<'_> {
+    /// The help overlay: the controls, and the methods by key.
+    pub fn help(&self) -> Vec<String> {
+        let (next, reference, animation) = match &self.subject {
+            Subject::Scene(_) => ("O orbit the next object", "trace", "P pause the animation"),
+            Subject::Photographs(_) => ("O go to the next photograph", "CPU blend", ""),
+        };
+        let methods = self.methods();
+        let keys: Vec<String> = methods
+            .iter()
+            .enumerate()
+            .map(|(i, name)| format!("{} {name}", (i + 1) % 10))
+            .collect();
+        let mut lines = vec![
+            "WASD move, Q/E down/up, mouse look, wheel speed".to_string(),
+            format!("Tab fly / orbit the point looked at, {next}"),
+        ];
+        lines.extend(keys.chunks(5).map(|c| c.join(" ")));
+        lines.push(format!(
+            "V split: off / {reference} | method / FLIP heat map"
+        ));
+        lines.extend(
+            [
+                animation,
+                "F12 screenshot  C save the camera block",
+                "H this help  Esc quit",
+            ]
+            .iter()
+            .filter(|l| !l.is_empty())
+            .map(|l| l.to_string()),
+        );
+        lines
+    }
 }
-
-/// The help overlay.
-pub const HELP: [&str; 9] = [
-    "WASD move, Q/E down/up, mouse look, wheel speed",
-    "Tab fly / orbit the point looked at, O orbit the next object",
-    "1 trace 2 impostor 3 pinhole-impostor 4 envmap 5 raster",
-    "6 c3rc 7 layered 8 relief 9 octahedral 0 projective",
-    "V split: off / trace | method / FLIP heat map",
-    "P pause the animation",
-    "F12 screenshot  C save the camera block",
-    "H this help  Esc quit",
-    "",
-];
 
 /// `image` enlarged to `size` by nearest neighbour (itself when the sizes agree).
 fn enlarge(image: &Image<Rgba>, size: (u32, u32)) -> Result<Image<Rgba>, ViewerError> {

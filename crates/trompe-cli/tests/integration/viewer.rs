@@ -157,10 +157,78 @@ fn a_bad_script_or_a_foreign_folder_is_refused_with_the_reason() {
 }
 
 #[test]
+fn the_photographs_options_are_refused_with_a_scene_and_a_missing_encoding_is_named() {
+    let dir = scratch("viewer-photographs-bad");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let o = trompe(&[
+        "view",
+        "scenes/teapot-in-bunny.toml",
+        "--k",
+        "8",
+        "--frames",
+        "1",
+        "-o",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("give them with --views or --master"),
+        "{}",
+        stderr(&o)
+    );
+    let o = trompe(&["view", "--views", "nowhere", "--frames", "1", "-o", out]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--mesh"), "{}", stderr(&o));
+    let duck = common::asset("gltf/Duck.glb");
+    let missing = dir.join("no-encoding");
+    let o = trompe(&[
+        "view",
+        "--master",
+        missing.to_str().unwrap(),
+        "--mesh",
+        duck.to_str().unwrap(),
+        "--frames",
+        "1",
+        "-o",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no-encoding"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_fly_camera_looks_where_it_is_told_whatever_the_worlds_up() {
+    use glam::Vec3;
+    use trompe_cli::viewer::FlyCamera;
+    for up in [
+        Vec3::Y,
+        Vec3::Z,
+        Vec3::new(0.3, -0.8, 0.5).normalize(),
+        -Vec3::Z,
+    ] {
+        for target in [Vec3::new(1.0, 2.0, -3.0), Vec3::new(-0.5, 0.2, 4.0)] {
+            let eye = Vec3::new(0.5, -0.25, 1.0);
+            let c = FlyCamera::looking_at(eye, target, up, 40.0, 0.01);
+            let wanted = (target - eye).normalize();
+            assert!(
+                c.direction().distance(wanted) < 1e-5,
+                "up {up}: {} for {wanted}",
+                c.direction()
+            );
+            // Its frame is level: the image's right hand is square to the world's up.
+            let pinhole = c.pinhole((64, 48)).unwrap();
+            let right = pinhole.mcmillan().0.as_vec3().normalize();
+            assert!(right.dot(up).abs() < 1e-5, "up {up}: right {right}");
+        }
+    }
+}
+
+#[test]
 fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_away() {
     let s = scene("c3rc-bunny.toml");
     let mut viewer = Viewer::new(&s, 64, None).unwrap();
-    assert_eq!(viewer.methods().nth(5), Some("c3rc"));
+    assert_eq!(viewer.methods().get(5), Some(&"c3rc"));
     // The second object, the bunny.
     viewer.input(Input::Down(Key::NextObject));
     viewer.input(Input::Down(Key::NextObject));
@@ -189,7 +257,7 @@ fn orbiting_an_object_turns_around_its_centre_and_the_hybrid_method_is_one_key_a
 fn the_layered_method_is_built_on_first_use_and_comes_close_to_tracing() {
     let s = scene("street.toml");
     let mut viewer = Viewer::new(&s, 64, None).unwrap();
-    assert_eq!(viewer.methods().nth(6), Some("layered"));
+    assert_eq!(viewer.methods().get(6), Some(&"layered"));
     viewer.input(Input::Down(Key::Method(0)));
     let traced = viewer.frame(SIZE, 1.0).unwrap();
     viewer.input(Input::Down(Key::Method(6)));
@@ -244,7 +312,7 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
             })
     };
     assert_eq!(
-        Viewer::new(&s, 64, None).unwrap().methods().nth(7),
+        Viewer::new(&s, 64, None).unwrap().methods().get(7).copied(),
         Some("relief")
     );
     let (frames, traced) = run(2);
@@ -299,4 +367,64 @@ fn the_relief_method_warps_impostors_its_shader_thread_makes_and_shows_their_sta
         "relief against trace: FLIP {}",
         score.flip
     );
+}
+
+#[test]
+fn the_photographs_viewer_starts_at_the_first_photograph_and_goes_to_the_next() {
+    use trompe::texturing::BlendSettings;
+    use trompe::views::visibility::DepthMap;
+    use trompe_gpu::{PhotoSource, TexturedMesh};
+    // Six photographs of the duck on a ring, read back as a COLMAP model.
+    let dir = scratch("viewer-photographs");
+    let duck = common::asset("gltf/Duck.glb");
+    let cap = dir.join("cap");
+    let o = trompe(&[
+        "views",
+        "capture",
+        duck.to_str().unwrap(),
+        "--count",
+        "6",
+        "--size",
+        "96x72",
+        "-o",
+        cap.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut set = trompe::views::ViewSet::load(&cap, None).unwrap();
+    set.load_images().unwrap();
+    let mesh = trompe::geom::io::load(&duck).unwrap().mesh;
+    let depth = DepthMap::of_all(&set.views, &mesh).unwrap();
+    let source = PhotoSource::Views {
+        views: &set.views,
+        depth: &depth,
+    };
+    let textured = TexturedMesh::new(None, &mesh, source, &BlendSettings::default()).unwrap();
+    let mut viewer = Viewer::of_photographs(textured, &mesh).unwrap();
+    assert_eq!(viewer.methods(), ["ulr", "vdtm", "view-map", "best-face"]);
+    // Through a photograph's own camera, the blend gives the photograph back where it shows
+    // the duck (the blend leaves the background out: the photograph fills it).
+    let agreement = |viewer: &mut Viewer, i: usize| {
+        let frame = viewer.frame(SIZE, 1.0).unwrap().image;
+        let photo = set.views[i].image.as_ref().unwrap();
+        let mut over = photo.clone();
+        for (o, f) in over.pixels_mut().iter_mut().zip(frame.pixels()) {
+            if f.w > 0.99 {
+                *o = *f;
+            }
+        }
+        let shown = frame.pixels().iter().filter(|f| f.w > 0.99).count();
+        assert!(shown > 500, "the duck shows on {shown} pixels");
+        metrics::compare(photo, &over, None).unwrap().flip
+    };
+    let first = agreement(&mut viewer, 0);
+    assert!(first < 0.01, "at the first photograph: FLIP {first}");
+    viewer.input(Input::Down(Key::NextObject));
+    let second = agreement(&mut viewer, 1);
+    assert!(second < 0.01, "at the second photograph: FLIP {second}");
+    // Key 4 blends one view a face: another frame, still the duck.
+    let ulr = viewer.frame(SIZE, 1.0).unwrap();
+    viewer.input(Input::Down(Key::Method(3)));
+    let best = viewer.frame(SIZE, 1.0).unwrap();
+    assert!(best.hud[0].starts_with("views best-face"), "{:?}", best.hud);
+    assert!(ulr.image != best.image);
 }

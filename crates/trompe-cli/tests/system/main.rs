@@ -61,6 +61,12 @@ fn main() {
             ADAPTER,
         ),
         trial(
+            "gpu::the_headless_viewer_blends_views_and_masters_on_the_gpu",
+            the_headless_viewer_blends_views_and_masters_on_the_gpu,
+            adapter,
+            ADAPTER,
+        ),
+        trial(
             "stereo::at_the_photographs_resolution_the_novel_view_beats_a_forward_warp_on_psnr_and_ssim",
             stereo::at_the_photographs_resolution_the_novel_view_beats_a_forward_warp_on_psnr_and_ssim,
             stereo::ready(),
@@ -483,5 +489,80 @@ pub fn the_headless_viewer_draws_trace_and_raster_on_the_gpu() {
             "{frame}: GPU against CPU, FLIP {}",
             score.flip
         );
+    }
+}
+
+/// The headless viewer flying around the duck textured from its photographs (`--views`) and
+/// from their master encoding (`--master`), on the GPU: every weighting, and the next
+/// photograph's camera, is the CPU viewer's frame.
+pub fn the_headless_viewer_blends_views_and_masters_on_the_gpu() {
+    let dir = scratch("view-photographs-gpu");
+    let duck = common::asset("gltf/Duck.glb");
+    let duck = duck.to_str().unwrap();
+    let (cap, enc) = (dir.join("cap"), dir.join("enc"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for args in [
+        &[
+            "views",
+            "capture",
+            duck,
+            "-o",
+            &s(&cap),
+            "--count",
+            "6",
+            "--size",
+            "128x96",
+        ][..],
+        &["master", "encode", &s(&cap), "--mesh", duck, "-o", &s(&enc)],
+    ] {
+        let o = trompe(args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    // Away from the photographs, a frame a weighting; then the next photograph's camera, and a
+    // step forward (20 steps a second, one input a step).
+    let keys = dir.join("keys.txt");
+    std::fs::write(
+        &keys,
+        "0.025 look 60 20\n0.025 tap 1\n0.075 tap 2\n0.125 tap 3\n0.175 tap 4\n\
+         0.225 tap O\n0.225 tap 1\n0.275 down W\n0.375 up W\n",
+    )
+    .unwrap();
+    let read = |p: &Path| trompe::frame::io::read_color(p).unwrap();
+    for (flag, input) in [("--views", &cap), ("--master", &enc)] {
+        for device in ["cpu", "gpu"] {
+            let o = trompe(&[
+                "view",
+                flag,
+                &s(input),
+                "--mesh",
+                duck,
+                "--frames",
+                "8",
+                "--fps",
+                "20",
+                "--script",
+                &s(&keys),
+                "--device",
+                device,
+                "-o",
+                &s(&dir.join(format!("{}-{device}", &flag[2..]))),
+            ]);
+            assert!(o.status.success(), "{}", stderr(&o));
+            let printed = String::from_utf8_lossy(&o.stdout);
+            for name in ["ulr", "vdtm", "view-map", "best-face"] {
+                assert!(printed.contains(name), "{name} not shown:\n{printed}");
+            }
+        }
+        for i in 0..8 {
+            let frame = format!("frame_{i:04}.png");
+            let at =
+                |device: &str| read(&dir.join(format!("{}-{device}", &flag[2..])).join(&frame));
+            let score = metrics::compare(&at("cpu"), &at("gpu"), None).unwrap();
+            println!(
+                "view {flag}, {frame}: GPU against CPU FLIP {:.5}",
+                score.flip
+            );
+            assert!(score.flip < 0.01, "{flag} {frame}: FLIP {}", score.flip);
+        }
     }
 }
