@@ -54,9 +54,11 @@ pub struct CheckSettings {
     pub view: u32,
     /// Also fire this many rays from a sphere of 3 bounding radii around the object.
     pub sphere_rays: u32,
-    /// Depth layers to peel behind the impostor's first (`impostor/peel.rs`). With more than
-    /// one, the report also sets the impostor with 1, 2, 4 and the automatic number of layers
-    /// beside it, on the same rays ([`CheckReport::layers_beside`]).
+    /// Depth layers to peel behind the impostor's first (`impostor/peel.rs`; by default the
+    /// automatic number, the configuration that holds paper 1's figures). With more than one,
+    /// the report also sets the impostor with 1, 2, 4 and the automatic number of layers beside
+    /// it, on the same rays ([`CheckReport::layers_beside`]), and the pinhole beside a SPOC is
+    /// peeled alike.
     pub layers: Layers,
 }
 
@@ -69,7 +71,7 @@ impl Default for CheckSettings {
             distance: 1.4,
             view: 1024,
             sphere_rays: 0,
-            layers: Layers::ONE,
+            layers: Layers::Auto,
         }
     }
 }
@@ -196,13 +198,14 @@ pub struct LayerRow {
 }
 
 /// An impostor to check, the object it replaces, the rays, the camera of the pinhole to
-/// set beside a SPOC, and whether to set other layer counts beside it.
+/// set beside a SPOC, and the layers it was asked for (other layer counts are set beside it
+/// when that is more than one).
 struct Checked {
     impostor: Impostor,
     target: Arc<Mesh>,
     rays: Vec<Ray>,
     pinhole_beside: Option<ImpostorCamera>,
-    compare_layers: bool,
+    layers: Layers,
 }
 
 /// Builds an impostor of `subject` through `settings.camera` and checks it on the reflector's
@@ -238,8 +241,7 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
     let mut impostor = timings.time("build impostor", || {
         build(camera, &setup.target, 0, &albedo_of(&setup.target))
     })?;
-    let compare_layers = settings.layers != Layers::ONE;
-    if compare_layers {
+    if settings.layers != Layers::ONE {
         timings.time("peel layers", || {
             impostor.peel(&setup.target, 0, &albedo_of(&setup.target), settings.layers)
         })?;
@@ -266,7 +268,7 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
         target: setup.target,
         rays,
         pinhole_beside,
-        compare_layers,
+        layers: settings.layers,
     };
     measure(checked, timings)
 }
@@ -351,7 +353,7 @@ pub fn check_baked(
         target,
         rays,
         pinhole_beside,
-        compare_layers: false,
+        layers: Layers::ONE,
     };
     measure(checked, timings)
 }
@@ -363,7 +365,7 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         target,
         rays,
         pinhole_beside,
-        compare_layers,
+        layers,
     } = checked;
     let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]))?;
     let fidelity = timings.time("check", || fidelity::check(&impostor, &exact, &rays));
@@ -372,9 +374,14 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
     });
     let pinhole_beside = match pinhole_beside {
         Some(camera) => {
-            let p = timings.time("build pinhole impostor", || {
+            let mut p = timings.time("build pinhole impostor", || {
                 build(camera, &target, 0, &albedo_of(&target))
             })?;
+            if layers != Layers::ONE {
+                timings.time("peel pinhole layers", || {
+                    p.peel(&target, 0, &albedo_of(&target), layers)
+                })?;
+            }
             let r = timings.time("check pinhole", || fidelity::check(&p, &exact, &rays));
             let c = fidelity::surface_captured(&p, &target, SURFACE_SAMPLES, 1);
             Some((r, c))
@@ -387,13 +394,22 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         })
     });
     let mut layers_beside = Vec::new();
-    if compare_layers {
+    if layers != Layers::ONE {
         for asked in [
             Layers::ONE,
             Layers::Count(2),
             Layers::Count(4),
             Layers::Auto,
         ] {
+            if asked == layers {
+                layers_beside.push(LayerRow {
+                    asked,
+                    layers: impostor.layer_count(),
+                    fidelity,
+                    map_bytes: impostor.map_bytes(),
+                });
+                continue;
+            }
             let albedo = albedo_of(&target);
             let mut other = build(impostor.camera().clone(), &target, 0, &albedo)?;
             other.peel(&target, 0, &albedo, asked)?;

@@ -249,9 +249,10 @@ pub struct CheckArgs {
           value_parser = clap::value_parser!(u32).range(1..=MAX_CHECK_RAYS))]
     rays: u32,
     /// Depth layers: a count from 1 to 8, or auto (added while a new layer holds more than
-    /// 1 % of the first layer's texels). With more than one, the impostor with 1, 2, 4 and
-    /// auto layers is checked beside it on the same rays.
-    #[arg(long, default_value = "1", conflicts_with = "impostor")]
+    /// 1 % of the first layer's texels: the configuration that holds paper 1's figures). With
+    /// more than one, the impostor with 1, 2, 4 and auto layers is checked beside it on the
+    /// same rays, and the pinhole beside a SPOC is peeled alike.
+    #[arg(long, default_value = "auto", conflicts_with = "impostor")]
     layers: trompe::impostor::Layers,
 }
 

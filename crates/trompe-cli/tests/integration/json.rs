@@ -397,3 +397,24 @@ fn an_error_is_a_json_document_with_the_same_exit_code_and_quiet_prints_no_notes
     assert!(o.stderr.is_empty(), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("covered"));
 }
+
+#[test]
+fn impostor_checks_defaults_meet_the_paper_and_set_one_layer_beside() {
+    // Paper 1's teapot beside the default mirror sphere, every setting left at its default:
+    // automatic layers, which hold the paper's 99.5 %; one layer (98.7 %) printed beside.
+    let check = ["impostor", "check", "assets/meshes/teapot.obj"];
+    let r = json(&check, "impostor check");
+    let layers = r["impostor"]["layers"].as_u64().unwrap();
+    assert!(layers > 1, "{layers} layers");
+    let agreement = f(&r["fidelity"]["agreement"]);
+    assert!(agreement >= 0.995, "agreement {agreement}");
+    let rows = r["layers_beside"].as_array().unwrap();
+    let one = rows.iter().find(|row| row["asked"] == "1").expect("one layer");
+    let single = f(&one["fidelity"]["agreement"]);
+    assert!(single < agreement, "one layer {single}, auto {agreement}");
+    let auto = rows.iter().find(|row| row["asked"] == "auto").expect("auto");
+    assert_eq!(f(&auto["fidelity"]["agreement"]), agreement);
+    let printed = text(&check);
+    let row = format!("              1     1  {:>8.3} %", 100.0 * single);
+    assert!(printed.contains(&row), "{row}\n{printed}");
+}

@@ -173,7 +173,7 @@ def check_impostor(
     k: Optional[float] = None,
     rays: int = 20000,
     region: float = 1.0,
-    layers: Union[int, str] = 1,
+    layers: Union[int, str] = "auto",
 ) -> dict:
     """Fires rays at an impostor of ``mesh`` and at the exact BVH, as ``trompe impostor check``
     does: one built through ``camera`` at ``resolution``, or the baked ``impostor`` (its
