@@ -409,10 +409,16 @@ fn impostor_checks_defaults_meet_the_paper_and_set_one_layer_beside() {
     let agreement = f(&r["fidelity"]["agreement"]);
     assert!(agreement >= 0.995, "agreement {agreement}");
     let rows = r["layers_beside"].as_array().unwrap();
-    let one = rows.iter().find(|row| row["asked"] == "1").expect("one layer");
+    let one = rows
+        .iter()
+        .find(|row| row["asked"] == "1")
+        .expect("one layer");
     let single = f(&one["fidelity"]["agreement"]);
     assert!(single < agreement, "one layer {single}, auto {agreement}");
-    let auto = rows.iter().find(|row| row["asked"] == "auto").expect("auto");
+    let auto = rows
+        .iter()
+        .find(|row| row["asked"] == "auto")
+        .expect("auto");
     assert_eq!(f(&auto["fidelity"]["agreement"]), agreement);
     let printed = text(&check);
     let row = format!("              1     1  {:>8.3} %", 100.0 * single);
