@@ -20,8 +20,8 @@ use crate::camera::CameraError;
 use crate::frame::FrameError;
 use crate::geom::{Mesh, Ray};
 use crate::impostor::{
-    CameraChoice, Impostor, ImpostorCamera, Layers, Paired, Subject, SubjectError, ViewCamera,
-    WalkMode, albedo_of, build,
+    CameraChoice, Impostor, ImpostorCamera, Layers, Paired, StrengthChoice, StrengthError, Subject,
+    SubjectError, ViewCamera, WalkMode, albedo_of, build, choose_strength,
 };
 use crate::progress::Timings;
 use crate::trace::Bvh;
@@ -121,6 +121,9 @@ pub enum CheckError {
     /// The impostor's layers could not be peeled.
     #[error("peeling the impostor's layers: {0}")]
     Layers(#[from] crate::impostor::LayerError),
+    /// The SPOC's strength could not be chosen.
+    #[error("choosing the SPOC's strength: {0}")]
+    Strength(#[from] StrengthError),
     /// The exact BVH the impostor is checked against would pass the memory budget.
     #[error("checking against the exact ray tracer: {0}")]
     Memory(#[from] crate::memory::OverBudget),
@@ -180,6 +183,9 @@ pub struct CheckReport {
     /// When layers were asked for: the same camera with 1, 2, 4 and the automatic number of
     /// layers, on the same rays.
     pub layers_beside: Vec<LayerRow>,
+    /// For a SPOC built with the rule's strength: how its strength was chosen
+    /// ([`choose_strength`]).
+    pub strength: Option<StrengthChoice>,
     /// The steps' durations.
     pub timings: Timings,
 }
@@ -205,7 +211,12 @@ struct Checked {
     target: Arc<Mesh>,
     rays: Vec<Ray>,
     pinhole_beside: Option<ImpostorCamera>,
+    /// The layers the impostor was asked for: with more than one, other counts are set beside
+    /// it.
     layers: Layers,
+    /// The layers the pinhole beside it is peeled into: as many as the impostor's.
+    pinhole_layers: Layers,
+    strength: Option<StrengthChoice>,
 }
 
 /// Builds an impostor of `subject` through `settings.camera` and checks it on the reflector's
@@ -213,6 +224,7 @@ struct Checked {
 pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckReport, CheckError> {
     let mut timings = Timings::default();
     let reflector = settings.reflector.clone().unwrap_or_else(default_reflector);
+    let mut choose = false;
     let (setup, camera) = match subject.pair(settings.camera)? {
         Paired::Graph { path, maze } => {
             let setup = ReflectorSetup::in_maze(maze, &reflector, settings.view)
@@ -232,19 +244,42 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
             }
             let setup = ReflectorSetup::beside(mesh, &reflector, settings.distance, settings.view)
                 .map_err(camera_err("reflector"))?;
+            choose = kind == ViewCamera::Spoc(None);
             let camera = setup
                 .camera(kind, settings.resolution)
                 .map_err(camera_err("impostor camera"))?;
             (setup, camera)
         }
     };
-    let mut impostor = timings.time("build impostor", || {
-        build(camera, &setup.target, 0, &albedo_of(&setup.target))
-    })?;
-    if settings.layers != Layers::ONE {
-        timings.time("peel layers", || {
-            impostor.peel(&setup.target, 0, &albedo_of(&setup.target), settings.layers)
+    let built = |camera| -> Result<Impostor, CheckError> {
+        let albedo = albedo_of(&setup.target);
+        let mut impostor = build(camera, &setup.target, 0, &albedo)?;
+        if settings.layers != Layers::ONE {
+            impostor.peel(&setup.target, 0, &albedo, settings.layers)?;
+        }
+        Ok(impostor)
+    };
+    // At the rule's strength first: what does not fit is refused before any choice.
+    let mut impostor = timings.time("build impostor", || built(camera))?;
+    let mut strength = None;
+    if choose {
+        // The rule's strength: chosen per object, on rays a second viewer sees in the mirror.
+        let choice = timings.time("choose the SPOC's strength", || {
+            let rays = setup.held_out_rays()?;
+            choose_strength(
+                &setup.target,
+                |k| setup.camera(ViewCamera::Spoc(k), settings.resolution),
+                settings.layers,
+                &rays,
+            )
         })?;
+        if choice.chosen != choice.rule {
+            let camera = setup
+                .camera(choice.camera(), settings.resolution)
+                .map_err(camera_err("impostor camera"))?;
+            impostor = timings.time("build impostor", || built(camera))?;
+        }
+        strength = Some(choice);
     }
     let pinhole_beside = match &impostor.camera() {
         ImpostorCamera::Spoc(_) => Some(
@@ -269,6 +304,8 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
         rays,
         pinhole_beside,
         layers: settings.layers,
+        pinhole_layers: settings.layers,
+        strength,
     };
     measure(checked, timings)
 }
@@ -325,6 +362,11 @@ pub fn check_baked(
         });
     }
     let b = target.bounds();
+    // The pinhole beside a baked SPOC holds as many layers as it does.
+    let pinhole_layers = match impostor.layer_count() {
+        1 => Layers::ONE,
+        n => Layers::Count(n as u32),
+    };
     let (rays, pinhole_beside) = match setup {
         Some(setup) => (timings.time("reflected rays", || setup.rays())?, None),
         None => {
@@ -354,6 +396,8 @@ pub fn check_baked(
         rays,
         pinhole_beside,
         layers: Layers::ONE,
+        pinhole_layers,
+        strength: None,
     };
     measure(checked, timings)
 }
@@ -366,6 +410,8 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         rays,
         pinhole_beside,
         layers,
+        pinhole_layers,
+        strength,
     } = checked;
     let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]))?;
     let fidelity = timings.time("check", || fidelity::check(&impostor, &exact, &rays));
@@ -377,9 +423,9 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
             let mut p = timings.time("build pinhole impostor", || {
                 build(camera, &target, 0, &albedo_of(&target))
             })?;
-            if layers != Layers::ONE {
+            if pinhole_layers != Layers::ONE {
                 timings.time("peel pinhole layers", || {
-                    p.peel(&target, 0, &albedo_of(&target), layers)
+                    p.peel(&target, 0, &albedo_of(&target), pinhole_layers)
                 })?;
             }
             let r = timings.time("check pinhole", || fidelity::check(&p, &exact, &rays));
@@ -429,6 +475,7 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         pinhole_beside,
         algorithm_1,
         layers_beside,
+        strength,
         timings,
     })
 }
@@ -482,6 +529,13 @@ impl fmt::Display for CheckReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let imp = &self.impostor;
         match &imp.camera() {
+            _ if self.strength.is_some() => writeln!(
+                f,
+                "{}",
+                self.strength
+                    .as_ref()
+                    .map_or(String::new(), |s| s.to_string())
+            )?,
             ImpostorCamera::Spoc(s) => writeln!(f, "SPOC strength k = {:.3}", s.strength())?,
             ImpostorCamera::Graph(g) => writeln!(f, "graph camera: {} frusta", g.frusta().len())?,
             _ => {}

@@ -16,8 +16,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// Positions within this many texel footprints agree.
-pub const AGREEMENT_FOOTPRINTS: f64 = 1.5;
+pub use crate::impostor::AGREEMENT_FOOTPRINTS;
 
 /// What [`check`] measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -111,10 +110,7 @@ where
                 (None, None) => one.agree = true,
                 (Some(e), Some(i)) => {
                     let err = e.position.distance(i.position) as f64;
-                    let fp = impostor
-                        .camera()
-                        .project(e.position.as_dvec3())
-                        .map_or(f64::INFINITY, |p| impostor.footprint(p.uv, p.gd));
+                    let fp = impostor.footprint_of(e.position);
                     one.err = err;
                     one.err_fp = err / fp;
                     one.agree = err <= AGREEMENT_FOOTPRINTS * fp;
@@ -179,25 +175,7 @@ pub fn reflected_rays(
         .collect())
 }
 
-/// `count` rays from points spread over a sphere (`center`, `radius`), each aimed at a point of
-/// the box `target` (deterministic for a given `seed`).
-pub fn sphere_rays(
-    center: Vec3,
-    radius: f32,
-    target: crate::geom::Aabb,
-    count: usize,
-    seed: u64,
-) -> Vec<Ray> {
-    let mut rng = crate::geom::SplitMix64::new(seed);
-    (0..count)
-        .map(|_| {
-            let o = center + rng.unit_vector() * radius;
-            let aim = target.min
-                + target.extent() * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-            Ray::new(o, (aim - o).normalize_or(Vec3::Y))
-        })
-        .collect()
-}
+pub use crate::geom::sphere_rays;
 
 /// Rays from the region an impostor serves: `count` rays from points spread over the sphere of
 /// radius `region` around its camera's viewpoint ([`crate::impostor::ImpostorCamera::viewpoint`]), each
@@ -420,8 +398,34 @@ impl ReflectorSetup {
     /// The reflected rays of the viewer's pixels that see the reflector, kept when they enter
     /// the target's bounding box (the only rays an impostor is ever asked about).
     pub fn rays(&self) -> Result<Vec<Ray>, crate::memory::OverBudget> {
+        self.rays_seen_by(&self.view)
+    }
+
+    /// Rays like [`Self::rays`] but none of them: those a second viewer sees, standing where
+    /// the viewer's reflection in the reflector's `z` plane would, at the viewer's resolution
+    /// or 1024² if more.
+    /// What a SPOC's strength is chosen on ([`crate::impostor::choose_strength`]).
+    pub fn held_out_rays(&self) -> Result<Vec<Ray>, crate::memory::OverBudget> {
+        let rc = self.reflector.bounds().center();
+        let offset = self.view.position().as_vec3() - rc;
+        let (w, h) = self.view.resolution();
+        let second = Pinhole::look_at(
+            rc + offset * Vec3::new(1.0, 1.0, -1.0),
+            rc,
+            Vec3::Y,
+            30.0,
+            w.max(1024),
+            h.max(1024),
+        );
+        match second {
+            Ok(view) => self.rays_seen_by(&view),
+            Err(_) => Ok(Vec::new()),
+        }
+    }
+
+    fn rays_seen_by(&self, view: &Pinhole) -> Result<Vec<Ray>, crate::memory::OverBudget> {
         let b = self.target.bounds();
-        Ok(reflected_rays(&self.view, self.reflector.clone())?
+        Ok(reflected_rays(view, self.reflector.clone())?
             .into_iter()
             .filter(|r| b.intersect(r, f32::INFINITY).is_some())
             .collect())

@@ -34,7 +34,7 @@ pub use hull::convex_hull;
 pub use mesh::{Material, Mesh, MeshError, SourceCounts, Texture, Warning};
 pub use plane::{Plane, clip_polygon};
 pub use primitives::{cube, icosphere, plane};
-pub use sampling::{SplitMix64, sample_surface};
+pub use sampling::{SplitMix64, sample_surface, sphere_rays};
 
 use glam::{Mat4, Vec2, Vec3};
 

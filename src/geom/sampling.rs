@@ -1,6 +1,6 @@
 //! Deterministic random numbers and surface sampling, for replayable tests and measurements.
 
-use super::Mesh;
+use super::{Mesh, Ray};
 use glam::Vec3;
 
 /// SplitMix64 (Steele, Lea and Flood 2014): a small, fast, seedable generator.
@@ -55,6 +55,26 @@ pub fn sample_surface(mesh: &Mesh, count: usize, seed: u64) -> Vec<Vec3> {
                 (u, v) = (1.0 - u, 1.0 - v);
             }
             Some(a + (b - a) * u + (c - a) * v)
+        })
+        .collect()
+}
+
+/// `count` rays from points spread over a sphere (`center`, `radius`), each aimed at a point of
+/// the box `target` (deterministic for a given `seed`).
+pub fn sphere_rays(
+    center: Vec3,
+    radius: f32,
+    target: super::Aabb,
+    count: usize,
+    seed: u64,
+) -> Vec<Ray> {
+    let mut rng = SplitMix64::new(seed);
+    (0..count)
+        .map(|_| {
+            let o = center + rng.unit_vector() * radius;
+            let aim = target.min
+                + target.extent() * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            Ray::new(o, (aim - o).normalize_or(Vec3::Y))
         })
         .collect()
 }

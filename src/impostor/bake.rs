@@ -3,7 +3,10 @@
 //! does, callable from code.
 
 use super::file::{ImpostorFileError, save};
-use super::{CameraChoice, ImpostorCamera, Paired, Subject, SubjectError, albedo_of, build};
+use super::{
+    CameraChoice, ImpostorCamera, Paired, StrengthChoice, Subject, SubjectError, ViewCamera,
+    albedo_of, build, choose_strength, region_rays,
+};
 use crate::camera::CameraError;
 use crate::frame::FrameError;
 use crate::progress::Timings;
@@ -68,6 +71,9 @@ pub enum BakeError {
     /// The layers could not be peeled.
     #[error("peeling the impostor's layers: {0}")]
     Layers(#[from] super::LayerError),
+    /// The SPOC's strength could not be chosen.
+    #[error("choosing the SPOC's strength: {0}")]
+    Strength(#[from] super::StrengthError),
     /// The sidecar or its EXR could not be written.
     #[error("saving the impostor: {0}")]
     Save(#[from] ImpostorFileError),
@@ -89,6 +95,9 @@ pub struct BakeReport {
     pub layers: usize,
     /// Bytes of the maps, every layer's.
     pub map_bytes: u64,
+    /// For a SPOC baked with the rule's strength: how its strength was chosen
+    /// ([`super::choose_strength`]).
+    pub strength: Option<StrengthChoice>,
     /// The sidecar, the EXR and the preview, in that order.
     pub files: [PathBuf; 3],
     /// The steps' durations.
@@ -103,6 +112,20 @@ pub fn bake(
     output: &Path,
 ) -> Result<BakeReport, BakeError> {
     let mut timings = Timings::default();
+    let place = |kind, mesh: &crate::geom::Mesh| {
+        ImpostorCamera::facing_mesh(
+            kind,
+            mesh,
+            settings.from,
+            settings.distance,
+            settings.resolution,
+        )
+        .map_err(|source| BakeError::Camera {
+            path: subject.path().to_path_buf(),
+            source,
+        })
+    };
+    let mut choose = false;
     let camera = match subject.pair(settings.camera)? {
         Paired::Graph { path, maze } => ImpostorCamera::Graph(
             maze.graph_camera(settings.resolution, path)
@@ -121,29 +144,47 @@ pub fn bake(
                     reason: "must be more than 1 radius",
                 });
             }
-            ImpostorCamera::facing_mesh(
-                kind,
-                mesh,
-                settings.from,
-                settings.distance,
-                settings.resolution,
-            )
-            .map_err(|source| BakeError::Camera {
-                path: subject.path().to_path_buf(),
-                source,
-            })?
+            choose = kind == ViewCamera::Spoc(None);
+            place(kind, mesh)?
         }
     };
     let mesh = subject.mesh();
-    let mut imp = timings
-        .time("build impostor", || {
-            build(camera, mesh, 0, &albedo_of(mesh))
-        })
-        .map_err(BakeError::Build)?;
-    if settings.layers != super::Layers::ONE {
-        timings.time("peel layers", || {
-            imp.peel(mesh, 0, &albedo_of(mesh), settings.layers)
+    let built = |camera| -> Result<super::Impostor, BakeError> {
+        let mut imp = build(camera, mesh, 0, &albedo_of(mesh)).map_err(BakeError::Build)?;
+        if settings.layers != super::Layers::ONE {
+            imp.peel(mesh, 0, &albedo_of(mesh), settings.layers)?;
+        }
+        Ok(imp)
+    };
+    // At the rule's strength first: what does not fit is refused before any choice.
+    let mut imp = timings.time("build impostor", || built(camera))?;
+    let mut strength = None;
+    if choose {
+        // The rule's strength: chosen per object, on rays from within one radius of the
+        // viewpoint (the region the rule sizes it for).
+        let b = mesh.bounds();
+        let eye = b.center() + settings.from.normalize_or_zero() * b.radius() * settings.distance;
+        let choice = timings.time("choose the SPOC's strength", || {
+            choose_strength(
+                mesh,
+                |k| {
+                    ImpostorCamera::facing_mesh(
+                        ViewCamera::Spoc(k),
+                        mesh,
+                        settings.from,
+                        settings.distance,
+                        settings.resolution,
+                    )
+                },
+                settings.layers,
+                &region_rays(mesh, (eye, b.radius())),
+            )
         })?;
+        if choice.chosen != choice.rule {
+            let camera = place(choice.camera(), mesh)?;
+            imp = timings.time("build impostor", || built(camera))?;
+        }
+        strength = Some(choice);
     }
     timings.time("save", || save(&imp, output))?;
     let preview = output.with_extension("png");
@@ -158,6 +199,7 @@ pub fn bake(
         coverage: imp.coverage(),
         layers: imp.layer_count(),
         map_bytes: imp.map_bytes(),
+        strength,
         files: [output.to_path_buf(), output.with_extension("exr"), preview],
         timings,
     })
@@ -176,6 +218,9 @@ impl fmt::Display for BakeReport {
             write!(f, ", {} depth layers", self.layers)?;
         }
         writeln!(f, ", maps {:.1} MB", self.map_bytes as f64 / 1e6)?;
+        if let Some(s) = &self.strength {
+            writeln!(f, "{s}")?;
+        }
         let [a, b, c] = &self.files;
         write!(
             f,

@@ -12,6 +12,9 @@ use crate::frame::packed::{HalfRgba, OctUnit, unpack_rgba, unpack_unit};
 use crate::geom::Aabb;
 use glam::{DVec2, Vec3, Vec4};
 
+/// An impostor's hit agrees with the exact one within this many of its texel's footprints.
+pub const AGREEMENT_FOOTPRINTS: f64 = 1.5;
+
 /// A depth image that stands in for geometry.
 ///
 /// Its maps are compact (24 bytes a texel through a pinhole, orthographic or SPOC camera):
@@ -339,6 +342,32 @@ impl Impostor {
         // `f64::floor` without SSE 4.1 is a library call, once per walk sample. NaN fails here.
         (uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64)
             .then_some((uv.x as u32, uv.y as u32))
+    }
+
+    /// The footprint ([`Impostor::footprint`]) of the texel the world point `p` projects to;
+    /// infinite where it projects nowhere.
+    pub fn footprint_of(&self, p: Vec3) -> f64 {
+        self.camera
+            .project(p.as_dvec3())
+            .map_or(f64::INFINITY, |q| self.footprint(q.uv, q.gd))
+    }
+
+    /// Whether the impostor's answer `own` to a ray agrees with the exact answer `exact`: both
+    /// miss, or both hit within [`AGREEMENT_FOOTPRINTS`] footprints of the texel at the exact
+    /// hit (`docs/fidelity.md`).
+    pub fn agrees(
+        &self,
+        exact: Option<&crate::trace::Hit>,
+        own: Option<&crate::trace::Hit>,
+    ) -> bool {
+        match (exact, own) {
+            (None, None) => true,
+            (Some(e), Some(i)) => {
+                f64::from(e.position.distance(i.position))
+                    <= AGREEMENT_FOOTPRINTS * self.footprint_of(e.position)
+            }
+            _ => false,
+        }
     }
 
     /// World size of one texel at image point `uv` and depth `gd` (its footprint). For a

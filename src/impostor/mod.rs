@@ -29,6 +29,7 @@ mod peel;
 mod planes;
 mod pyramid;
 mod settings;
+mod strength;
 mod subject;
 mod texels;
 mod walk;
@@ -46,10 +47,13 @@ pub use builder::{
 };
 pub use camera::{ImpostorCamera, ViewCamera};
 pub use front::front_bounds;
-pub use maps::{Impostor, ImpostorSummary};
+pub use maps::{AGREEMENT_FOOTPRINTS, Impostor, ImpostorSummary};
 pub use peel::{AUTO_SHARE, LayerError, Layers, MAX_LAYERS, PEEL_GAP};
 pub use planes::TexelPlane;
 pub use pyramid::MaxPyramid;
 pub use settings::{ImpostorError, ImpostorSettings};
+pub use strength::{
+    STRENGTH_MARGIN, STRENGTH_RAYS, StrengthChoice, StrengthError, choose_strength, region_rays,
+};
 pub use subject::{CameraChoice, Paired, Subject, SubjectError, is_maze};
 pub use walk::{WalkMode, WalkStats};

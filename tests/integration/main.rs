@@ -15,5 +15,6 @@ mod raster_vs_bvh;
 mod relief;
 mod render;
 mod sequence;
+mod spoc_kinds;
 mod texturing;
 mod views;

@@ -209,7 +209,8 @@ pub struct CheckArgs {
     /// Impostor camera.
     #[arg(long, value_enum, default_value_t = CameraArg::Spoc)]
     camera: CameraArg,
-    /// SPOC strength k (default: the rule k = 2Δ/z_O from the reflector's region).
+    /// SPOC strength k (default: chosen per object on rays a second viewer sees in the mirror:
+    /// the rule k = 2Δ/z_O from the reflector's region, a weaker push, or the pinhole).
     #[arg(long, value_parser = parse_strength)]
     k: Option<f64>,
     /// Impostor resolution (square).
@@ -286,7 +287,8 @@ pub struct BakeArgs {
     /// Camera distance from the object's centre, in bounding-sphere radii.
     #[arg(long, default_value_t = 3.0)]
     distance: f32,
-    /// SPOC strength k (default: the rule k = 2Δ/z_O with Δ one bounding radius).
+    /// SPOC strength k (default: chosen per object on rays from within one radius of the
+    /// viewpoint: the rule k = 2Δ/z_O with Δ that radius, a weaker push, or the pinhole).
     #[arg(long, value_parser = parse_strength)]
     k: Option<f64>,
     /// The sidecar to write (NAME.json; NAME.exr and NAME.png go beside it).
