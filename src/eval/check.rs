@@ -513,6 +513,7 @@ impl serde::Serialize for CheckReport {
                 json!({ "fidelity": fidelity(r), "captured": c })
             }),
             "algorithm_1": self.algorithm_1.as_ref().map(fidelity),
+            "strength": self.strength,
             "layers_beside": self.layers_beside.iter().map(|row| json!({
                 "asked": row.asked.to_string(),
                 "layers": row.layers,

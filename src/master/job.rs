@@ -5,6 +5,7 @@
 use super::bake::BakeReport;
 use super::edit::{Apply, delta, propagate};
 use super::file::{Manifest, load, load_manifest, load_master, master_name, save_manifest};
+use super::layout::TexelBudget;
 use super::{Atlas, DEFAULT_SCALE, MasterError, encode, encode_stream};
 use crate::camera::Pinhole;
 use crate::files::{FolderKind, StagedFolder};
@@ -32,6 +33,8 @@ pub struct EncodeSummary {
     pub exemplar_bytes: (u64, u64),
     /// Bytes of the master textures as 8-bit RGB, and of the one UV set (`3m` pairs).
     pub master_bytes: (u64, u64),
+    /// Where the atlas's texels go.
+    pub budget: TexelBudget,
     /// What the view-independent bake did.
     pub bake: BakeReport,
     /// Files written.
@@ -57,6 +60,7 @@ impl serde::Serialize for EncodeSummary {
             "exemplar_bytes": { "images": self.exemplar_bytes.0, "uvs": self.exemplar_bytes.1 },
             "master_bytes": { "textures": self.master_bytes.0, "uvs": self.master_bytes.1 },
             "compression": self.compression(),
+            "texel_budget": self.budget,
             "bake": {
                 "whole_faces": self.bake.whole,
                 "outlier_looks": self.bake.seams.outliers,
@@ -93,6 +97,7 @@ impl std::fmt::Display for EncodeSummary {
             mb(self.master_bytes.1),
             self.compression()
         )?;
+        writeln!(f, "texels: {}", self.budget)?;
         write!(f, "view-independent bake: {}", self.bake.told(self.faces))
     }
 }
@@ -161,6 +166,8 @@ pub fn encode_folder(
     )?);
     let files = published(staged, files)?;
     let (exemplar_bytes, master_bytes) = storage(&atlas, &sizes);
+    let pinholes: Vec<Pinhole> = cameras.iter().map(|(_, c)| c.clone()).collect();
+    let surface = super::face_surface(mesh, &pinholes, scale.unwrap_or(DEFAULT_SCALE));
     Ok(EncodeSummary {
         views: cameras.len(),
         faces: mesh.triangle_count(),
@@ -168,6 +175,7 @@ pub fn encode_folder(
         used: atlas.used(),
         exemplar_bytes,
         master_bytes,
+        budget: TexelBudget::of(&atlas.layout, surface),
         bake: baked.report,
         files,
     })

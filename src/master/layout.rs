@@ -367,3 +367,58 @@ mod tests {
         );
     }
 }
+
+/// Where an atlas's texels go (paper 5 §3's sizing, warp, pairing and packing, each as the
+/// share it adds): the faces' surface as their largest views show it, the right triangles they
+/// are warped to, the boxes that pair them with gutters and borders, and the packed atlas.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct TexelBudget {
+    /// Texels of the faces' surface: each face's largest projected area in any view, times the
+    /// scale squared — what no layout can do without.
+    pub surface: f64,
+    /// Texels of the right triangles the faces are warped to (half their legs' product).
+    pub triangles: f64,
+    /// Texels of the boxes that pair them, gutters and borders included.
+    pub boxes: f64,
+    /// Texels of the atlas.
+    pub atlas: f64,
+}
+
+impl TexelBudget {
+    /// The budget of `layout`, whose faces' surface is `surface` texels.
+    pub fn of(layout: &Layout, surface: f64) -> TexelBudget {
+        let triangles = layout
+            .faces
+            .iter()
+            .map(|f| f.size[0] as f64 * f.size[1] as f64 * 0.5)
+            .sum();
+        let mut boxes: Vec<[u32; 4]> = layout.faces.iter().map(|f| f.bbox).collect();
+        boxes.sort_unstable();
+        boxes.dedup();
+        TexelBudget {
+            surface,
+            triangles,
+            boxes: boxes.iter().map(|b| b[2] as f64 * b[3] as f64).sum(),
+            atlas: layout.width as f64 * layout.height as f64,
+        }
+    }
+}
+
+/// "surface S texels; warped to right triangles × a, paired in boxes × b, packed × c: the atlas
+/// is × d the surface".
+impl std::fmt::Display for TexelBudget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = |a: f64, b: f64| a / b.max(1.0);
+        write!(
+            f,
+            "the faces' surface at their largest views {:.0} texels; warped to right triangles \
+             × {:.2}, paired in boxes with gutters × {:.2}, packed × {:.2}: the atlas is × {:.2} \
+             the surface",
+            self.surface,
+            r(self.triangles, self.surface),
+            r(self.boxes, self.triangles),
+            r(self.atlas, self.boxes),
+            r(self.atlas, self.surface)
+        )
+    }
+}

@@ -139,6 +139,28 @@ pub fn face_sizes(mesh: &Mesh, cameras: &[Pinhole], scale: f64) -> Vec<[u32; 2]>
         .collect()
 }
 
+/// The faces' surface in texels: each face's largest projected area in any of `cameras` that
+/// has it in front, times `scale²` (what [`layout::TexelBudget`] measures a layout against).
+pub fn face_surface(mesh: &Mesh, cameras: &[Pinhole], scale: f64) -> f64 {
+    let areas: Vec<f64> = (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|t| {
+            let corners = mesh.corners(t).map(|p| p.as_dvec3());
+            cameras
+                .iter()
+                .filter_map(|cam| {
+                    let px: Option<Vec<DVec2>> = corners
+                        .iter()
+                        .map(|&p| cam.project(p).map(|q| q.uv))
+                        .collect();
+                    px.map(|px| 0.5 * (px[1] - px[0]).perp_dot(px[2] - px[0]).abs())
+                })
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    areas.iter().sum::<f64>() * scale * scale
+}
+
 impl Atlas {
     /// The atlas of `mesh` for faces of legs `sizes` (from [`face_sizes`]).
     pub fn new(mesh: &Mesh, sizes: &[[u32; 2]]) -> Result<Atlas, MasterError> {
