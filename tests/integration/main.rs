@@ -8,6 +8,7 @@ mod hybrid;
 mod impostor;
 mod layers;
 mod loaders;
+mod master_regime;
 mod methods;
 mod octahedral;
 mod peeling;
