@@ -1,6 +1,6 @@
 //! What the experiments, benchmarks and tests share: the framing camera — one place says how a
-//! mesh is framed, so a figure in `docs/` and the test beside it measure the same view — and
-//! where the repository's shipped scenes and models are.
+//! mesh is framed, so a figure in `docs/` and the test beside it measure the same view — where
+//! the repository's shipped scenes and models are, and the model kinds they lack ([`kinds`]).
 
 use crate::camera::Pinhole;
 use crate::geom::Mesh;

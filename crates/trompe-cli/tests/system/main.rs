@@ -12,7 +12,7 @@ mod web;
 
 use common::{fails_cleanly, needs, scratch, stderr, trompe};
 use libtest_mimic::{Arguments, Trial};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use trompe::frame::metrics;
 
 /// A test function as a trial that needs `what` (present or not): a panic fails it.
@@ -329,6 +329,41 @@ pub fn render_on_the_gpu_is_the_cpu_frame() {
     }
 }
 
+/// `count` views of `duck` of `size` captured into `dir`/cap, and their master encoding in
+/// `dir`/enc.
+fn duck_capture_and_encoding(dir: &Path, count: u32, size: &str) -> (PathBuf, PathBuf) {
+    let duck = common::asset("gltf/Duck.glb");
+    let (cap, enc) = (dir.join("cap"), dir.join("enc"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let count = count.to_string();
+    for args in [
+        &[
+            "views",
+            "capture",
+            &s(&duck),
+            "-o",
+            &s(&cap),
+            "--count",
+            &count,
+            "--size",
+            size,
+        ][..],
+        &[
+            "master",
+            "encode",
+            &s(&cap),
+            "--mesh",
+            &s(&duck),
+            "-o",
+            &s(&enc),
+        ],
+    ] {
+        let o = trompe(args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    (cap, enc)
+}
+
 /// `master render --device gpu` (every master a layer of one texture array, blended by a
 /// compute shader) and `views render --device gpu` (the views' images and depth maps in texture
 /// arrays) and `layers render --device gpu` (every image layer, or every whole photograph, in
@@ -339,25 +374,8 @@ pub fn projective_renders_on_the_gpu_are_the_cpu_frames() {
     let dir = scratch("master-gpu");
     let duck = common::asset("gltf/Duck.glb");
     let duck = duck.to_str().unwrap();
-    let (cap, enc) = (dir.join("cap"), dir.join("enc"));
+    let (cap, enc) = duck_capture_and_encoding(&dir, 8, "160x120");
     let s = |p: &Path| p.to_str().unwrap().to_string();
-    for args in [
-        &[
-            "views",
-            "capture",
-            duck,
-            "-o",
-            &s(&cap),
-            "--count",
-            "8",
-            "--size",
-            "160x120",
-        ][..],
-        &["master", "encode", &s(&cap), "--mesh", duck, "-o", &s(&enc)],
-    ] {
-        let o = trompe(args);
-        assert!(o.status.success(), "{}", stderr(&o));
-    }
     let render = |(command, input): (&str, &Path), device: &str, weights: &str, out: &Path| {
         let (input, out) = (s(input), s(out));
         let mut args = vec![command, "render", &input, "--mesh", duck];
@@ -499,25 +517,8 @@ pub fn the_headless_viewer_blends_views_and_masters_on_the_gpu() {
     let dir = scratch("view-photographs-gpu");
     let duck = common::asset("gltf/Duck.glb");
     let duck = duck.to_str().unwrap();
-    let (cap, enc) = (dir.join("cap"), dir.join("enc"));
+    let (cap, enc) = duck_capture_and_encoding(&dir, 6, "128x96");
     let s = |p: &Path| p.to_str().unwrap().to_string();
-    for args in [
-        &[
-            "views",
-            "capture",
-            duck,
-            "-o",
-            &s(&cap),
-            "--count",
-            "6",
-            "--size",
-            "128x96",
-        ][..],
-        &["master", "encode", &s(&cap), "--mesh", duck, "-o", &s(&enc)],
-    ] {
-        let o = trompe(args);
-        assert!(o.status.success(), "{}", stderr(&o));
-    }
     // Away from the photographs, a frame a weighting; then the next photograph's camera, and a
     // step forward (20 steps a second, one input a step).
     let keys = dir.join("keys.txt");
