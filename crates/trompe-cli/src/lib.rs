@@ -1,10 +1,10 @@
 //! # trompe-cli — the `trompe` command-line tool
 //!
 //! The application around the [`trompe`] library: the command line ([`cli`]), the demo report
-//! ([`report`]), the benchmark workloads of `trompe bench` and `cargo bench` ([`mod@bench`]) and the
-//! interactive viewer ([`viewer`], its window in `cli/view/window.rs`); how results print, as text or
-//! JSON ([`output`]). Each command parses its
-//! arguments, calls the library and prints what it returns; no rendering algorithm lives here.
+//! ([`report`]), the benchmark workloads of `trompe bench` and `cargo bench` ([`mod@bench`])
+//! and the interactive viewer ([`viewer`], its window in `cli/view/window.rs`); how results
+//! print, as text or JSON ([`output`]). Each command parses its arguments, calls the library
+//! and prints what it returns; no rendering algorithm lives here.
 
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
