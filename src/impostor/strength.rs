@@ -1,15 +1,16 @@
 //! Choosing a SPOC's strength per object (paper 1 §4; docs/conventions.md §3.2).
 //!
 //! The rule `k = 2Δ/z_O` sizes the push for the parallax of the rays' region, but the push has a
-//! price: the view widens to hold the pushed-out silhouette, so every texel on the object's near
-//! side grows with it. An object with little to disocclude — a slab, an assembly of thin parts —
-//! can lose more to the coarser texels (hits placed or invented by the thickness rule across a
-//! wider footprint) than it gains from the surface the push uncovers. [`choose_strength`] builds
-//! the impostor at the rule's strength, at half and a quarter of it, and at zero — where the SPOC
-//! is its pinhole, framed alike — fires one set of rays from the region at each and at the exact
-//! BVH, and keeps the rule's push unless a weaker one agrees more often by [`STRENGTH_MARGIN`] of
-//! the rays, and the push kept only if it beats zero by as much; otherwise the SPOC falls back to
-//! its pinhole ([`StrengthChoice::camera`]), and says so.
+//! price: texels stretched across the pushed-out silhouette, where the walk's thickness rule
+//! invents hits in the gaps between thin parts and steps through a thin part to what lies behind
+//! it (`docs/fidelity.md` measures both on the Cesium milk truck). An object with little to
+//! disocclude — a slab, an assembly of thin parts — can lose more there than it gains from the
+//! surface the push uncovers. [`choose_strength`] builds the impostor at the rule's strength, at
+//! half and a quarter of it, and at zero — where the SPOC is its pinhole, framed alike — fires
+//! held-out rays at each and at the exact BVH, and keeps the rule's push unless a weaker one
+//! agrees more often by [`STRENGTH_MARGIN`] of the rays, and the push kept only if it beats zero
+//! by as much; otherwise the SPOC falls back to its pinhole ([`StrengthChoice::camera`]), and
+//! says so.
 //!
 //! Invariants: the rays are like those the impostor will answer but never a check's own (a bake's
 //! from the region with their own seed, [`region_rays`]; a reflector check's from a second
@@ -27,7 +28,7 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use thiserror::Error;
 
-/// The share of the region's rays a push must win by over the pinhole (`k = 0`) to be kept.
+/// The share of the held-out rays a push must win by over the pinhole (`k = 0`) to be kept.
 pub const STRENGTH_MARGIN: f64 = 0.001;
 
 /// The fewest held-out rays a choice is made on; with fewer, the rule's strength stands.
@@ -46,7 +47,7 @@ pub struct StrengthChoice {
     pub rule: f64,
     /// The strength kept: one of those tried; 0 where the SPOC falls back to its pinhole.
     pub chosen: f64,
-    /// Each strength tried and the share of the region's rays its impostor agreed on.
+    /// Each strength tried and the share of the held-out rays its impostor agreed on.
     pub tried: Vec<(f64, f64)>,
     /// Rays fired at each.
     pub rays: usize,
