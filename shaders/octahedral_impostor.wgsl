@@ -28,6 +28,7 @@ const PARALLAX_STEPS: u32 = 4u;
 const COVERAGE_SPHERE: u32 = 0u;
 const COVERAGE_HEMISPHERE: u32 = 1u;
 const ALPHA_TEST: f32 = 0.5;
+const DEPTH_AGREEMENT: f32 = 0.125;
 
 struct Camera {
     // World to clip space; depth is compared as the pipeline says (trompe's renderer: reversed).
@@ -324,24 +325,44 @@ fn find(in: VertexOut, lod: f32) -> Found {
         return found;
     }
     let frames = frames_around(normalize(o - centre));
+    var looks: array<Lookup, 3>;
+    // The nearest surface a covered frame finds along the ray.
+    var front = 3.0e38;
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        if (frames.weights[k] > 0.0) {
+            looks[k] = lookup(frames.cells[k], o, dir, lod);
+            if (looks[k].color.a * looks[k].inside >= ALPHA_TEST) {
+                front = min(front, dot(looks[k].position - o, dir));
+            }
+        }
+    }
     var color = vec3<f32>(0.0);
     var normal = vec3<f32>(0.0);
     var position = vec3<f32>(0.0);
     var alpha = 0.0;
+    var total = 0.0;
     for (var k = 0u; k < 3u; k = k + 1u) {
-        let w = frames.weights[k];
+        var w = frames.weights[k];
         if (w <= 0.0) {
             continue;
         }
-        let s = lookup(frames.cells[k], o, dir, lod);
-        let a = s.color.a * s.inside * w;
+        let s = looks[k];
+        let coverage = s.color.a * s.inside;
+        // Depth-aware blending (render.rs `blend`): a frame that sees past the nearest surface
+        // fades out.
+        if (coverage >= ALPHA_TEST) {
+            let behind = (dot(s.position - o, dir) - front) / (DEPTH_AGREEMENT * impostor.radius);
+            w = w * exp(-behind * behind);
+        }
+        total += w;
+        let a = coverage * w;
         color += s.color.rgb * a;
         normal += s.normal * a;
         position += s.position * a;
         alpha += a;
     }
     // The alpha test; and only what lies ahead of the eye.
-    if (alpha < ALPHA_TEST || dot(position / alpha - o, dir) <= 0.0) {
+    if (total <= 0.0 || alpha < ALPHA_TEST * total || dot(position / alpha - o, dir) <= 0.0) {
         return found;
     }
     let n = length(normal);

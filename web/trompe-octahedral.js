@@ -171,6 +171,10 @@ in vec3 vObject;
 const int COVERAGE_SPHERE = 0;
 const int COVERAGE_HEMISPHERE = 1;
 const float PI = 3.141592653589793;
+// The coverage from which a lookup is a surface, and depth-aware blending's tolerance in
+// bounding radii (src/octahedral/render.rs: ALPHA_TEST, DEPTH_AGREEMENT).
+const float COVERED = 0.5;
+const float DEPTH_AGREEMENT = 0.125;
 
 float signNonzero(float v) { return v >= 0.0 ? 1.0 : -1.0; }
 
@@ -286,22 +290,41 @@ void main() {
     cells[0] = cell + vec2(1.0); cells[1] = cell + vec2(0.0, 1.0); cells[2] = cell + vec2(1.0, 0.0);
     weights = vec3(f.x + f.y - 1.0, 1.0 - f.x, 1.0 - f.y);
   }
+  Lookup looks[3];
+  // The nearest surface a covered frame finds along the ray.
+  float front = 3.0e38;
+  for (int k = 0; k < 3; k++) {
+    if (weights[k] <= 0.0) continue;
+    looks[k] = lookup(cells[k], o, dir, lod);
+    if (looks[k].color.a * looks[k].inside >= COVERED) {
+      front = min(front, dot(looks[k].position - o, dir));
+    }
+  }
   vec3 color = vec3(0.0);
   vec3 normal = vec3(0.0);
   vec3 position = vec3(0.0);
   float alpha = 0.0;
+  float total = 0.0;
   for (int k = 0; k < 3; k++) {
     float w = weights[k];
     if (w <= 0.0) continue;
-    Lookup l = lookup(cells[k], o, dir, lod);
-    float a = l.color.a * l.inside * w;
+    Lookup l = looks[k];
+    float coverage = l.color.a * l.inside;
+    // Depth-aware blending (render.rs, blend): a frame that sees past the nearest surface
+    // fades out.
+    if (coverage >= COVERED) {
+      float behind = (dot(l.position - o, dir) - front) / (DEPTH_AGREEMENT * uRadius);
+      w *= exp(-behind * behind);
+    }
+    total += w;
+    float a = coverage * w;
     color += l.color.rgb * a;
     normal += l.normal * a;
     position += l.position * a;
     alpha += a;
   }
   // The alpha test; and only what lies ahead of the eye.
-  if (alpha < uAlphaTest || dot(position / alpha - o, dir) <= 0.0) discard;
+  if (total <= 0.0 || alpha < uAlphaTest * total || dot(position / alpha - o, dir) <= 0.0) discard;
   vec3 albedo = color / alpha;
   mat3 toWorld = mat3(vModel);
   vec3 n = length(normal) > 1e-20 ? normalize(toWorld * normal) : normalize(toWorld * -dir);

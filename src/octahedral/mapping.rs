@@ -3,7 +3,9 @@
 //! `|x| + |y| + |z| = 1` and the octahedron unfolded onto the unit square — the upper half
 //! (`y ≥ 0`) as the inner diamond, the lower half folded out to the corners. The hemi-octahedral
 //! map unfolds the upper half alone onto the whole square. An `n × n` grid of frames samples the
-//! square at `(i, j)/(n − 1)`, corners and edges included, so the poles and the horizon are frames.
+//! square at `(i, j)/(n − 1)`, corners and edges included: the sphere's `−y` pole (the corners)
+//! and the hemisphere's horizon (the edges) are always frames; the `+y` pole (the centre) and
+//! the sphere's horizon (the diamond's edges) are frames when `n` is odd.
 //!
 //! Invariants: `decode(encode(d)) = d` for unit `d` (of the upper hemisphere for the hemi map);
 //! the three frames [`Grid::frames_around`] picks hold weights that sum to 1 and are

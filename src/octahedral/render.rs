@@ -2,7 +2,8 @@
 //! shader does. For each pixel whose ray meets the bounding sphere, the three frames around the
 //! view direction are looked up and blended by their barycentric weights; each lookup is
 //! parallax-corrected with the frame's depth (the ray is intersected with the plane at the depth
-//! read there, a few times over), and the blended base colour is relit with the blended normal.
+//! read there, a few times over); frames that find a surface well behind the nearest one fade
+//! out (depth-aware blending), and the blended base colour is relit with the blended normal.
 //!
 //! Invariants: a frame's texel `(x, y)` images the point `c + r·(2(x+½)/s − 1)·right +
 //! r·(1 − 2(y+½)/s)·up` of its plane (orthographic frames; a pinhole frame the ray through that
@@ -21,6 +22,13 @@ use rayon::prelude::*;
 
 /// Parallax refinement steps (0: the frame's plane through the centre, no depth).
 pub const PARALLAX_STEPS: u32 = 4;
+
+/// Depth-aware blending's tolerance, in bounding radii: a frame whose surface lies `δ` behind the
+/// nearest surface another covered frame finds along the ray keeps `exp(−(δ / (DEPTH_AGREEMENT·r))²)`
+/// of its barycentric weight (the weights then renormalised). It keeps frames that see one
+/// surface through small parallax errors and drops the ones that see past an occluder, the
+/// ghosts between frames.
+pub const DEPTH_AGREEMENT: f64 = 0.125;
 
 /// The blended coverage a surface needs to be drawn by an alpha-tested impostor material (the
 /// glTF card's `alphaCutoff`, the runtimes' alpha test).
@@ -189,18 +197,45 @@ impl OctahedralAtlas {
         if b * b - (oc.length_squared() - r * r) < 0.0 {
             return None;
         }
+        let looks = frames.map(|((i, j), weight)| {
+            let sample = (weight > 0.0)
+                .then(|| self.lookup(i, j, o, dir, parallax))
+                .flatten()
+                .unwrap_or_default();
+            (weight.max(0.0), sample)
+        });
+        // Depth-aware blending: a frame that finds a surface well behind the nearest one a
+        // covered frame finds is looking past an occluder the others see, and fades out.
+        let front = looks
+            .iter()
+            .filter(|(w, s)| *w > 0.0 && s.alpha >= ALPHA_TEST)
+            .map(|(_, s)| s.t / f64::from(s.alpha))
+            .reduce(f64::min);
+        let sigma = DEPTH_AGREEMENT * r;
         let mut acc = Sample::default();
-        for &((i, j), weight) in frames {
-            if weight <= 0.0 {
-                continue;
-            }
-            if let Some(s) = self.lookup(i, j, o, dir, parallax) {
-                acc.color += s.color * weight as f32;
-                acc.normal += s.normal * weight as f32;
-                acc.alpha += s.alpha * weight as f32;
-                acc.t += s.t * weight;
-            }
+        let mut total = 0.0;
+        for (weight, s) in looks {
+            let weight = match front {
+                Some(front) if s.alpha >= ALPHA_TEST => {
+                    let behind = (s.t / f64::from(s.alpha) - front) / sigma;
+                    weight * (-behind * behind).exp()
+                }
+                _ => weight,
+            };
+            acc.color += s.color * weight as f32;
+            acc.normal += s.normal * weight as f32;
+            acc.alpha += s.alpha * weight as f32;
+            acc.t += s.t * weight;
+            total += weight;
         }
+        if total <= 0.0 {
+            return None;
+        }
+        let total_f32 = total as f32;
+        acc.color /= total_f32;
+        acc.normal /= total_f32;
+        acc.alpha /= total_f32;
+        acc.t /= total;
         if acc.alpha <= 1e-6 {
             return None;
         }

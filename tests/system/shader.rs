@@ -54,6 +54,13 @@ pub fn the_shader_constants_are_the_rust_codes() {
         )),
         "ALPHA_TEST"
     );
+    assert!(
+        src.contains(&format!(
+            "const DEPTH_AGREEMENT: f32 = {:?};",
+            trompe::octahedral::render::DEPTH_AGREEMENT
+        )),
+        "DEPTH_AGREEMENT"
+    );
 }
 
 /// A compute entry over the shader's own `frames_around`: each direction in, its three frames

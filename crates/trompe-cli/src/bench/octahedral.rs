@@ -38,6 +38,8 @@ pub struct TurntableRow {
     pub mean: f64,
     /// The worst view's.
     pub worst: f64,
+    /// The worst view's direction: degrees of azimuth about `+y` and of elevation.
+    pub worst_view: (f64, f64),
     /// Mean FLIP without parallax.
     pub flat: f64,
 }
@@ -120,10 +122,16 @@ pub fn octahedral(inputs: &Shipped, quick: bool) -> Result<OctahedralFigures, Be
             256,
         )?;
         let n = t.len() as f64;
+        // (A turntable always holds the straight-down and straight-up views.)
+        let (worst, worst_view) = t
+            .iter()
+            .max_by(|a, b| a.flip.total_cmp(&b.flip))
+            .map_or((0.0, (0.0, 0.0)), |v| (v.flip, (v.azimuth, v.elevation)));
         turntables.push(TurntableRow {
             name: name.into(),
             mean: t.iter().map(|v| v.flip).sum::<f64>() / n,
-            worst: t.iter().map(|v| v.flip).fold(0.0, f64::max),
+            worst,
+            worst_view,
             flat: t.iter().map(|v| v.flip_flat).sum::<f64>() / n,
         });
     }
@@ -161,8 +169,8 @@ impl std::fmt::Display for OctahedralFigures {
         for t in &self.turntables {
             writeln!(
                 f,
-                "| {} | {:.4} | {:.4} | {:.4} |",
-                t.name, t.mean, t.worst, t.flat
+                "| {} | {:.4} | {:.4} (azimuth {:.0}°, elevation {:.0}°) | {:.4} |",
+                t.name, t.mean, t.worst, t.worst_view.0, t.worst_view.1, t.flat
             )?;
         }
         Ok(())

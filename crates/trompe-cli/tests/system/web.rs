@@ -209,6 +209,20 @@ fn score(name: &str, glb: &Path, atlas: &OctahedralAtlas, dir: &Path) -> (f64, f
 }
 
 pub fn the_threejs_runtime_draws_the_ducks_bake_as_trompe_does() {
+    // The runtime's constants are the Rust code's.
+    let runtime = std::fs::read_to_string(root().join("web/trompe-octahedral.js")).unwrap();
+    for (name, value) in [
+        ("COVERED", f64::from(trompe::octahedral::render::ALPHA_TEST)),
+        (
+            "DEPTH_AGREEMENT",
+            trompe::octahedral::render::DEPTH_AGREEMENT,
+        ),
+    ] {
+        assert!(
+            runtime.contains(&format!("const float {name} = {value:?};")),
+            "{name}"
+        );
+    }
     let dir = scratch("web_threejs_runtime");
     for (name, extra) in [("PNG", &[][..]), ("KTX2", &["--ktx2"][..])] {
         let glb = dir.join(format!("duck-{name}.glb"));
