@@ -349,9 +349,11 @@ fn find(in: VertexOut, lod: f32) -> Found {
         let s = looks[k];
         let coverage = s.color.a * s.inside;
         // Depth-aware blending (render.rs `blend`): a frame that sees past the nearest surface
-        // fades out.
+        // fades out. At mip level L a lookup's depth is the mean of 2^L texels, which shrinks
+        // the gaps a level-0 blend sees; the tolerance shrinks with it (docs/octahedral.md).
         if (coverage >= ALPHA_TEST) {
-            let behind = (dot(s.position - o, dir) - front) / (DEPTH_AGREEMENT * impostor.radius);
+            let tolerance = DEPTH_AGREEMENT * impostor.radius * exp2(-lod);
+            let behind = (dot(s.position - o, dir) - front) / tolerance;
             w = w * exp(-behind * behind);
         }
         total += w;

@@ -311,9 +311,10 @@ void main() {
     Lookup l = looks[k];
     float coverage = l.color.a * l.inside;
     // Depth-aware blending (render.rs, blend): a frame that sees past the nearest surface
-    // fades out.
+    // fades out. At mip level L a lookup's depth is the mean of 2^L texels, which shrinks the
+    // gaps a level-0 blend sees; the tolerance shrinks with it (docs/octahedral.md).
     if (coverage >= COVERED) {
-      float behind = (dot(l.position - o, dir) - front) / (DEPTH_AGREEMENT * uRadius);
+      float behind = (dot(l.position - o, dir) - front) / (DEPTH_AGREEMENT * uRadius * exp2(-lod));
       w *= exp(-behind * behind);
     }
     total += w;
