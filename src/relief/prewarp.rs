@@ -11,7 +11,10 @@
 //! 1-D passes — rows, then columns — each traversed toward the epipole (the eye's foot on the
 //! plane), so that a later write is always the nearer surface and no z-buffer is needed. Between
 //! two neighbours of a pass, the columns they leave empty are filled by interpolating the two
-//! (paper §3) and flagged: the count of those texels is the brute-force validity measure.
+//! (paper §3) and flagged: the count of those texels is the brute-force validity measure. A
+//! run's first and last texels, where the warp stretches them apart from their neighbour, also
+//! cover the empty texels of their own warped half-footprint (flagged extended, not counted):
+//! otherwise a stretched silhouette loses that half-footprint.
 //!
 //! Invariants: a texel lands at index `floor(x)` of its pass, `x` the warped continuous
 //! coordinate of its centre; the output is the base plane extended by a margin on every side
@@ -150,7 +153,15 @@ pub mod flag {
     pub const DIRECT: u8 = 1;
     /// Filled by interpolating two neighbours (in either pass).
     pub const INTERPOLATED: u8 = 2;
+    /// Covered by the warped footprint of the texel that ends a run (in either pass): where the
+    /// warp stretches the surface at a silhouette, the last texel's own footprint grows past
+    /// its centre. Not counted as direct or interpolated (the validity measure is the paper's).
+    pub const EXTENDED: u8 = 3;
 }
+
+/// The most texels a run's end grows by ([`flag::EXTENDED`]): a spacing wider than twice this
+/// is a step between two surfaces more than a stretched one.
+const MAX_EXTENSION: f64 = 2.0;
 
 /// Flag bit of a displacement that is not an eight-bit step (interpolated between two).
 const OFF_GRID: u8 = 4;
@@ -445,31 +456,82 @@ impl Line<'_> {
     where
         M: Fn(usize, f32, u8, bool) -> Option<f64>,
     {
-        let mut prev: Option<Moved> = None;
+        let spreads = |a: &Moved, b: &Moved| if ascending { b.x > a.x } else { b.x < a.x };
+        // The last texel moved in the current run, and the one before it.
+        let (mut prev, mut before): (Option<Moved>, Option<Moved>) = (None, None);
         let mut last = None;
         for (i, texel) in order {
             last = None;
             let Some(mut t) = texel else {
-                prev = None;
+                self.end_run(before, prev, &spreads);
+                (prev, before) = (None, None);
                 continue;
             };
             let Some(x) = map(i, t.d, t.code, t.flag & OFF_GRID != 0) else {
                 self.dropped += 1;
-                prev = None;
+                self.end_run(before, prev, &spreads);
+                (prev, before) = (None, None);
                 continue;
             };
             t.x = x;
-            if let Some(p) = prev {
-                let spreads = if ascending { t.x > p.x } else { t.x < p.x };
-                if spreads {
-                    self.fill(&p, &t);
+            if let Some(p) = prev
+                && spreads(&p, &t)
+            {
+                self.fill(&p, &t);
+                if before.is_none() {
+                    // `p` starts the run: its footprint grows backward.
+                    self.extend(&p, &t);
                 }
             }
             self.put(&t);
-            prev = Some(t);
+            (before, prev) = (prev, Some(t));
             last = Some((i, t));
         }
+        // A run still open here goes on past the epipole, where the two sweeps are joined.
         last
+    }
+
+    /// At the end of a run whose last two texels spread apart, the last one's footprint grows
+    /// forward.
+    fn end_run(
+        &mut self,
+        before: Option<Moved>,
+        last: Option<Moved>,
+        spreads: &impl Fn(&Moved, &Moved) -> bool,
+    ) {
+        if let (Some(b), Some(e)) = (before, last)
+            && spreads(&b, &e)
+        {
+            self.extend(&e, &b);
+        }
+    }
+
+    /// Covers the empty texels within the warped half-footprint of `e`, the texel ending a run,
+    /// on the side away from its neighbour `n`: as far as half the spacing between the two, at
+    /// most [`MAX_EXTENSION`] texels.
+    fn extend(&mut self, e: &Moved, n: &Moved) {
+        let reach = ((e.x - n.x).abs() * 0.5).min(MAX_EXTENSION);
+        if reach <= 0.5 {
+            return;
+        }
+        let dir = (e.x - n.x).signum();
+        let own = floor_i64(e.x);
+        let far = e.x + dir * reach;
+        let (lo, hi) = (floor_i64(e.x.min(far)), floor_i64(e.x.max(far)));
+        for j in lo..=hi {
+            let along = (texel_centre(j as f64) - e.x) * dir;
+            let k = j + self.offset;
+            if j == own || along <= 0.0 || along > reach || k < 0 || k >= self.color.len() as i64 {
+                continue;
+            }
+            let k = k as usize;
+            if self.flag[k] == flag::EMPTY {
+                self.color[k] = e.color;
+                self.d[k] = e.d;
+                self.code[k] = e.code;
+                self.flag[k] = flag::EXTENDED | (e.flag & OFF_GRID);
+            }
+        }
     }
 
     /// Writes `t` where it lands.
@@ -503,7 +565,14 @@ impl Line<'_> {
             self.color[j] = lerp8(p.color, q.color, s);
             self.d[j] = p.d + (q.d - p.d) * s;
             self.code[j] = 0;
-            self.flag[j] = flag::INTERPOLATED | OFF_GRID;
+            // What lies between an extended texel and another is extended too.
+            let extended = (p.flag & KIND) == flag::EXTENDED || (q.flag & KIND) == flag::EXTENDED;
+            let kind = if extended {
+                flag::EXTENDED
+            } else {
+                flag::INTERPOLATED
+            };
+            self.flag[j] = kind | OFF_GRID;
         }
     }
 }
@@ -654,7 +723,8 @@ mod tests {
         // One row of 4 texels, heights 0, 0, 2, 2, eye straight above texel 0.5 at height 4:
         // u' = (u h − u_e d)/(h − d) with u_e = 0.5, h = 4. Centres 0.5, 1.5 stay; 2.5 → 4.5,
         // 3.5 → 6.5. So columns 0, 1, 4, 6 are direct, 2, 3 (between 1.5 and 4.5) and 5 are
-        // interpolated.
+        // interpolated; texel 3, the run's end, covers [5.5, 7.5] once warped, so column 7
+        // (centre 7.5) is extended, and counted as neither.
         let imp = bumped(4, |u, v| (v == 1).then_some(if u < 2 { 0.0 } else { 2.0 }));
         // Rows: the eye sits above row 1's centre, so v is not moved.
         let eye = imp.frame.point(0.5, 1.5, 4.0);
@@ -663,8 +733,8 @@ mod tests {
         let flags: Vec<u8> = (0..8)
             .map(|u| p.flags[row + p.margin.0 as usize + u])
             .collect();
-        use flag::{DIRECT as D, EMPTY as E, INTERPOLATED as I};
-        assert_eq!(flags, vec![D, D, I, I, D, I, D, E]);
+        use flag::{DIRECT as D, EXTENDED as X, INTERPOLATED as I};
+        assert_eq!(flags, vec![D, D, I, I, D, I, D, X]);
         assert_eq!((p.direct, p.interpolated, p.dropped), (4, 3, 0));
         assert!((p.interpolated_ratio() - 0.75).abs() < 1e-12);
     }

@@ -99,6 +99,15 @@ impl WalkReport {
         mean(self.frames.iter().filter_map(|f| f.psnr))
     }
 
+    /// The scored frame with the lowest PSNR: its index and PSNR.
+    pub fn lowest_psnr(&self) -> Option<(usize, f64)> {
+        self.frames
+            .iter()
+            .enumerate()
+            .filter_map(|(k, f)| f.psnr.map(|p| (k, p)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
     /// Mean PSNR of direct rasterization against the truth.
     pub fn mean_raster_psnr(&self) -> Option<f64> {
         mean(self.frames.iter().filter_map(|f| f.raster_psnr))
@@ -327,10 +336,14 @@ impl std::fmt::Display for WalkReport {
             pipeline.as_secs_f64() * 1e3,
             raster.as_secs_f64() * 1e3
         )?;
-        if let (Some(p), Some(r)) = (self.mean_psnr(), self.mean_raster_psnr()) {
+        if let (Some(p), Some(r), Some((k, low))) = (
+            self.mean_psnr(),
+            self.mean_raster_psnr(),
+            self.lowest_psnr(),
+        ) {
             writeln!(
                 f,
-                "against the software shader's true render: relief {p:.2} dB, direct rasterization {r:.2} dB (mean PSNR)"
+                "against the software shader's true render: relief {p:.2} dB, direct rasterization {r:.2} dB (mean PSNR); lowest relief frame {low:.2} dB (frame {k})"
             )?;
         }
         let (agree, pairs) = self.agreement();
