@@ -16,6 +16,7 @@
 //!   impostor's viewpoint, aimed at the mesh's box ([`fidelity::viewpoint_rays`]).
 
 use super::fidelity::{self, FidelityReport, ReflectorSetup, SurfaceCapture};
+use super::misses::{MissPicture, miss_picture};
 use crate::camera::CameraError;
 use crate::frame::FrameError;
 use crate::geom::{Mesh, Ray};
@@ -60,6 +61,9 @@ pub struct CheckSettings {
     /// it, on the same rays ([`CheckReport::layers_beside`]), and the pinhole beside a SPOC is
     /// peeled alike.
     pub layers: Layers,
+    /// Also draw where the impostor (and the pinhole beside a SPOC) disagrees with the BVH
+    /// ([`CheckReport::misses`]).
+    pub misses: bool,
 }
 
 impl Default for CheckSettings {
@@ -72,6 +76,7 @@ impl Default for CheckSettings {
             view: 1024,
             sphere_rays: 0,
             layers: Layers::Auto,
+            misses: false,
         }
     }
 }
@@ -87,6 +92,8 @@ pub struct BakedCheckSettings {
     pub region: f32,
     /// How many rays come from that region.
     pub rays: u32,
+    /// Also draw where the impostor disagrees with the BVH ([`CheckReport::misses`]).
+    pub misses: bool,
 }
 
 impl Default for BakedCheckSettings {
@@ -96,6 +103,7 @@ impl Default for BakedCheckSettings {
             view: 1024,
             region: 1.0,
             rays: 20_000,
+            misses: false,
         }
     }
 }
@@ -186,6 +194,9 @@ pub struct CheckReport {
     /// For a SPOC built with the rule's strength: how its strength was chosen
     /// ([`choose_strength`]).
     pub strength: Option<StrengthChoice>,
+    /// When asked for: where the impostor, then the pinhole beside it, disagree with the BVH
+    /// ([`super::misses::miss_picture`]; [`super::misses::side_by_side`] joins them).
+    pub misses: Vec<MissPicture>,
     /// The steps' durations.
     pub timings: Timings,
 }
@@ -217,6 +228,8 @@ struct Checked {
     /// The layers the pinhole beside it is peeled into: as many as the impostor's.
     pinhole_layers: Layers,
     strength: Option<StrengthChoice>,
+    /// Whether to draw the disagreements.
+    misses: bool,
 }
 
 /// Builds an impostor of `subject` through `settings.camera` and checks it on the reflector's
@@ -306,6 +319,7 @@ pub fn check_built(subject: &Subject, settings: &CheckSettings) -> Result<CheckR
         layers: settings.layers,
         pinhole_layers: settings.layers,
         strength,
+        misses: settings.misses,
     };
     measure(checked, timings)
 }
@@ -398,6 +412,7 @@ pub fn check_baked(
         layers: Layers::ONE,
         pinhole_layers,
         strength: None,
+        misses: settings.misses,
     };
     measure(checked, timings)
 }
@@ -412,12 +427,19 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         layers,
         pinhole_layers,
         strength,
+        misses,
     } = checked;
+    let mut pictures = Vec::new();
     let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]))?;
     let fidelity = timings.time("check", || fidelity::check(&impostor, &exact, &rays));
     let captured = timings.time("surface captured", || {
         fidelity::surface_captured(&impostor, &target, SURFACE_SAMPLES, 1)
     });
+    if misses {
+        pictures.push(timings.time("draw misses", || {
+            miss_picture("impostor", &impostor, &exact, &rays)
+        }));
+    }
     let pinhole_beside = match pinhole_beside {
         Some(camera) => {
             let mut p = timings.time("build pinhole impostor", || {
@@ -430,6 +452,11 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
             }
             let r = timings.time("check pinhole", || fidelity::check(&p, &exact, &rays));
             let c = fidelity::surface_captured(&p, &target, SURFACE_SAMPLES, 1);
+            if misses {
+                pictures.push(timings.time("draw misses", || {
+                    miss_picture("pinhole beside", &p, &exact, &rays)
+                }));
+            }
             Some((r, c))
         }
         None => None,
@@ -476,6 +503,7 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
         algorithm_1,
         layers_beside,
         strength,
+        misses: pictures,
         timings,
     })
 }
@@ -519,6 +547,13 @@ impl serde::Serialize for CheckReport {
                 "layers": row.layers,
                 "fidelity": fidelity(&row.fidelity),
                 "map_bytes": row.map_bytes,
+            })).collect::<Vec<_>>(),
+            "misses": self.misses.iter().map(|m| json!({
+                "name": m.name,
+                "missed": m.missed,
+                "placed": m.placed,
+                "spurious": m.spurious,
+                "outside": m.outside,
             })).collect::<Vec<_>>(),
             "timings_ms": self.timings,
         })
@@ -627,6 +662,13 @@ impl fmt::Display for CheckReport {
                 r1.agreement() * 100.0,
                 r1.hit_agreement() * 100.0,
                 r1.texel_visits_per_ray
+            )?;
+        }
+        for m in &self.misses {
+            write!(
+                f,
+                "\nmisses    {}: {} missed (red), {} too far apart (orange), {} spurious (blue); {} outside its image",
+                m.name, m.missed, m.placed, m.spurious, m.outside
             )?;
         }
         Ok(())

@@ -6,9 +6,11 @@
 //! * [`validate`] — the rasterizer against the BVH's primary hits: depth, ids, coverage.
 //! * [`check`] — the whole `trompe impostor check` experiment: build or load an impostor, fire
 //!   rays, set a pinhole depth image beside a SPOC, report.
+//! * [`misses`] — pictures of where an impostor and the BVH disagree, for `check`.
 //! * [`fixtures`] — the cameras and placements those experiments share.
 
 pub mod check;
 pub mod fidelity;
 pub mod fixtures;
+pub mod misses;
 pub mod validate;

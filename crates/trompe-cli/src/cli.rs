@@ -255,6 +255,11 @@ pub struct CheckArgs {
     /// same rays, and the pinhole beside a SPOC is peeled alike.
     #[arg(long, default_value = "auto", conflicts_with = "impostor")]
     layers: trompe::impostor::Layers,
+    /// Draw where the impostor disagrees with the exact BVH into this PNG: its colour image
+    /// dimmed, each disagreeing ray marked at its point (red: the impostor misses; orange: both
+    /// hit, too far apart; blue: only the impostor hits), the pinhole beside a SPOC to its right.
+    #[arg(long)]
+    misses: Option<PathBuf>,
 }
 
 /// `trompe impostor bake`.
@@ -627,6 +632,9 @@ impl CheckArgs {
             plan.writes(o, &["json"])
                 .writes(o.with_extension("exr"), &["exr"]);
         }
+        if let Some(m) = &self.misses {
+            plan.writes(m, &["png"]);
+        }
         check_plan(&plan)?;
         let Some(path) = &self.impostor else {
             let settings = CheckSettings {
@@ -637,6 +645,7 @@ impl CheckArgs {
                 view: self.view,
                 sphere_rays: self.sphere_rays,
                 layers: self.layers,
+                misses: self.misses.is_some(),
             };
             return Ok(check_built(&subject, &settings)?);
         };
@@ -654,6 +663,7 @@ impl CheckArgs {
             view: self.view,
             region: self.region,
             rays: self.rays,
+            misses: self.misses.is_some(),
         };
         Ok(check_baked(&subject, baked, path, &settings)?)
     }
@@ -815,10 +825,16 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         }
         Command::Impostor(ImpostorCommand::Check(args)) => {
             let output = args.output.clone();
+            let misses = args.misses.clone();
             let report = with_spinner("checking", || args.check())?;
             if let Some(o) = &output {
                 trompe::impostor::file::save(&report.impostor, o).context("saving the impostor")?;
                 crate::output::note(format_args!("wrote {}", o.display()));
+            }
+            if let Some(m) = &misses {
+                let picture = trompe::eval::misses::side_by_side(&report.misses)?;
+                io::write_png(m, &picture).with_context(|| format!("writing {}", m.display()))?;
+                crate::output::note(format_args!("wrote {}", m.display()));
             }
             crate::output::report("impostor check", &report, &report)?;
             print_timings(verbose, &report.timings);

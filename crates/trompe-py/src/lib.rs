@@ -285,6 +285,7 @@ fn check_impostor(
                 view: 1024,
                 sphere_rays: 0,
                 layers: layers(layers_text)?,
+                misses: false,
             };
             check_built(&subject, &settings).or_raise()?
         }
@@ -298,6 +299,7 @@ fn check_impostor(
                 view: 1024,
                 region,
                 rays,
+                misses: false,
             };
             check_baked(&subject, baked, &path, &settings).or_raise()?
         }

@@ -225,6 +225,64 @@ fn impostor_check_as_json_holds_the_texts_figures() {
     assert!(printed.contains(&rays), "{rays}\n{printed}");
 }
 
+/// `--misses` marks exactly the rays that disagree: the picture's counts add up to the rays the
+/// fidelity report does not count as agreeing, for the SPOC and for the pinhole beside it, and
+/// the picture holds both, side by side, at the impostor's resolution.
+#[test]
+fn the_miss_picture_marks_every_disagreeing_ray() {
+    let d = scratch("json-misses");
+    let png = d.join("misses.png");
+    let check = [
+        "impostor",
+        "check",
+        "assets/meshes/teapot.obj",
+        "--resolution",
+        "128",
+        "--view",
+        "256",
+        "--layers",
+        "1",
+        "--misses",
+        png.to_str().unwrap(),
+    ];
+    let r = json(&check, "impostor check");
+    let misses = r["misses"].as_array().unwrap();
+    assert_eq!(misses.len(), 2, "{misses:?}");
+    let disagreeing = |f: &Value| f["rays"].as_u64().unwrap() - f["agreeing"].as_u64().unwrap();
+    let marked = |m: &Value| {
+        ["missed", "placed", "spurious"]
+            .iter()
+            .map(|k| m[k].as_u64().unwrap())
+            .sum::<u64>()
+    };
+    assert_eq!(misses[0]["name"], "impostor");
+    assert_eq!(marked(&misses[0]), disagreeing(&r["fidelity"]));
+    assert_eq!(misses[0]["missed"], r["fidelity"]["missed"]);
+    assert_eq!(misses[0]["spurious"], r["fidelity"]["spurious"]);
+    assert_eq!(misses[1]["name"], "pinhole beside");
+    assert_eq!(
+        marked(&misses[1]),
+        disagreeing(&r["pinhole_beside"]["fidelity"])
+    );
+    assert!(marked(&misses[0]) > 0);
+    let picture = trompe::frame::io::read_png(&png).unwrap();
+    assert_eq!(picture.size(), (256, 128));
+    // The red marks are there, on the left half.
+    let red = |x: u32, y: u32| {
+        let c = picture.get(x, y);
+        c.x > 0.9 && c.y < 0.2 && c.z < 0.2
+    };
+    let reds = (0..128)
+        .flat_map(|y| (0..128).map(move |x| (x, y)))
+        .filter(|&(x, y)| red(x, y))
+        .count();
+    assert_eq!(
+        reds > 0,
+        misses[0]["missed"].as_u64().unwrap() > 0,
+        "{reds} red pixels"
+    );
+}
+
 #[test]
 fn a_batch_as_json_lists_every_entry_and_fails_with_its_failures() {
     let d = scratch("json-batch");
