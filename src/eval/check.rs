@@ -431,15 +431,22 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
     } = checked;
     let mut pictures = Vec::new();
     let exact = timings.time("build BVH", || Bvh::build(vec![target.clone()]))?;
-    let fidelity = timings.time("check", || fidelity::check(&impostor, &exact, &rays));
+    // The rays that disagree are kept only to be drawn.
+    let check = |impostor: &Impostor| {
+        if misses {
+            fidelity::check_disagreements(impostor, &exact, &rays)
+        } else {
+            (fidelity::check(impostor, &exact, &rays), Vec::new())
+        }
+    };
+    let (fidelity, disagreements) = timings.time("check", || check(&impostor));
     let captured = timings.time("surface captured", || {
         fidelity::surface_captured(&impostor, &target, SURFACE_SAMPLES, 1)
     });
     if misses {
-        pictures.push(timings.time("draw misses", || {
-            miss_picture("impostor", &impostor, &exact, &rays)
-        }));
+        pictures.push(miss_picture("impostor", &impostor, &disagreements));
     }
+    drop(disagreements);
     let pinhole_beside = match pinhole_beside {
         Some(camera) => {
             let mut p = timings.time("build pinhole impostor", || {
@@ -450,12 +457,10 @@ fn measure(checked: Checked, mut timings: Timings) -> Result<CheckReport, CheckE
                     p.peel(&target, 0, &albedo_of(&target), pinhole_layers)
                 })?;
             }
-            let r = timings.time("check pinhole", || fidelity::check(&p, &exact, &rays));
+            let (r, disagreements) = timings.time("check pinhole", || check(&p));
             let c = fidelity::surface_captured(&p, &target, SURFACE_SAMPLES, 1);
             if misses {
-                pictures.push(timings.time("draw misses", || {
-                    miss_picture("pinhole beside", &p, &exact, &rays)
-                }));
+                pictures.push(miss_picture("pinhole beside", &p, &disagreements));
             }
             Some((r, c))
         }

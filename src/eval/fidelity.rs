@@ -65,7 +65,32 @@ impl FidelityReport {
 /// Compares the impostor's answer to every ray (its default walk, [`Impostor::walk`]) with the
 /// exact answer of `exact`.
 pub fn check(impostor: &Impostor, exact: &Bvh, rays: &[Ray]) -> FidelityReport {
-    check_by(impostor, exact, rays, |r| impostor.walk(r, f32::INFINITY))
+    check_by(impostor, exact, rays, false, |r| {
+        impostor.walk(r, f32::INFINITY)
+    })
+    .0
+}
+
+/// How one ray's answers disagree, and where (`impostor check --misses`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Disagreement {
+    /// The BVH hits here; the impostor misses.
+    Missed(Vec3),
+    /// Both hit, too far apart: the exact hit.
+    Placed(Vec3),
+    /// Only the impostor hits, here.
+    Spurious(Vec3),
+}
+
+/// [`check`], with every ray that does not agree, in the rays' order.
+pub fn check_disagreements(
+    impostor: &Impostor,
+    exact: &Bvh,
+    rays: &[Ray],
+) -> (FidelityReport, Vec<Disagreement>) {
+    check_by(impostor, exact, rays, true, |r| {
+        impostor.walk(r, f32::INFINITY)
+    })
 }
 
 /// [`check`] with a chosen walk ([`Impostor::walk_mode`]).
@@ -75,12 +100,20 @@ pub fn check_with(
     rays: &[Ray],
     mode: crate::impostor::WalkMode,
 ) -> FidelityReport {
-    check_by(impostor, exact, rays, |r| {
+    check_by(impostor, exact, rays, false, |r| {
         impostor.walk_mode(r, f32::INFINITY, mode)
     })
+    .0
 }
 
-fn check_by<W>(impostor: &Impostor, exact: &Bvh, rays: &[Ray], walk: W) -> FidelityReport
+/// The comparison itself; `keep` also lists the rays that disagree.
+fn check_by<W>(
+    impostor: &Impostor,
+    exact: &Bvh,
+    rays: &[Ray],
+    keep: bool,
+    walk: W,
+) -> (FidelityReport, Vec<Disagreement>)
 where
     W: Fn(&Ray) -> (Option<crate::trace::Hit>, crate::impostor::WalkStats) + Sync,
 {
@@ -93,6 +126,7 @@ where
         err_fp: f64,
         visits: u64,
         unheld: bool,
+        disagreement: Option<Disagreement>,
     }
     impostor.prepare_walks();
     let per_ray: Vec<One> = rays
@@ -114,9 +148,15 @@ where
                     one.err = err;
                     one.err_fp = err / fp;
                     one.agree = err <= AGREEMENT_FOOTPRINTS * fp;
+                    if !one.agree {
+                        one.disagreement = Some(Disagreement::Placed(e.position));
+                    }
                 }
-                (Some(e), None) => one.unheld = !holds(impostor, e.position).within_footprint,
-                (None, Some(_)) => {}
+                (Some(e), None) => {
+                    one.unheld = !holds(impostor, e.position).within_footprint;
+                    one.disagreement = Some(Disagreement::Missed(e.position));
+                }
+                (None, Some(i)) => one.disagreement = Some(Disagreement::Spurious(i.position)),
             }
             one
         })
@@ -124,7 +164,12 @@ where
     let both: Vec<&One> = per_ray.iter().filter(|o| o.exact && o.imp).collect();
     let mut errors_fp: Vec<f64> = both.iter().map(|o| o.err_fp).collect();
     errors_fp.sort_by(f64::total_cmp);
-    FidelityReport {
+    let disagreements = if keep {
+        per_ray.iter().filter_map(|o| o.disagreement).collect()
+    } else {
+        Vec::new()
+    };
+    let report = FidelityReport {
         rays: rays.len(),
         exact_hits: per_ray.iter().filter(|o| o.exact).count(),
         impostor_hits: per_ray.iter().filter(|o| o.imp).count(),
@@ -137,7 +182,8 @@ where
         median_error_footprints: median(&errors_fp),
         texel_visits_per_ray: per_ray.iter().map(|o| o.visits as f64).sum::<f64>()
             / rays.len().max(1) as f64,
-    }
+    };
+    (report, disagreements)
 }
 
 /// The middle of sorted `values` (the mean of the two middle ones for an even count; 0 for

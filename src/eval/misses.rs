@@ -5,15 +5,13 @@
 //! hit). Where a SPOC and a pinhole are compared, the two pictures side by side show which parts
 //! of the object each camera loses (paper 1 §6, Fig. 6–7).
 //!
-//! Invariants: a ray is marked exactly when [`Impostor::agrees`] says no; the picture has the
-//! impostor's size; a point that projects outside the image is counted, not drawn.
+//! Invariants: a ray is marked exactly when the fidelity check counts it as disagreeing (the
+//! marks come from that check's own answers); the picture has the impostor's size; a point that
+//! projects outside the image is counted, not drawn.
 
+use super::fidelity::Disagreement;
 use crate::frame::{FrameError, Image, Rgba};
-use crate::geom::Ray;
 use crate::impostor::Impostor;
-use crate::trace::{Bvh, RayQuery};
-use glam::Vec3;
-use rayon::prelude::*;
 
 /// The mark of a ray the BVH hits and the impostor misses.
 pub const MISSED: Rgba = Rgba::new(1.0, 0.1, 0.1, 1.0);
@@ -39,38 +37,12 @@ pub struct MissPicture {
     pub outside: usize,
 }
 
-/// How one ray disagrees, and where.
-#[derive(Clone, Copy)]
-enum Disagreement {
-    Missed(Vec3),
-    Placed(Vec3),
-    Spurious(Vec3),
-}
-
-/// Fires `rays` at `impostor` (its default walk) and at `exact`, and draws where they disagree.
+/// Draws `disagreements` ([`super::fidelity::check_disagreements`], on the same impostor) on `impostor`'s image.
 pub fn miss_picture(
     name: &'static str,
     impostor: &Impostor,
-    exact: &Bvh,
-    rays: &[Ray],
+    disagreements: &[Disagreement],
 ) -> MissPicture {
-    impostor.prepare_walks();
-    let found: Vec<Disagreement> = rays
-        .par_iter()
-        .filter_map(|r| {
-            let e = exact.closest_hit(r, f32::INFINITY);
-            let (i, _) = impostor.walk(r, f32::INFINITY);
-            if impostor.agrees(e.as_ref(), i.as_ref()) {
-                return None;
-            }
-            Some(match (e, i) {
-                (Some(e), None) => Disagreement::Missed(e.position),
-                (Some(e), Some(_)) => Disagreement::Placed(e.position),
-                (None, Some(i)) => Disagreement::Spurious(i.position),
-                (None, None) => return None,
-            })
-        })
-        .collect();
     // The colour image shaded by the normals' facing toward the viewpoint, at half brightness.
     let mut image = impostor.color_image();
     let (normals, positions) = (impostor.normal_image(), impostor.position_image());
@@ -93,8 +65,8 @@ pub fn miss_picture(
         spurious: 0,
         outside: 0,
     };
-    for d in found {
-        let (p, mark) = match d {
+    for d in disagreements {
+        let (p, mark) = match *d {
             Disagreement::Missed(p) => {
                 picture.missed += 1;
                 (p, MISSED)
