@@ -157,6 +157,15 @@ pub fn load_manifest(dir: &Path) -> Result<Manifest, MasterError> {
                 format!("face {face}: its box or legs do not fit the packing map"),
             ));
         }
+        if f.corner > 2 {
+            return Err(err(
+                &path,
+                format!(
+                    "face {face}: its right angle is at corner {}, not 0, 1 or 2",
+                    f.corner
+                ),
+            ));
+        }
     }
     for (index, view) in manifest.views.iter().enumerate() {
         let file = &view.master;
@@ -269,10 +278,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_packing_map_without_corners_is_the_papers_corner_0() {
+        let place: super::super::layout::FacePlace =
+            serde_json::from_str(r#"{"bbox": [0, 0, 9, 7], "slot_b": true, "size": [6, 4]}"#)
+                .unwrap();
+        assert_eq!(place.corner, 0);
+        // Its corner 0 at the right angle: the box's bottom-right, the border within.
+        assert_eq!(place.at(0.0, 0.0), glam::DVec2::new(8.0, 6.0));
+    }
+
+    #[test]
     fn the_glb_loads_back_with_its_one_uv_set() {
         let mesh = crate::geom::icosphere(1);
-        let sizes = vec![[6, 4]; mesh.triangle_count()];
-        let layout = Layout::new(&sizes);
+        let shapes: Vec<_> = (0..mesh.triangle_count())
+            .map(|t| super::super::layout::FaceShape {
+                corner: (t % 3) as u8,
+                legs: [6, 4],
+            })
+            .collect();
+        let layout = Layout::new(&shapes);
         let uvs = layout.uvs();
         let png = io::encode_png(
             &Image::new(layout.width, layout.height, Rgba::ONE).unwrap(),

@@ -300,8 +300,7 @@ pub fn edit_folder(
             });
         }
     }
-    let sizes: Vec<[u32; 2]> = manifest.layout.faces.iter().map(|f| f.size).collect();
-    let atlas = Atlas::from_layout(mesh, manifest.layout.clone(), &sizes)?;
+    let atlas = Atlas::from_layout(mesh, manifest.layout.clone())?;
     let depth = DepthMap::through(&camera, mesh)?;
     let after = encode(&atlas, &camera, edited, &depth)?;
     let before = match source {

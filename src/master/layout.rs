@@ -1,12 +1,14 @@
 //! The packing map of Master Texture Space (paper 5 §3; docs/conventions.md §6.2–6.4): one
-//! common size per face (the largest its facet has in any view), every face warped to a
-//! `w × h` right triangle, faces paired two to a box — the second turned 180° into the opposite
-//! corner, a gutter between their hypotenuses — and the boxes packed largest first at the
-//! topmost, then leftmost place that fits. The same map serves every view, which is what makes
-//! the master textures pixel-aligned.
+//! common shape per face (its corner nearest a right angle and the largest its two edges from
+//! there have in any view), every face warped to a `w × h` right triangle, faces paired two to
+//! a box — the second turned 180° into the opposite corner, a gutter between their
+//! hypotenuses — and the boxes packed largest first at the topmost, then leftmost place that
+//! fits. The same map serves every view, which is what makes the master textures
+//! pixel-aligned.
 //!
-//! Invariants: a face's corner order is the mesh's (corner 0 at the right angle, corner 1 along
-//! `+x`, corner 2 along `+y` in its slot's frame); boxes never overlap; every texel the encoder
+//! Invariants: a face's corners keep the mesh's cyclic order (its chosen corner `c` at the right
+//! angle, `c + 1` along `+x`, `c + 2` along `+y` in its slot's frame, indices mod 3), whatever
+//! the view; boxes never overlap; every texel the encoder
 //! writes for a face lies in its own box, at most [`DILATION`] texels outside its triangle, and
 //! the two faces of a box are at least [`GUTTER`] texels apart, so bilinear filtering never
 //! mixes two faces.
@@ -23,6 +25,24 @@ pub const GUTTER: f64 = 2.0 * DILATION + 1.0;
 /// Largest side of a face's triangle, texels (a face seen larger is sampled at this size).
 pub const MAX_FACE_SIDE: u32 = 512;
 
+/// How one face is warped to its right triangle: which of its corners takes the right angle,
+/// and the legs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FaceShape {
+    /// The mesh corner (0, 1 or 2) at the right angle; the next one (cyclically) lies along the
+    /// first leg, the one after along the second.
+    pub corner: u8,
+    /// The legs `[w, h]`, texels.
+    pub legs: [u32; 2],
+}
+
+impl From<[u32; 2]> for FaceShape {
+    /// Legs `[w, h]` with the right angle at corner 0 (the paper's warp).
+    fn from(legs: [u32; 2]) -> FaceShape {
+        FaceShape { corner: 0, legs }
+    }
+}
+
 /// Where one face lives in the atlas.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FacePlace {
@@ -31,11 +51,42 @@ pub struct FacePlace {
     /// Slot `A` (right angle at the box's top-left, unrotated) or `B` (right angle at the
     /// bottom-right, turned 180°).
     pub slot_b: bool,
+    /// The mesh corner (0, 1 or 2) at the right angle ([`FaceShape::corner`]); 0 when absent
+    /// from a stored map, the paper's warp.
+    #[serde(default)]
+    pub corner: u8,
     /// The right triangle's legs, texels.
     pub size: [u32; 2],
 }
 
 impl FacePlace {
+    /// The face's shape.
+    pub fn shape(&self) -> FaceShape {
+        FaceShape {
+            corner: self.corner,
+            legs: self.size,
+        }
+    }
+
+    /// The leg fractions `(l1, l2)` of the surface point with mesh barycentrics `(b1, b2)` of
+    /// corners 1 and 2: the weights of the corners along the first and second leg.
+    fn legs_of(&self, b1: f64, b2: f64) -> (f64, f64) {
+        let b = [1.0 - b1 - b2, b1, b2];
+        let c = usize::from(self.corner % 3);
+        (b[(c + 1) % 3], b[(c + 2) % 3])
+    }
+
+    /// Mesh barycentrics `(b1, b2)` of corners 1 and 2 of the point with leg fractions
+    /// `(l1, l2)`.
+    fn barycentrics_of(&self, l1: f64, l2: f64) -> (f64, f64) {
+        let c = usize::from(self.corner % 3);
+        let mut b = [0.0; 3];
+        b[c] = 1.0 - l1 - l2;
+        b[(c + 1) % 3] = l1;
+        b[(c + 2) % 3] = l2;
+        (b[1], b[2])
+    }
+
     /// The right angle's corner and the two leg directions, in atlas texel coordinates.
     fn frame(&self) -> (DVec2, DVec2, DVec2) {
         let [x, y, w, h] = self.bbox.map(|v| v as f64);
@@ -54,12 +105,20 @@ impl FacePlace {
     /// corners 1 and 2.
     pub fn at(&self, b1: f64, b2: f64) -> DVec2 {
         let (o, ex, ey) = self.frame();
-        o + ex * (b1 * self.size[0] as f64) + ey * (b2 * self.size[1] as f64)
+        let (l1, l2) = self.legs_of(b1, b2);
+        o + ex * (l1 * self.size[0] as f64) + ey * (l2 * self.size[1] as f64)
     }
 
     /// Barycentrics `(b1, b2)` of corners 1 and 2 at atlas coordinates `p` (extrapolated
     /// outside the triangle).
     pub fn barycentrics(&self, p: DVec2) -> (f64, f64) {
+        let (l1, l2) = self.leg_fractions(p);
+        self.barycentrics_of(l1, l2)
+    }
+
+    /// The leg fractions of atlas point `p`: its offset from the right angle along each leg,
+    /// over the leg's length.
+    fn leg_fractions(&self, p: DVec2) -> (f64, f64) {
         let (o, ex, ey) = self.frame();
         let d = p - o;
         (
@@ -70,10 +129,10 @@ impl FacePlace {
 
     /// Whether atlas point `p` is within [`DILATION`] texels of the face's triangle.
     pub fn holds(&self, p: DVec2) -> bool {
-        let (b1, b2) = self.barycentrics(p);
+        let (l1, l2) = self.leg_fractions(p);
         let (w, h) = (self.size[0] as f64, self.size[1] as f64);
-        let (x, y) = (b1 * w, b2 * h);
-        let hyp = (b1 + b2 - 1.0) / (1.0 / (w * w) + 1.0 / (h * h)).sqrt();
+        let (x, y) = (l1 * w, l2 * h);
+        let hyp = (l1 + l2 - 1.0) / (1.0 / (w * w) + 1.0 / (h * h)).sqrt();
         x >= -DILATION && y >= -DILATION && hyp <= DILATION
     }
 }
@@ -115,15 +174,17 @@ pub fn pair_box(a: [u32; 2], b: [u32; 2]) -> [u32; 2] {
 }
 
 impl Layout {
-    /// The layout of faces with legs `sizes` (mesh order): paired by area, packed largest first.
-    pub fn new(sizes: &[[u32; 2]]) -> Layout {
+    /// The layout of faces of shapes `shapes` (mesh order): paired by area, packed largest
+    /// first.
+    pub fn new(shapes: &[FaceShape]) -> Layout {
+        let sizes: Vec<[u32; 2]> = shapes.iter().map(|s| s.legs).collect();
         let border = 2 * DILATION as u32;
-        // Pairs of consecutive faces by area, descending (ties by index: deterministic).
+        // Pairs of consecutive faces by their legs, first then second, descending (ties by
+        // index: deterministic): faces of like shape share a box. (The paper pairs by area,
+        // which puts thin triangles beside wide ones: 39 % more box texels on the teapot seen
+        // from 6 radii, docs/master.md.)
         let mut order: Vec<usize> = (0..sizes.len()).collect();
-        order.sort_by(|&i, &j| {
-            let area = |k: usize| sizes[k][0] as u64 * sizes[k][1] as u64;
-            area(j).cmp(&area(i)).then(i.cmp(&j))
-        });
+        order.sort_by(|&i, &j| sizes[j].cmp(&sizes[i]).then(i.cmp(&j)));
         struct Group {
             a: usize,
             b: Option<usize>,
@@ -167,6 +228,7 @@ impl Layout {
             FacePlace {
                 bbox: [0; 4],
                 slot_b: false,
+                corner: 0,
                 size: [1, 1],
             };
             sizes.len()
@@ -177,12 +239,14 @@ impl Layout {
             faces[g.a] = FacePlace {
                 bbox,
                 slot_b: false,
+                corner: shapes[g.a].corner,
                 size: sizes[g.a],
             };
             if let Some(b) = g.b {
                 faces[b] = FacePlace {
                     bbox,
                     slot_b: true,
+                    corner: shapes[b].corner,
                     size: sizes[b],
                 };
             }
@@ -284,16 +348,52 @@ impl Skyline {
 mod tests {
     use super::*;
 
-    fn sizes(n: usize) -> Vec<[u32; 2]> {
+    /// `n` faces of pseudo-random legs, their right angles at corners 0, 1, 2 in turn.
+    fn sizes(n: usize) -> Vec<FaceShape> {
         let mut seed = 11u64;
         (0..n)
-            .map(|_| {
+            .map(|i| {
                 seed = seed
                     .wrapping_mul(6364136223846793005)
                     .wrapping_add(1442695040888963407);
-                [2 + (seed >> 59) as u32 * 3, 2 + ((seed >> 40) & 31) as u32]
+                FaceShape {
+                    corner: (i % 3) as u8,
+                    legs: [2 + (seed >> 59) as u32 * 3, 2 + ((seed >> 40) & 31) as u32],
+                }
             })
             .collect()
+    }
+
+    #[test]
+    fn the_chosen_corner_takes_the_right_angle_and_the_order_stays_cyclic() {
+        for slot_b in [false, true] {
+            for corner in 0..3u8 {
+                let place = FacePlace {
+                    bbox: [10, 20, 14, 9],
+                    slot_b,
+                    corner,
+                    size: [8, 5],
+                };
+                // Mesh corners 0, 1, 2 as barycentrics (b1, b2).
+                let at = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)].map(|(b1, b2)| place.at(b1, b2));
+                let c = usize::from(corner);
+                let (o, e1, e2) = (at[c], at[(c + 1) % 3] - at[c], at[(c + 2) % 3] - at[c]);
+                let (right_angle, _, _) = place.frame();
+                assert_eq!(o, right_angle, "corner {corner}");
+                assert_eq!((e1.length(), e2.length()), (8.0, 5.0), "corner {corner}");
+                assert_eq!(e1.dot(e2), 0.0, "corner {corner}");
+                // There and back, inside and outside the triangle.
+                for (b1, b2) in [(0.2, 0.3), (0.7, 0.1), (-0.1, 0.5), (0.6, 0.6)] {
+                    let back = place.barycentrics(place.at(b1, b2));
+                    assert!((back.0 - b1).abs() < 1e-12 && (back.1 - b2).abs() < 1e-12);
+                }
+                // The centroid is held, a point beyond the hypotenuse is not.
+                assert!(place.holds(place.at(1.0 / 3.0, 1.0 / 3.0)));
+                let outward = (e1 / e1.length_squared() + e2 / e2.length_squared()).normalize();
+                let beyond = o + (e1 + e2) * 0.5 + outward * (DILATION + 0.5);
+                assert!(!place.holds(beyond), "corner {corner}");
+            }
+        }
     }
 
     #[test]

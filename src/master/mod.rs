@@ -4,7 +4,8 @@
 //! one packing map and one set of texture coordinates for all — then rendered view-dependently
 //! from them, and edited once for every view.
 //!
-//! * [`layout`] — face sizes, pairing, packing: the packing map and the one UV set.
+//! * [`face_shapes`] — each face's right triangle: the corner at its right angle, its legs.
+//! * [`layout`] — pairing, packing: the packing map and the one UV set.
 //! * [`Atlas`] — the layout and, per texel, the face and surface point it holds.
 //! * [`encode`] — a view's image warped into the atlas, occluded texels marked (alpha 0).
 //! * [`render`] — VDTM / ULR rendering from the master textures.
@@ -29,7 +30,7 @@ use crate::geom::Mesh;
 use crate::texturing::Sight;
 use crate::views::visibility::{DepthMap, sight_at};
 use glam::{DVec2, Vec3, Vec4};
-use layout::{Layout, MAX_FACE_SIDE};
+use layout::{FaceShape, Layout, MAX_FACE_SIDE};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -114,29 +115,65 @@ pub struct Atlas {
 /// Bytes an atlas texel costs while encoding (face, point, and one master's colour).
 pub const BYTES_PER_TEXEL: u64 = 4 + 12 + 16;
 
-/// The common size of every face of `mesh` (paper 5 §3): the largest bounding box its
-/// projection has in any of `cameras` that has it in front, in pixels, times `scale` texels a
-/// pixel (1 in the paper), at least 2 and at most [`MAX_FACE_SIDE`] a side.
-pub fn face_sizes(mesh: &Mesh, cameras: &[Pinhole], scale: f64) -> Vec<[u32; 2]> {
+/// The common shape of every face of `mesh` (paper 5 §3, docs/conventions.md §6.2), from the
+/// views of `cameras` that have it in front: the right angle at the corner that gives the
+/// smallest right triangle (the corner nearest a right angle), legs as long as the two edges
+/// from it are at their longest in any view, each lengthened by one factor so that no
+/// direction of the face, in any view, is sampled by fewer than `scale` texels a pixel (1 in
+/// the paper); at least 2 and at most [`MAX_FACE_SIDE`] a side.
+pub fn face_shapes(mesh: &Mesh, cameras: &[Pinhole], scale: f64) -> Vec<FaceShape> {
     (0..mesh.triangle_count())
         .into_par_iter()
         .map(|t| {
             let corners = mesh.corners(t).map(|p| p.as_dvec3());
-            let mut size = DVec2::splat(2.0);
-            for cam in cameras {
-                let px: Option<Vec<DVec2>> = corners
-                    .iter()
-                    .map(|&p| cam.project(p).map(|q| q.uv))
-                    .collect();
-                let Some(px) = px else { continue };
-                let lo = px[0].min(px[1]).min(px[2]);
-                let hi = px[0].max(px[1]).max(px[2]);
-                size = size.max(hi - lo);
-            }
+            let views: Vec<[DVec2; 3]> = cameras
+                .iter()
+                .filter_map(|cam| {
+                    let [a, b, c] = corners.map(|p| cam.project(p).map(|q| q.uv));
+                    Some([a?, b?, c?])
+                })
+                .collect();
             let side = |v: f64| ((v * scale).ceil() as u32).clamp(2, MAX_FACE_SIDE);
-            [side(size.x), side(size.y)]
+            let shape = |c: usize| {
+                let edges = |px: &[DVec2; 3]| (px[(c + 1) % 3] - px[c], px[(c + 2) % 3] - px[c]);
+                let (mut first, mut second) = (0.0f64, 0.0f64);
+                for px in &views {
+                    let (a, b) = edges(px);
+                    first = first.max(a.length());
+                    second = second.max(b.length());
+                }
+                // With legs of the edges' longest lengths, a texel step along the hypotenuse
+                // spans up to √2 pixels where the view shows the corner sharp: the largest
+                // stretch over the views lengthens both legs.
+                let stretch = views
+                    .iter()
+                    .map(|px| {
+                        let (a, b) = edges(px);
+                        largest_singular_value(a / first.max(1e-12), b / second.max(1e-12))
+                    })
+                    .fold(1.0, f64::max);
+                FaceShape {
+                    corner: c as u8,
+                    legs: [side(first * stretch), side(second * stretch)],
+                }
+            };
+            (0..3)
+                .map(shape)
+                .min_by_key(|s| s.legs[0] as u64 * s.legs[1] as u64)
+                .unwrap_or(FaceShape {
+                    corner: 0,
+                    legs: [2, 2],
+                })
         })
         .collect()
+}
+
+/// The largest singular value of the 2 × 2 matrix of columns `a` and `b`: the most it stretches
+/// a unit vector.
+fn largest_singular_value(a: DVec2, b: DVec2) -> f64 {
+    let (p, q, r) = (a.length_squared(), a.dot(b), b.length_squared());
+    let (trace, det) = (p + r, p * r - q * q);
+    ((trace + (trace * trace - 4.0 * det).max(0.0).sqrt()) * 0.5).sqrt()
 }
 
 /// The faces' surface in texels: each face's largest projected area in any of `cameras` that
@@ -162,12 +199,12 @@ pub fn face_surface(mesh: &Mesh, cameras: &[Pinhole], scale: f64) -> f64 {
 }
 
 impl Atlas {
-    /// The atlas of `mesh` for faces of legs `sizes` (from [`face_sizes`]).
-    pub fn new(mesh: &Mesh, sizes: &[[u32; 2]]) -> Result<Atlas, MasterError> {
+    /// The atlas of `mesh` for faces of shapes `shapes` (from [`face_shapes`]).
+    pub fn new(mesh: &Mesh, shapes: &[FaceShape]) -> Result<Atlas, MasterError> {
         if mesh.triangle_count() == 0 {
             return Err(MasterError::EmptyMesh);
         }
-        let layout = Layout::new(sizes);
+        let layout = Layout::new(shapes);
         let (w, h) = crate::frame::check_size(layout.width as u64, layout.height as u64)?;
         crate::memory::check(
             || format!("a {w} × {h} master-texture atlas"),
@@ -204,17 +241,21 @@ impl Atlas {
         })
     }
 
-    /// The atlas of a stored layout (the face sizes must be the layout's own).
-    pub fn from_layout(
-        mesh: &Mesh,
-        layout: Layout,
-        sizes: &[[u32; 2]],
-    ) -> Result<Atlas, MasterError> {
-        let atlas = Atlas::new(mesh, sizes)?;
+    /// The atlas of a stored layout: laid out again from its faces' shapes, which must give
+    /// the same map.
+    pub fn from_layout(mesh: &Mesh, layout: Layout) -> Result<Atlas, MasterError> {
+        if layout.faces.len() != mesh.triangle_count() {
+            return Err(MasterError::Faces {
+                mesh: mesh.triangle_count(),
+                map: layout.faces.len(),
+            });
+        }
+        let shapes: Vec<FaceShape> = layout.faces.iter().map(|f| f.shape()).collect();
+        let atlas = Atlas::new(mesh, &shapes)?;
         if atlas.layout != layout {
             return Err(MasterError::File {
                 path: std::path::PathBuf::from("masters.json"),
-                reason: "its packing map is not the one this mesh's face sizes give".into(),
+                reason: "its packing map is not the one its faces' shapes give".into(),
             });
         }
         Ok(atlas)
@@ -233,7 +274,7 @@ impl Atlas {
 
 /// Default texels a pixel of a face's largest view: 2, so that the two resamplings (view to
 /// master, master to frame) lose less than at the paper's 1 (on the Duck, rendering at an
-/// exemplar's camera: 31.7 dB at 1, 34.9 dB at 2, for four times the texels).
+/// exemplar's camera: 32.2 dB at 1, 33.6 dB at 2, for four times the texels).
 pub const DEFAULT_SCALE: f64 = 2.0;
 
 /// Barycentrics `(b1, b2)` moved into the triangle (`b1, b2 ≥ 0`, `b1 + b2 ≤ 1`).
@@ -317,7 +358,7 @@ impl Encoding {
 pub type Streamed = (Atlas, bake::Baker);
 
 /// Encodes the views `cameras` (names and undistorted pinholes) of `mesh`, streaming: face
-/// sizes over all cameras (`scale` texels a pixel, [`face_sizes`]) and the layout first, then
+/// shapes over all cameras (`scale` texels a pixel, [`face_shapes`]) and the layout first, then
 /// one view at a time — its image asked of `image_of`, its depth map drawn, its master texture
 /// encoded, folded into the bake and handed to `sink` — so that one image and one master
 /// texture are in memory at a time. Returns the atlas and the bake's first pass.
@@ -330,8 +371,8 @@ pub fn encode_stream(
     progress: &dyn crate::progress::Progress,
 ) -> Result<Streamed, MasterError> {
     let pinholes: Vec<Pinhole> = cameras.iter().map(|(_, c)| c.clone()).collect();
-    let sizes = face_sizes(mesh, &pinholes, scale);
-    let atlas = Atlas::new(mesh, &sizes)?;
+    let shapes = face_shapes(mesh, &pinholes, scale);
+    let atlas = Atlas::new(mesh, &shapes)?;
     let mut baker = bake::Baker::new(&atlas, cameras.len())?;
     let mut seen = false;
     for (v, cam) in pinholes.iter().enumerate() {

@@ -193,7 +193,7 @@ mod tests {
                 out.covered, out.holes
             );
             // Two bilinear resamplings (view to master, master to frame) of a textured model:
-            // measured 34.9 and 32.3 dB.
+            // measured 33.6 and 33.1 dB.
             assert!(p >= 31.0, "view {v}: {p:.2} dB");
             assert!(out.holes * 100 <= out.covered, "{} holes", out.holes);
         }
@@ -229,7 +229,8 @@ mod tests {
             "masters against exemplars: {p:.2} dB, atlas {:?}",
             enc.atlas.size()
         );
-        // Measured 40.95 dB (the paper's "same fidelity" goal of 45 dB is not reached).
-        assert!(p >= 39.0, "{p:.2} dB");
+        // The paper's "same fidelity": 45 dB asked, 49.91 dB measured. (With the paper's own
+        // warp, right angle at corner 0 and legs of the largest bounding box: 40.95 dB.)
+        assert!(p >= 45.0, "{p:.2} dB");
     }
 }
