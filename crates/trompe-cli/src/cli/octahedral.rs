@@ -2,7 +2,8 @@
 //! `impostor merge-manifests`: octahedral impostors for engines on the command line — parse,
 //! call `trompe::octahedral`, print its report.
 
-use super::{BakeArgs, OutputPlan, check_plan, has_extension, with_spinner};
+use super::impostor::{BakeArgs, GeometryArg};
+use super::{OutputPlan, check_plan, has_extension, with_spinner};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -54,8 +55,8 @@ pub struct ExportArgs {
     output: PathBuf,
     /// For an impostor's surface: compressed (16-bit positions, 8-bit normals, meshopt codecs:
     /// KHR_mesh_quantization and EXT_meshopt_compression) or float (plain glTF).
-    #[arg(long, value_enum, default_value_t = super::GeometryArg::Compressed)]
-    geometry: super::GeometryArg,
+    #[arg(long, value_enum, default_value_t = GeometryArg::Compressed)]
+    geometry: GeometryArg,
 }
 
 impl ExportArgs {
