@@ -619,7 +619,7 @@ pub fn relief_report(
     scene: &Scene,
     pipeline: &Pipeline,
     time: f32,
-    objects: &[crate::relief::pipeline::ObjectFrame],
+    objects: &[crate::relief::frames::ObjectFrame],
 ) -> (String, Vec<String>) {
     let threshold = pipeline.settings().threshold;
     let state = objects

@@ -12,6 +12,8 @@
 //! * [`mcmillan`] — McMillan's full 3-D warp of a perspective depth image (Eq. 1), the reference.
 //! * [`validity`] — the interpolated-texel ratio and the critical-point heuristic (§3).
 //! * [`pipeline`] — the warping loop and the rendering thread, the state machine, the cache.
+//! * [`frames`] — what the pipeline hands back a frame: each object's state, the draws.
+//! * [`raster`] — the objects drawn directly (fallbacks, objects without relief).
 //! * [`walk`](mod@walk) — a camera path walked through the pipeline and scored against the true render.
 //!
 //! Invariants: the base plane is the front of the object (paper Fig. 2: the image plane of the
@@ -21,9 +23,11 @@
 //! `(u + 0.5, v + 0.5)` in texel coordinates; a background texel has alpha 0. Warps are
 //! deterministic: the same impostor and eye give the same pre-warped image on any thread count.
 
+pub mod frames;
 pub mod mcmillan;
 pub mod pipeline;
 pub mod prewarp;
+pub mod raster;
 pub mod shader;
 pub mod texture;
 pub mod validity;
@@ -33,9 +37,8 @@ use crate::frame::Rgba;
 use glam::{DVec3, Vec3};
 use thiserror::Error;
 
-pub use pipeline::{
-    ObjectState, Pipeline, PipelineSettings, PreparedDraws, PreparedFrame, ReliefDraw,
-};
+pub use frames::{ObjectState, PreparedDraws, PreparedFrame, ReliefDraw};
+pub use pipeline::{Pipeline, PipelineSettings};
 pub use prewarp::{Coefficients, Eye, Prewarped, prewarp};
 pub use shader::SoftwareShader;
 pub use walk::{WalkReport, WalkSettings, walk};

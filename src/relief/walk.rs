@@ -8,7 +8,9 @@
 //! times, or, for a scene without a path, one orbit around its `look_at` at the camera's
 //! distance and height.
 
-use super::pipeline::{ObjectFrame, ObjectState, Pipeline, PipelineSettings, raster_subset};
+use super::frames::{ObjectFrame, ObjectState};
+use super::pipeline::{Pipeline, PipelineSettings};
+use super::raster::raster_subset;
 use super::shader::SoftwareShader;
 use super::validity::{Calibration, CriticalPairs, calibrate, verdicts};
 use super::{DepthEncoding, ReliefError};

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 use trompe::glam::Vec3;
-use trompe::relief::pipeline::ObjectState;
+use trompe::relief::ObjectState;
 use trompe::relief::shader::SoftwareShader;
 use trompe::relief::walk::verdicts_along;
 use trompe::relief::{PipelineSettings, WalkSettings, walk};

@@ -358,7 +358,7 @@ fn dispatch(d: &ReliefDraw, camera: &Pinhole, rect: [u32; 4]) -> Option<GpuDraw>
 }
 
 /// The objects `objects` of `view` on the device, drawn by the GPU rasterizer and shaded as the
-/// library's `relief::pipeline::raster_subset` shades them; the other objects' meshes left
+/// library's `relief::raster::raster_subset` shades them; the other objects' meshes left
 /// empty, so the ids stay the scene's.
 fn directly_drawn<'a>(
     gpu: &'a Gpu,
@@ -379,7 +379,7 @@ fn directly_drawn<'a>(
         .iter()
         .filter_map(|&o| view.meshes.get(o).cloned())
         .collect();
-    let settings = trompe::relief::pipeline::raster_settings(&drawn);
+    let settings = trompe::relief::raster::raster_settings(&drawn);
     let subset = trompe::scene::View {
         lens: None,
         camera: view.camera.clone(),

@@ -9,7 +9,7 @@ use super::{DemoInputs, ReportError};
 use glam::{DVec3, Vec4};
 use std::path::Path;
 use trompe::frame::{Image, Rgba, io, metrics};
-use trompe::relief::pipeline::ObjectState;
+use trompe::relief::ObjectState;
 use trompe::relief::validity::{RATIO_THRESHOLD, validity_map};
 use trompe::relief::walk::{path, true_frame, verdicts_along};
 use trompe::relief::{DepthEncoding, PipelineSettings, ReliefError, WalkSettings, walk};
@@ -76,7 +76,7 @@ pub(super) fn section(inputs: &DemoInputs, out: &Path) -> Result<Section, Report
     let mut figures = Vec::new();
     for (i, frame, truth) in &shown {
         let (_, camera) = &cameras[*i];
-        let raster = trompe::relief::pipeline::raster_subset(
+        let raster = trompe::relief::raster::raster_subset(
             &view,
             &scene.lighting,
             camera,
