@@ -222,37 +222,30 @@ fn encode_render_and_edit_through_the_command_line() {
         &s(&enc),
     ]));
     assert!(e.contains("new folder"), "{e}");
+    // `master render` of the encoding with `manifest` as its masters.json: its error.
+    let render_with = |manifest: &[u8]| {
+        std::fs::write(enc.join("masters.json"), manifest).unwrap();
+        err(&trompe(&[
+            "master",
+            "render",
+            &s(&enc),
+            "--mesh",
+            duck,
+            "--scene",
+            &s(&scene),
+            "-o",
+            &s(&dir.join("y.png")),
+        ]))
+    };
     // A face whose right angle is at a corner a triangle does not have.
     let manifest = std::fs::read(enc.join("masters.json")).unwrap();
     let mut json: serde_json::Value = serde_json::from_slice(&manifest).unwrap();
     json["layout"]["faces"][5]["corner"] = serde_json::json!(3);
-    std::fs::write(enc.join("masters.json"), json.to_string()).unwrap();
-    let e = err(&trompe(&[
-        "master",
-        "render",
-        &s(&enc),
-        "--mesh",
-        duck,
-        "--scene",
-        &s(&scene),
-        "-o",
-        &s(&dir.join("z.png")),
-    ]));
+    let e = render_with(json.to_string().as_bytes());
     assert!(
         e.contains("masters.json") && e.contains("face 5") && e.contains("corner 3"),
         "{e}"
     );
-    std::fs::write(enc.join("masters.json"), b"{\"version\": 1}").unwrap();
-    let e = err(&trompe(&[
-        "master",
-        "render",
-        &s(&enc),
-        "--mesh",
-        duck,
-        "--scene",
-        &s(&scene),
-        "-o",
-        &s(&dir.join("y.png")),
-    ]));
+    let e = render_with(b"{\"version\": 1}");
     assert!(e.contains("masters.json"), "{e}");
 }
