@@ -8,10 +8,9 @@
 //!
 //! Invariants: a face's corners keep the mesh's cyclic order (its chosen corner `c` at the right
 //! angle, `c + 1` along `+x`, `c + 2` along `+y` in its slot's frame, indices mod 3), whatever
-//! the view; boxes never overlap; every texel the encoder
-//! writes for a face lies in its own box, at most [`DILATION`] texels outside its triangle, and
-//! the two faces of a box are at least [`GUTTER`] texels apart, so bilinear filtering never
-//! mixes two faces.
+//! the view; boxes never overlap; every texel the encoder writes for a face lies in its own box,
+//! at most [`DILATION`] texels outside its triangle, and the two faces of a box are at least
+//! [`GUTTER`] texels apart, so bilinear filtering never mixes two faces.
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
@@ -34,13 +33,6 @@ pub struct FaceShape {
     pub corner: u8,
     /// The legs `[w, h]`, texels.
     pub legs: [u32; 2],
-}
-
-impl From<[u32; 2]> for FaceShape {
-    /// Legs `[w, h]` with the right angle at corner 0 (the paper's warp).
-    fn from(legs: [u32; 2]) -> FaceShape {
-        FaceShape { corner: 0, legs }
-    }
 }
 
 /// Where one face lives in the atlas.
@@ -174,8 +166,8 @@ pub fn pair_box(a: [u32; 2], b: [u32; 2]) -> [u32; 2] {
 }
 
 impl Layout {
-    /// The layout of faces of shapes `shapes` (mesh order): paired by area, packed largest
-    /// first.
+    /// The layout of faces of shapes `shapes` (mesh order): paired by their legs, packed
+    /// largest first.
     pub fn new(shapes: &[FaceShape]) -> Layout {
         let sizes: Vec<[u32; 2]> = shapes.iter().map(|s| s.legs).collect();
         let border = 2 * DILATION as u32;
